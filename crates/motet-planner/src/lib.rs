@@ -1,0 +1,12 @@
+//! The planner: the author side of the trajectory.
+//!
+//! Job sources turn files into [`Command`]s; the planner turns commands into
+//! [`motet_trajectory::Segment`]s and event changes stamped in microseconds. It is pure
+//! and deterministic: the same commands and limits give the same trajectory, bit
+//! for bit, whether the commands arrive at once or one by one.
+
+pub mod command;
+pub mod target;
+
+pub use command::{Command, Located, Move, MoveKind, SourceError, SourceLoc};
+pub use target::{AxisInfo, JobTarget, ToolInfo, ToolKind};
