@@ -13,6 +13,8 @@ pub mod profile;
 pub mod segment;
 mod math;
 
+pub use point::{Point, MAX_AXES};
+
 
 
 
