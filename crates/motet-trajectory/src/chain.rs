@@ -1,1 +1,238 @@
-//! (in progress)
+//! Element chains (Gestalt): the mechanical parts between a joint and its motor,
+//! composed to give steps per joint unit.
+
+use serde::{Deserialize, Serialize};
+
+/// The quantity flowing between elements of a chain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Unit {
+    Millimetre,
+    Degree,
+    Revolution,
+    FullStep,
+    Microstep,
+}
+
+impl Unit {
+    pub fn name(self) -> &'static str {
+        match self {
+            Unit::Millimetre => "millimetres",
+            Unit::Degree => "degrees",
+            Unit::Revolution => "revolutions",
+            Unit::FullStep => "full steps",
+            Unit::Microstep => "microsteps",
+        }
+    }
+}
+
+/// One mechanical part of an actuator's chain, listed from the joint toward the
+/// motor's step input.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Element {
+    /// Belt and pulley: millimetres to revolutions; the belt moves one
+    /// circumference (π × pitch diameter, or belt pitch × teeth) per revolution.
+    Pulley { circumference: f64 },
+    /// Leadscrew: millimetres to revolutions, `lead` mm per revolution.
+    Leadscrew { lead: f64 },
+    /// Gear or reduction: `ratio` input revolutions per output revolution.
+    Gear { ratio: f64 },
+    /// Stepper motor: revolutions to full steps, `step_angle` degrees per step.
+    Stepper { step_angle: f64 },
+    /// Microstepping driver: `divisions` microsteps per full step.
+    Microstep { divisions: u32 },
+    /// Reverses the direction of motion.
+    Invert,
+}
+
+impl Element {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Element::Pulley { .. } => "pulley",
+            Element::Leadscrew { .. } => "leadscrew",
+            Element::Gear { .. } => "gear",
+            Element::Stepper { .. } => "stepper",
+            Element::Microstep { .. } => "microstep",
+            Element::Invert => "invert",
+        }
+    }
+
+    /// The unit this element takes and the one it gives, with the factor between.
+    fn convert(&self, input: Unit) -> Result<(Unit, f64), ChainErrorKind> {
+        let need = |want: Unit, out: Unit, factor: f64| {
+            if input == want {
+                Ok((out, factor))
+            } else {
+                Err(ChainErrorKind::WrongInput { expected: want, got: input })
+            }
+        };
+        let positive = |v: f64, what: &'static str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(ChainErrorKind::BadValue { what })
+            }
+        };
+        match *self {
+            Element::Pulley { circumference } => {
+                need(Unit::Millimetre, Unit::Revolution, 1.0 / positive(circumference, "circumference")?)
+            }
+            Element::Leadscrew { lead } => {
+                need(Unit::Millimetre, Unit::Revolution, 1.0 / positive(lead, "lead")?)
+            }
+            Element::Gear { ratio } => {
+                let ratio = positive(ratio, "ratio")?;
+                match input {
+                    // An angle in degrees is a fraction of a revolution.
+                    Unit::Degree => Ok((Unit::Revolution, ratio / 360.0)),
+                    _ => need(Unit::Revolution, Unit::Revolution, ratio),
+                }
+            }
+            Element::Stepper { step_angle } => {
+                let per_rev = 360.0 / positive(step_angle, "step_angle")?;
+                match input {
+                    Unit::Degree => Ok((Unit::FullStep, per_rev / 360.0)),
+                    _ => need(Unit::Revolution, Unit::FullStep, per_rev),
+                }
+            }
+            Element::Microstep { divisions } => {
+                if divisions == 0 || divisions > 256 {
+                    return Err(ChainErrorKind::BadValue { what: "divisions" });
+                }
+                need(Unit::FullStep, Unit::Microstep, divisions as f64)
+            }
+            Element::Invert => Ok((input, -1.0)),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ChainErrorKind {
+    WrongInput { expected: Unit, got: Unit },
+    BadValue { what: &'static str },
+    /// The chain does not end at the motor's steps.
+    Incomplete { ends_in: Unit },
+}
+
+/// Why a chain is impossible, and at which element (0-based).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChainError {
+    pub index: usize,
+    pub kind: ChainErrorKind,
+}
+
+impl core::fmt::Display for ChainError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.kind {
+            ChainErrorKind::WrongInput { expected, got } => write!(
+                f,
+                "element {} takes {} but the chain gives it {}",
+                self.index + 1,
+                expected.name(),
+                got.name()
+            ),
+            ChainErrorKind::BadValue { what } => {
+                write!(f, "element {}: {} must be a positive number", self.index + 1, what)
+            }
+            ChainErrorKind::Incomplete { ends_in } => write!(
+                f,
+                "the chain ends in {}; it must end at a stepper (optionally followed by microstep)",
+                ends_in.name()
+            ),
+        }
+    }
+}
+
+/// A validated chain: how many motor steps one joint unit is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ElementChain {
+    /// Signed: negative when the chain inverts.
+    pub steps_per_unit: f64,
+}
+
+impl ElementChain {
+    /// Composes `elements` for a joint measured in `joint_unit`.
+    pub fn new(joint_unit: Unit, elements: &[Element]) -> Result<ElementChain, ChainError> {
+        let mut unit = joint_unit;
+        let mut factor = 1.0;
+        for (index, e) in elements.iter().enumerate() {
+            let (out, k) = e.convert(unit).map_err(|kind| ChainError { index, kind })?;
+            unit = out;
+            factor *= k;
+        }
+        match unit {
+            Unit::FullStep | Unit::Microstep => Ok(ElementChain { steps_per_unit: factor }),
+            ends_in => Err(ChainError { index: elements.len(), kind: ChainErrorKind::Incomplete { ends_in } }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::f64::consts::PI;
+
+    #[test]
+    fn chains_give_steps_per_unit() {
+        // (joint unit, chain, expected steps per unit)
+        let cases: &[(Unit, &[Element], f64)] = &[
+            // GT2 belt, 20 teeth, 1.8° stepper, 16 microsteps: 80 steps/mm.
+            (
+                Unit::Millimetre,
+                &[Element::Pulley { circumference: 40.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                80.0,
+            ),
+            // 8 mm lead screw: 400 steps/mm.
+            (
+                Unit::Millimetre,
+                &[Element::Leadscrew { lead: 8.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                400.0,
+            ),
+            // Pulley by pitch diameter, inverted.
+            (
+                Unit::Millimetre,
+                &[Element::Pulley { circumference: PI * 10.0 }, Element::Invert, Element::Stepper { step_angle: 0.9 }],
+                -400.0 / (PI * 10.0),
+            ),
+            // Turntable: 5:1 reduction, 1.8° motor, 8 microsteps: 5*200*8/360 steps/°.
+            (
+                Unit::Degree,
+                &[Element::Gear { ratio: 5.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 8 }],
+                5.0 * 200.0 * 8.0 / 360.0,
+            ),
+            // Extruder drive gear with a 3:1 reduction.
+            (
+                Unit::Millimetre,
+                &[Element::Pulley { circumference: PI * 7.5 }, Element::Gear { ratio: 3.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                3.0 * 3200.0 / (PI * 7.5),
+            ),
+        ];
+        for (unit, chain, want) in cases {
+            let got = ElementChain::new(*unit, chain).unwrap().steps_per_unit;
+            assert!((got - want).abs() < 1e-9 * want.abs(), "{chain:?}: {got} != {want}");
+        }
+    }
+
+    #[test]
+    fn impossible_chains_are_refused() {
+        let cases: &[(Unit, &[Element], usize)] = &[
+            // Microstep before the stepper.
+            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }, Element::Microstep { divisions: 16 }], 1),
+            // No stepper at all.
+            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }], 1),
+            // Two pulleys in a row.
+            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }, Element::Pulley { circumference: 40.0 }], 1),
+            // Linear joint straight into a stepper.
+            (Unit::Millimetre, &[Element::Stepper { step_angle: 1.8 }], 0),
+            // Zero lead.
+            (Unit::Millimetre, &[Element::Leadscrew { lead: 0.0 }, Element::Stepper { step_angle: 1.8 }], 0),
+            // Negative step angle.
+            (Unit::Degree, &[Element::Stepper { step_angle: -1.8 }], 0),
+            // Empty chain.
+            (Unit::Millimetre, &[], 0),
+        ];
+        for (unit, chain, index) in cases {
+            let err = ElementChain::new(*unit, chain).unwrap_err();
+            assert_eq!(err.index, *index, "{chain:?}: {err}");
+        }
+    }
+}

@@ -8,15 +8,13 @@
 
 pub mod chain;
 pub mod kinematics;
+mod math;
 pub mod point;
 pub mod profile;
 pub mod segment;
-mod math;
 
+pub use chain::{ChainError, Element, ElementChain, Unit};
+pub use kinematics::{JointMap, JointPath, KinematicsKind};
 pub use point::{Point, MAX_AXES};
-
-
-
-
-
-
+pub use profile::{Profile, ProfileKind, ProfileParams};
+pub use segment::Segment;

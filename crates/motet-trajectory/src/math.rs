@@ -22,14 +22,6 @@ pub fn cos(x: f64) -> f64 {
     libm::cos(x)
 }
 #[inline]
-pub fn floor(x: f64) -> f64 {
-    libm::floor(x)
-}
-#[inline]
-pub fn ceil(x: f64) -> f64 {
-    libm::ceil(x)
-}
-#[inline]
 pub fn round(x: f64) -> f64 {
     libm::round(x)
 }
