@@ -10,3 +10,8 @@ pub mod target;
 
 pub use command::{Command, Located, Move, MoveKind, SourceError, SourceLoc};
 pub use target::{AxisInfo, JobTarget, ToolInfo, ToolKind};
+pub mod limits;
+pub mod planner;
+
+pub use limits::{AxisLimits, JointLimits, Limits, ToolTiming};
+pub use planner::{PlanError, Planned, Planner, ToolEvent};

@@ -174,26 +174,53 @@ impl JointPath {
     /// The joint along `seg`, continuing from the joint value `reference` (used to
     /// pick the angle's turn).
     pub fn new(map: &JointMap, seg: &Segment, reference: f64) -> JointPath {
-        let length = seg.profile.length();
+        JointPath::between(map, &seg.start, &seg.end, seg.profile.length(), reference)
+    }
+
+    /// The joint along the straight line from `start` to `end`, `length` long.
+    pub fn between(map: &JointMap, start: &Point, end: &Point, length: f64, reference: f64) -> JointPath {
         let inv = if length > 0.0 { 1.0 / length } else { 0.0 };
         let shape = match *map {
             JointMap::Linear { .. } => {
-                let a0 = map.value(&seg.start, reference);
-                let a1 = map.value(&seg.end, reference);
+                let a0 = map.value(start, reference);
+                let a1 = map.value(end, reference);
                 Shape::Linear { a0, k: (a1 - a0) * inv }
             }
             JointMap::PolarRadius { x, y } | JointMap::PolarAngle { x, y } => {
                 let (x, y) = (x as usize, y as usize);
-                let p0 = (seg.start[x], seg.start[y]);
-                let w = ((seg.end[x] - p0.0) * inv, (seg.end[y] - p0.1) * inv);
+                let p0 = (start[x], start[y]);
+                let w = ((end[x] - p0.0) * inv, (end[y] - p0.1) * inv);
                 if let JointMap::PolarRadius { .. } = map {
                     Shape::Radius { p0, w }
                 } else {
-                    Shape::Angle { p0, w, theta0: map.value(&seg.start, reference) }
+                    Shape::Angle { p0, w, theta0: map.value(start, reference) }
                 }
             }
         };
         JointPath { shape, length }
+    }
+
+    /// The largest |d² value / d s²| over `[s_lo, s_hi]`: how hard the joint must
+    /// accelerate at constant path speed (an upper bound for the angle).
+    pub fn max_curvature(&self, s_lo: f64, s_hi: f64) -> f64 {
+        let (p0, w) = match self.shape {
+            Shape::Linear { .. } => return 0.0,
+            Shape::Radius { p0, w } | Shape::Angle { p0, w, .. } => (p0, w),
+        };
+        let ww = w.0 * w.0 + w.1 * w.1;
+        let s_min = if ww > 0.0 { (-(p0.0 * w.0 + p0.1 * w.1) / ww).clamp(s_lo, s_hi) } else { s_lo };
+        let (x, y) = (p0.0 + w.0 * s_min, p0.1 + w.1 * s_min);
+        let r = sqrt(x * x + y * y);
+        let cross = (p0.0 * w.1 - p0.1 * w.0).abs();
+        if r <= 0.0 {
+            return if cross == 0.0 { 0.0 } else { f64::INFINITY };
+        }
+        match self.shape {
+            // r'' = |p × w|² / r³
+            Shape::Radius { .. } => cross * cross / (r * r * r),
+            // |θ''| = 2 |p × w| |p · w| / r⁴ ≤ 2 |p × w| |w| / r³
+            _ => 2.0 * cross * sqrt(ww) / (r * r * r) * DEG,
+        }
     }
 
     #[inline]

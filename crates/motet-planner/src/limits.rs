@@ -1,0 +1,61 @@
+//! The machine's motion limits as the planner sees them.
+
+use motet_trajectory::{JointMap, ProfileKind, MAX_AXES};
+
+/// Limits of one machine axis, in axis units per second (squared, cubed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisLimits {
+    pub max_velocity: f64,
+    pub max_acceleration: f64,
+    /// Only used with [`ProfileKind::SCurve`].
+    pub max_jerk: Option<f64>,
+    /// Counts toward path length (x, y, z) rather than riding along (extruders).
+    pub path: bool,
+}
+
+/// Limits of a joint after kinematics (a CoreXY motor, a polar turntable), in joint
+/// units per second (squared).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointLimits {
+    pub map: JointMap,
+    pub max_velocity: f64,
+    pub max_acceleration: f64,
+}
+
+/// How a tool output is switched.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolTiming {
+    /// Motion comes to rest before the change (pen lift, spindle start); otherwise
+    /// the change happens on the fly at its place on the path (laser power).
+    pub stop: bool,
+    /// Seconds to stand still after the change (servo travel, spin-up).
+    pub settle: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    /// One entry per machine axis, in axis index order (at most [`MAX_AXES`]).
+    pub axes: Vec<AxisLimits>,
+    /// Extra limits after kinematics.
+    pub joints: Vec<JointLimits>,
+    /// grbl-style junction deviation, mm.
+    pub junction_deviation: f64,
+    pub profile: ProfileKind,
+    /// One entry per tool index used by [`crate::Command::Tool`].
+    pub tools: Vec<ToolTiming>,
+    /// Most moves held for lookahead before the oldest is planned as if the queue
+    /// ended there (safe, slower). Bounds memory on endless streams of tiny moves.
+    pub lookahead: usize,
+}
+
+impl Limits {
+    pub(crate) fn path_mask(&self) -> u8 {
+        let mut m = 0;
+        for (i, a) in self.axes.iter().enumerate().take(MAX_AXES) {
+            if a.path {
+                m |= 1 << i;
+            }
+        }
+        m
+    }
+}

@@ -1,0 +1,404 @@
+//! Lookahead planning: commands in, time-stamped segments and tool events out.
+//!
+//! Each move gets a speed cap (feed, axis and joint limits after kinematics), an
+//! acceleration (the tightest axis or joint along its direction) and a junction
+//! cap (junction deviation with the previous move). A backward pass from the end
+//! of the queue (which must end at rest) and a forward pass from the front give
+//! entry and exit speeds. A move is emitted as soon as more moves can no longer
+//! change its exit speed, so planning a stream one command at a time gives the
+//! same trajectory, bit for bit, as planning the whole job at once.
+
+use crate::command::{Command, Move, MoveKind};
+use crate::limits::Limits;
+use motet_trajectory::kinematics::JointPath;
+use motet_trajectory::point::distance_masked;
+use motet_trajectory::profile::{fastest, reachable_speed};
+use motet_trajectory::{JointMap, Point, Profile, ProfileKind, Segment, MAX_AXES};
+use std::collections::VecDeque;
+
+/// A tool output changing value at a time on the trajectory.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolEvent {
+    /// Microseconds on the host clock.
+    pub time: f64,
+    pub tool: u8,
+    pub value: f32,
+}
+
+/// What the planner produces, in time order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Planned {
+    Segment(Segment),
+    Event(ToolEvent),
+}
+
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    #[error("target coordinate {axis} is not a finite number")]
+    NotFinite { axis: usize },
+    #[error("feed must be a positive number (got {0})")]
+    BadFeed(f64),
+    #[error("dwell must be a non-negative number of seconds (got {0})")]
+    BadDwell(f64),
+    #[error("tool {0} is not on this machine")]
+    UnknownTool(u8),
+    #[error("the move cannot be made within the joint limits (it passes through a kinematic singularity, such as the polar centre)")]
+    Singular,
+}
+
+/// A move waiting for its speeds.
+#[derive(Clone, Debug)]
+struct Pending {
+    start: Point,
+    end: Point,
+    length: f64,
+    /// Direction per unit length, all axes (used for junctions).
+    unit: Point,
+    v_cap: f64,
+    accel: f64,
+    jerk: f64,
+    /// Cap on the entry speed from the junction with the previous move.
+    entry_cap: f64,
+    /// Entry speed from the latest backward pass.
+    entry: f64,
+    /// Whether `entry` is held down by the queue's end rather than by a cap;
+    /// such a value may still rise when more moves arrive.
+    end_limited: bool,
+    /// Inline tool changes that happen where this move starts.
+    events: Vec<(u8, f32)>,
+}
+
+pub struct Planner {
+    limits: Limits,
+    path_mask: u8,
+    queue: VecDeque<Pending>,
+    /// Where the last queued move ends.
+    tail: Point,
+    /// Exit speed of the last emitted move (entry of `queue[0]`).
+    emitted_exit: f64,
+    /// Host time at the end of everything emitted, µs.
+    clock: f64,
+    /// Where everything emitted ends.
+    emitted_pos: Point,
+    out: VecDeque<Planned>,
+    /// Inline events with no move after them yet.
+    loose_events: Vec<(u8, f32)>,
+    /// A stop is required before the next move (after a dwell or stopping tool).
+    stopped: bool,
+}
+
+impl Planner {
+    /// A planner for a machine at rest at `start`, with the clock at `t0` µs.
+    pub fn new(limits: Limits, start: Point, t0: f64) -> Planner {
+        let path_mask = limits.path_mask();
+        Planner {
+            limits,
+            path_mask,
+            queue: VecDeque::new(),
+            tail: start,
+            emitted_exit: 0.0,
+            clock: t0,
+            emitted_pos: start,
+            out: VecDeque::new(),
+            loose_events: Vec::new(),
+            stopped: true,
+        }
+    }
+
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Host time at the end of everything emitted so far, µs.
+    pub fn clock(&self) -> f64 {
+        self.clock
+    }
+
+    /// Where the machine will be after every queued command.
+    pub fn tail(&self) -> Point {
+        self.tail
+    }
+
+    /// Adds a command. Output becomes available through [`Planner::pop`].
+    pub fn push(&mut self, cmd: &Command) -> Result<(), PlanError> {
+        match *cmd {
+            Command::Move(ref m) => self.push_move(m),
+            Command::Dwell { seconds } => {
+                if !(seconds.is_finite() && seconds >= 0.0) {
+                    return Err(PlanError::BadDwell(seconds));
+                }
+                self.flush();
+                self.emit_loose_events();
+                if seconds > 0.0 {
+                    self.emit_dwell(seconds);
+                }
+                Ok(())
+            }
+            Command::Tool { tool, value } => {
+                let timing = *self.limits.tools.get(tool as usize).ok_or(PlanError::UnknownTool(tool))?;
+                if timing.stop {
+                    self.flush();
+                    self.emit_loose_events();
+                    self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool, value }));
+                    if timing.settle > 0.0 {
+                        self.emit_dwell(timing.settle);
+                    }
+                } else {
+                    self.loose_events.push((tool, value));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Ends the job: everything queued is planned to come to rest.
+    pub fn finish(&mut self) {
+        self.flush();
+        self.emit_loose_events();
+    }
+
+    /// The next planned segment or event, in time order.
+    pub fn pop(&mut self) -> Option<Planned> {
+        self.out.pop_front()
+    }
+
+    /// Number of commands held for lookahead.
+    pub fn queued(&self) -> usize {
+        self.queue.len()
+    }
+
+    fn push_move(&mut self, m: &Move) -> Result<(), PlanError> {
+        for (axis, v) in m.target.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(PlanError::NotFinite { axis });
+            }
+        }
+        let feed = match m.kind {
+            MoveKind::Rapid => f64::INFINITY,
+            MoveKind::Feed => {
+                if !(m.feed > 0.0) {
+                    return Err(PlanError::BadFeed(m.feed));
+                }
+                m.feed
+            }
+        };
+        let start = self.tail;
+        let end = m.target;
+        let mut length = distance_masked(&start, &end, self.path_mask);
+        if length <= 1e-9 {
+            // Moves of riding axes only (a retraction) measure their own length.
+            length = distance_masked(&start, &end, 0xff);
+        }
+        if length <= 1e-9 {
+            return Ok(());
+        }
+        let mut unit = [0.0; MAX_AXES];
+        for i in 0..MAX_AXES {
+            unit[i] = (end[i] - start[i]) / length;
+        }
+        let (v_cap, accel, jerk) = self.move_limits(&start, &end, &unit, length, feed);
+        if !(v_cap > 0.0 && accel > 0.0 && accel.is_finite()) {
+            return Err(PlanError::Singular);
+        }
+        let entry_cap = match self.queue.back() {
+            Some(prev) if !self.stopped => self.junction_speed(prev, &unit, v_cap, accel),
+            _ => 0.0,
+        };
+        self.stopped = false;
+        self.tail = end;
+        let events = std::mem::take(&mut self.loose_events);
+        self.queue.push_back(Pending {
+            start,
+            end,
+            length,
+            unit,
+            v_cap,
+            accel,
+            jerk,
+            entry_cap,
+            entry: 0.0,
+            end_limited: true,
+            events,
+        });
+        self.backward_pass();
+        self.emit_final();
+        if self.queue.len() > self.limits.lookahead.max(2) {
+            self.emit_front_as_is();
+        }
+        Ok(())
+    }
+
+    /// Speed cap, acceleration and jerk for a move along `unit`.
+    fn move_limits(&self, start: &Point, end: &Point, unit: &Point, length: f64, feed: f64) -> (f64, f64, f64) {
+        let mut v = feed;
+        let mut a = f64::INFINITY;
+        let mut j = f64::INFINITY;
+        for (i, lim) in self.limits.axes.iter().enumerate().take(MAX_AXES) {
+            let u = unit[i].abs();
+            if u > 0.0 {
+                v = v.min(lim.max_velocity / u);
+                a = a.min(lim.max_acceleration / u);
+                if let Some(mj) = lim.max_jerk {
+                    j = j.min(mj / u);
+                }
+            }
+        }
+        for jl in &self.limits.joints {
+            let path = JointPath::between(&jl.map, start, end, length, 0.0);
+            let rate = path.max_rate(0.0, length);
+            if rate > 0.0 {
+                v = v.min(jl.max_velocity / rate);
+            }
+            if let JointMap::Linear { .. } = jl.map {
+                if rate > 0.0 {
+                    a = a.min(jl.max_acceleration / rate);
+                }
+            } else {
+                // joint'' = rate · a + curvature · v²: give each term half the budget.
+                if rate > 0.0 {
+                    a = a.min(0.5 * jl.max_acceleration / rate);
+                }
+                let curv = path.max_curvature(0.0, length);
+                if curv > 0.0 {
+                    v = v.min((0.5 * jl.max_acceleration / curv).sqrt());
+                }
+            }
+        }
+        let jerk = match self.limits.profile {
+            ProfileKind::Trapezoid => 0.0,
+            ProfileKind::SCurve if j.is_finite() => j,
+            // No jerk limit on any moving axis: plain ramps.
+            ProfileKind::SCurve => 0.0,
+        };
+        (v, a, jerk)
+    }
+
+    /// grbl's junction deviation: the speed at which a circle of deviation `δ`
+    /// tangent to both moves is taken at acceleration `a`.
+    fn junction_speed(&self, prev: &Pending, unit: &Point, v_cap: f64, accel: f64) -> f64 {
+        let norm = |u: &Point| u.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (n0, n1) = (norm(&prev.unit), norm(unit));
+        let mut cos = 0.0;
+        for i in 0..MAX_AXES {
+            cos -= prev.unit[i] * unit[i];
+        }
+        cos /= n0 * n1;
+        let cap = prev.v_cap.min(v_cap);
+        if cos <= -0.999_999 {
+            // Straight on.
+            return cap;
+        }
+        if cos >= 0.999_999 {
+            // Full reversal.
+            return 0.0;
+        }
+        let sin_half = (0.5 * (1.0 - cos)).sqrt();
+        let a = prev.accel.min(accel);
+        let v2 = a * self.limits.junction_deviation * sin_half / (1.0 - sin_half);
+        v2.sqrt().min(cap)
+    }
+
+    /// Recomputes entry speeds from the end of the queue (which ends at rest),
+    /// stopping where nothing changes any more.
+    fn backward_pass(&mut self) {
+        let mut exit = 0.0;
+        let mut exit_end_limited = true;
+        let n = self.queue.len();
+        for k in (0..n).rev() {
+            let fixed_entry = k == 0;
+            let m = &mut self.queue[k];
+            let reach = reachable_speed(exit, m.length, m.accel, m.jerk);
+            let (entry, end_limited) = if fixed_entry {
+                (self.emitted_exit, false)
+            } else if m.entry_cap <= reach {
+                (m.entry_cap, false)
+            } else {
+                (reach, exit_end_limited)
+            };
+            if k != n - 1 && entry == m.entry && end_limited == m.end_limited {
+                break;
+            }
+            m.entry = entry;
+            m.end_limited = end_limited;
+            exit = entry;
+            exit_end_limited = end_limited;
+        }
+    }
+
+    /// Emits moves from the front whose exit speed can no longer change.
+    fn emit_final(&mut self) {
+        while self.queue.len() >= 2 {
+            let (entry, length, accel, jerk) = {
+                let m = &self.queue[0];
+                (self.emitted_exit, m.length, m.accel, m.jerk)
+            };
+            let next = &self.queue[1];
+            let forward = reachable_speed(entry, length, accel, jerk);
+            let exit = forward.min(next.entry);
+            if forward > next.entry && next.end_limited {
+                break;
+            }
+            self.emit_front(exit);
+        }
+    }
+
+    /// Emits the front move with the exit the current queue allows (the queue's
+    /// end counted as a stop): always safe, possibly slower than optimal.
+    fn emit_front_as_is(&mut self) {
+        let m = &self.queue[0];
+        let forward = reachable_speed(self.emitted_exit, m.length, m.accel, m.jerk);
+        let exit = if self.queue.len() >= 2 { forward.min(self.queue[1].entry) } else { 0.0 };
+        self.emit_front(exit);
+        if let Some(next) = self.queue.front_mut() {
+            next.end_limited = false;
+        }
+        self.emit_final();
+    }
+
+    fn emit_front(&mut self, exit: f64) {
+        let m = self.queue.pop_front().expect("emit_front on an empty queue");
+        for (tool, value) in &m.events {
+            self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool: *tool, value: *value }));
+        }
+        let entry = self.emitted_exit;
+        // Rounding can leave the exit a hair above what the move can reach.
+        let exit = exit.min(reachable_speed(entry, m.length, m.accel, m.jerk));
+        let profile = fastest(m.length, entry, exit, m.v_cap.max(entry).max(exit), m.accel, m.jerk);
+        let seg = Segment { t0: self.clock, start: m.start, end: m.end, profile };
+        self.clock = seg.t1();
+        self.emitted_pos = m.end;
+        self.emitted_exit = exit;
+        if let Some(next) = self.queue.front_mut() {
+            next.entry = exit;
+        }
+        self.out.push_back(Planned::Segment(seg));
+    }
+
+    /// Plans everything queued to end at rest.
+    fn flush(&mut self) {
+        while !self.queue.is_empty() {
+            if self.queue.len() == 1 {
+                self.emit_front(0.0);
+            } else {
+                // The backward pass already assumed a stop at the end.
+                let m = &self.queue[0];
+                let forward = reachable_speed(self.emitted_exit, m.length, m.accel, m.jerk);
+                let exit = forward.min(self.queue[1].entry);
+                self.emit_front(exit);
+            }
+        }
+        self.stopped = true;
+    }
+
+    fn emit_loose_events(&mut self) {
+        for (tool, value) in std::mem::take(&mut self.loose_events) {
+            self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool, value }));
+        }
+    }
+
+    fn emit_dwell(&mut self, seconds: f64) {
+        let seg = Segment { t0: self.clock, start: self.emitted_pos, end: self.emitted_pos, profile: Profile::dwell(seconds) };
+        self.clock = seg.t1();
+        self.out.push_back(Planned::Segment(seg));
+    }
+}
