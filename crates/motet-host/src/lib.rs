@@ -1,14 +1,11 @@
-pub fn add(left: u64, right: u64) -> u64 {
-    left + right
-}
+//! The host side of motet: the virtual machine described by a machine file, job
+//! checks, and the distribution of the trajectory to nodes.
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+pub mod distribute;
+pub mod job;
+pub mod machine;
+mod machine_file;
 
-    #[test]
-    fn it_works() {
-        let result = add(2, 2);
-        assert_eq!(result, 4);
-    }
-}
+pub use distribute::{Distributor, Subscription};
+pub use job::check_job;
+pub use machine::{Actuator, Axis, Joint, Machine, MachineError, NodeSpec, Tool};

@@ -1,14 +1,18 @@
-pub fn add(left: u64, right: u64) -> u64 {
-    left + right
-}
+//! The node runtime: what runs on every motet node, in firmware and in the
+//! simulator alike.
+//!
+//! A node receives messages as bytes ([`Node::handle`]), keeps a queue of
+//! trajectory segments and a queue of event changes, and on every frame
+//! ([`Node::poll`]) tells its [`Board`] which steps to take and which tool
+//! outputs to switch, each at its exact time within the frame. It never reads a
+//! clock: the caller passes the time in.
+#![no_std]
+#![forbid(unsafe_code)]
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+pub mod board;
+pub mod channel;
+pub mod node;
 
-    #[test]
-    fn it_works() {
-        let result = add(2, 2);
-        assert_eq!(result, 4);
-    }
-}
+pub use board::Board;
+pub use channel::Channel;
+pub use node::{Node, NodeStatus, DEFAULT_QUEUE, MAX_CHANNELS, MAX_TOOLS};

@@ -1,14 +1,11 @@
-pub fn add(left: u64, right: u64) -> u64 {
-    left + right
-}
+//! The simulator: runs a job on a machine's nodes, using the same node code as
+//! firmware, against a simulated plant; reports how the machine moved and draws
+//! what it did.
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+pub mod path;
+pub mod plant;
+pub mod report;
+pub mod run;
 
-    #[test]
-    fn it_works() {
-        let result = add(2, 2);
-        assert_eq!(result, 4);
-    }
-}
+pub use report::Report;
+pub use run::{simulate, SimError, SimResult, NODE_QUEUE};

@@ -1,3 +1,65 @@
-fn main() {
-    println!("Hello, world!");
+//! The `motet` command line. Thin: it reads files, calls the libraries, and
+//! prints; all behaviour lives in the crates.
+
+mod bench;
+mod job;
+mod run;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "motet", version, about = "Describe a machine, drive it from G-code and SVG, on simulated nodes")]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a job (G-code or SVG) on the simulated machine and write a render and a report.
+    Run {
+        /// Machine file (TOML).
+        machine: PathBuf,
+        /// Job: .gcode/.nc/.g (optionally .gz) or .svg.
+        job: PathBuf,
+        /// Output folder [default: out/<job name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Skip unsupported G-codes with a warning instead of refusing the job.
+        #[arg(long)]
+        allow_unknown: bool,
+        /// No progress bar or summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Check a machine file and a job without running it.
+    Check {
+        machine: PathBuf,
+        job: Option<PathBuf>,
+        #[arg(long)]
+        allow_unknown: bool,
+    },
+    /// Measure parsing, planning and simulation speed on a real slicer's G-code.
+    Bench {
+        #[arg(long, default_value = "examples/printer.toml")]
+        machine: PathBuf,
+        #[arg(long, default_value = "bench/data/prusaslicer-twisted-vase.gcode.gz")]
+        job: PathBuf,
+        /// Repetitions of the planning measurement (the best is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        /// Skip the full simulation.
+        #[arg(long)]
+        no_sim: bool,
+    },
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Cmd::Run { machine, job, out, allow_unknown, quiet } => run::run(&machine, &job, out, allow_unknown, quiet),
+        Cmd::Check { machine, job, allow_unknown } => run::check(&machine, job.as_deref(), allow_unknown),
+        Cmd::Bench { machine, job, repeat, no_sim } => bench::bench(&machine, &job, repeat, no_sim),
+    }
 }

@@ -1,0 +1,465 @@
+//! The virtual machine: a validated machine description.
+
+use crate::machine_file::{ElementFile, MachineFile};
+use motet_planner::{
+    AxisInfo, AxisLimits, JobTarget, JointLimits, Limits, ToolInfo, ToolKind, ToolTiming,
+};
+use motet_trajectory::{
+    Element, ElementChain, JointMap, KinematicsKind, Point, ProfileKind, Unit, MAX_AXES,
+};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// A problem in a machine file, with its place.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}:{line}:{column}: {message}")]
+pub struct MachineError {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    pub name: String,
+    /// `[min, max]`; infinite for axes without travel limits.
+    pub travel: [f64; 2],
+    pub max_velocity: f64,
+    pub max_acceleration: f64,
+    pub max_jerk: Option<f64>,
+    pub path: bool,
+}
+
+/// What an actuator moves: a machine axis, or a joint of the kinematics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    pub name: String,
+    pub map: JointMap,
+    pub unit: Unit,
+    pub max_velocity: Option<f64>,
+    pub max_acceleration: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Actuator {
+    pub name: String,
+    pub joint: usize,
+    /// Signed; negative when the chain inverts.
+    pub steps_per_unit: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tool {
+    pub name: String,
+    pub kind: ToolKind,
+    pub settle: f64,
+    pub on_value: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeSpec {
+    pub name: String,
+    /// Indices into [`Machine::actuators`]; the position is the node's channel id.
+    pub actuators: Vec<usize>,
+    /// Indices into [`Machine::tools`]; the position is the node's tool output.
+    pub tools: Vec<usize>,
+    pub queue: usize,
+    pub frame_us: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Machine {
+    pub name: String,
+    pub file: PathBuf,
+    pub axes: Vec<Axis>,
+    pub kinematics: KinematicsKind,
+    /// Indices of the x and y axes when the kinematics couples them.
+    pub xy: Option<(usize, usize)>,
+    pub joints: Vec<Joint>,
+    pub actuators: Vec<Actuator>,
+    pub tools: Vec<Tool>,
+    pub nodes: Vec<NodeSpec>,
+    pub junction_deviation: f64,
+    pub profile: ProfileKind,
+    pub tolerance: f64,
+    pub draw_feed: f64,
+    pub start: Point,
+    pub min_radius: f64,
+    pub lookahead: usize,
+}
+
+/// Turns byte offsets into line and column for error messages.
+struct Source<'a> {
+    file: String,
+    text: &'a str,
+}
+
+impl Source<'_> {
+    fn err(&self, span: Range<usize>, message: impl Into<String>) -> MachineError {
+        let at = span.start.min(self.text.len());
+        let before = &self.text[..at];
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        MachineError { file: self.file.clone(), line, column, message: message.into() }
+    }
+}
+
+impl Machine {
+    /// Reads and validates a machine file.
+    pub fn load(path: &Path) -> Result<Machine, MachineError> {
+        let text = std::fs::read_to_string(path).map_err(|e| MachineError {
+            file: path.display().to_string(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read machine file: {e}"),
+        })?;
+        Machine::parse(&text, path)
+    }
+
+    /// Validates a machine description given as TOML text.
+    pub fn parse(text: &str, file: &Path) -> Result<Machine, MachineError> {
+        let src = Source { file: file.display().to_string(), text };
+        let raw: MachineFile = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            src.err(span, e.message().to_string())
+        })?;
+        build(&src, raw, file)
+    }
+
+    /// The planner's view of the limits.
+    pub fn limits(&self) -> Limits {
+        Limits {
+            axes: self
+                .axes
+                .iter()
+                .map(|a| AxisLimits {
+                    max_velocity: a.max_velocity,
+                    max_acceleration: a.max_acceleration,
+                    max_jerk: a.max_jerk,
+                    path: a.path,
+                })
+                .collect(),
+            joints: self
+                .joints
+                .iter()
+                .filter(|j| j.max_velocity.is_some() || j.max_acceleration.is_some())
+                .map(|j| JointLimits {
+                    map: j.map,
+                    max_velocity: j.max_velocity.unwrap_or(f64::INFINITY),
+                    max_acceleration: j.max_acceleration.unwrap_or(f64::INFINITY),
+                })
+                .collect(),
+            junction_deviation: self.junction_deviation,
+            profile: self.profile,
+            tools: self.tools.iter().map(|t| ToolTiming { stop: t.kind != ToolKind::Laser, settle: t.settle }).collect(),
+            lookahead: self.lookahead,
+        }
+    }
+
+    /// What job sources need to know.
+    pub fn job_target(&self) -> JobTarget {
+        JobTarget {
+            axes: self.axes.iter().map(|a| AxisInfo { name: a.name.clone(), travel: a.travel, path: a.path }).collect(),
+            tools: self
+                .tools
+                .iter()
+                .map(|t| ToolInfo { name: t.name.clone(), kind: t.kind, on_value: t.on_value })
+                .collect(),
+            start: self.start,
+            tolerance: self.tolerance,
+            draw_feed: self.draw_feed,
+        }
+    }
+
+    pub fn axis(&self, name: &str) -> Option<usize> {
+        self.axes.iter().position(|a| a.name == name)
+    }
+}
+
+fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, MachineError> {
+    let m = &raw.motion;
+    let kinematics = match m.kinematics.get_ref().as_str() {
+        "cartesian" => KinematicsKind::Cartesian,
+        "corexy" => KinematicsKind::CoreXY,
+        "hbot" => KinematicsKind::HBot,
+        "polar" => KinematicsKind::Polar,
+        other => {
+            return Err(src.err(
+                m.kinematics.span(),
+                format!("unknown kinematics `{other}`; expected cartesian, corexy, hbot or polar"),
+            ))
+        }
+    };
+    let profile = match m.profile.get_ref().as_str() {
+        "trapezoid" => ProfileKind::Trapezoid,
+        "scurve" => ProfileKind::SCurve,
+        other => return Err(src.err(m.profile.span(), format!("unknown profile `{other}`; expected trapezoid or scurve"))),
+    };
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    if !positive(m.junction_deviation) || !positive(m.tolerance) || !(m.min_radius >= 0.0) {
+        return Err(src.err(0..0, "[motion]: junction_deviation and tolerance must be positive, min_radius not negative"));
+    }
+
+    // Axes, in file order of their names (BTreeMap: alphabetical) would scramble
+    // x, y, z: order them by the conventional letters first.
+    let mut names: Vec<&String> = raw.axes.keys().collect();
+    let rank = |n: &str| ["x", "y", "z", "e", "a", "b", "c"].iter().position(|k| *k == n).unwrap_or(99);
+    names.sort_by_key(|n| (rank(n), (*n).clone()));
+    if names.is_empty() {
+        return Err(src.err(0..0, "the machine has no [axes]"));
+    }
+    if names.len() > MAX_AXES {
+        let span = raw.axes[names[MAX_AXES]].span();
+        return Err(src.err(span, format!("at most {MAX_AXES} axes are supported")));
+    }
+    let mut axes = Vec::new();
+    for name in &names {
+        let a = &raw.axes[*name];
+        let span = a.span();
+        let a = a.get_ref();
+        if !name.chars().all(|c| c.is_ascii_lowercase()) || name.is_empty() {
+            return Err(src.err(span, format!("axis name `{name}` must be lower-case letters")));
+        }
+        let path = a.path.unwrap_or(name.as_str() != "e");
+        let travel = match &a.travel {
+            Some(t) => {
+                let [lo, hi] = *t.get_ref();
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(src.err(t.span(), format!("axis {name}: travel must be [min, max] with min < max")));
+                }
+                [lo, hi]
+            }
+            None if !path => [f64::NEG_INFINITY, f64::INFINITY],
+            None => return Err(src.err(span, format!("axis {name}: missing field `travel`"))),
+        };
+        for (v, what) in [(&a.max_velocity, "max_velocity"), (&a.max_acceleration, "max_acceleration")] {
+            if !positive(*v.get_ref()) {
+                return Err(src.err(v.span(), format!("axis {name}: {what} must be a positive number")));
+            }
+        }
+        if let Some(j) = &a.max_jerk {
+            if !positive(*j.get_ref()) {
+                return Err(src.err(j.span(), format!("axis {name}: max_jerk must be a positive number")));
+            }
+        }
+        axes.push(Axis {
+            name: (*name).clone(),
+            travel,
+            max_velocity: *a.max_velocity.get_ref(),
+            max_acceleration: *a.max_acceleration.get_ref(),
+            max_jerk: a.max_jerk.as_ref().map(|j| *j.get_ref()),
+            path,
+        });
+    }
+    if profile == ProfileKind::SCurve && axes.iter().all(|a| a.max_jerk.is_none()) {
+        return Err(src.err(m.profile.span(), "profile = \"scurve\" needs max_jerk on at least one axis"));
+    }
+    let axis_index = |n: &str| axes.iter().position(|a| a.name == n);
+
+    // Joints: the kinematics replaces x and y; every other axis is its own joint.
+    let xy = if kinematics == KinematicsKind::Cartesian {
+        None
+    } else {
+        match (axis_index("x"), axis_index("y")) {
+            (Some(x), Some(y)) => Some((x, y)),
+            _ => {
+                return Err(src.err(
+                    m.kinematics.span(),
+                    format!("{} kinematics needs axes named x and y", kinematics.name()),
+                ))
+            }
+        }
+    };
+    let mut joints = Vec::new();
+    if let Some((x, y)) = xy {
+        for (j, name) in kinematics.xy_joints().iter().enumerate() {
+            let angle = kinematics.joint_is_angle(j);
+            joints.push(Joint {
+                name: (*name).to_string(),
+                map: kinematics.xy_joint_map(j, x, y),
+                unit: if angle { Unit::Degree } else { Unit::Millimetre },
+                max_velocity: None,
+                max_acceleration: None,
+            });
+        }
+    }
+    for (i, a) in axes.iter().enumerate() {
+        if xy.is_some_and(|(x, y)| i == x || i == y) {
+            continue;
+        }
+        joints.push(Joint { name: a.name.clone(), map: JointMap::axis(i), unit: Unit::Millimetre, max_velocity: None, max_acceleration: None });
+    }
+    let joint_names = joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ");
+
+    // Actuators and their element chains.
+    let mut actuators = Vec::new();
+    let mut driven = vec![false; joints.len()];
+    for (name, a) in &raw.actuators {
+        let a = a.get_ref();
+        let joint = joints.iter().position(|j| j.name == *a.joint.get_ref()).ok_or_else(|| {
+            src.err(
+                a.joint.span(),
+                format!("actuator {name}: unknown joint `{}`; this machine's joints are {}", a.joint.get_ref(), joint_names),
+            )
+        })?;
+        driven[joint] = true;
+        let mut elements = Vec::new();
+        for e in a.chain.get_ref() {
+            let el = match e.get_ref() {
+                ElementFile::Pulley(p) => {
+                    let circumference = match (p.pitch_diameter, p.teeth, p.belt_pitch) {
+                        (Some(d), None, None) => std::f64::consts::PI * d,
+                        (None, Some(t), Some(pitch)) => t as f64 * pitch,
+                        _ => {
+                            return Err(src.err(
+                                e.span(),
+                                format!("actuator {name}: a pulley needs either pitch_diameter, or teeth and belt_pitch"),
+                            ))
+                        }
+                    };
+                    Element::Pulley { circumference }
+                }
+                ElementFile::Leadscrew { lead } => Element::Leadscrew { lead: *lead },
+                ElementFile::Gear { ratio } => Element::Gear { ratio: *ratio },
+                ElementFile::Stepper { step_angle } => Element::Stepper { step_angle: *step_angle },
+                ElementFile::Microstep(n) => Element::Microstep { divisions: *n },
+                ElementFile::Invert => Element::Invert,
+            };
+            elements.push(el);
+        }
+        let chain = ElementChain::new(joints[joint].unit, &elements).map_err(|e| {
+            let span = a.chain.get_ref().get(e.index).map_or(a.chain.span(), |x| x.span());
+            src.err(span, format!("actuator {name}: impossible element chain: {e}"))
+        })?;
+        if let Some(v) = a.max_velocity {
+            let j = &mut joints[joint];
+            j.max_velocity = Some(j.max_velocity.map_or(v, |w| w.min(v)));
+        }
+        if let Some(v) = a.max_acceleration {
+            let j = &mut joints[joint];
+            j.max_acceleration = Some(j.max_acceleration.map_or(v, |w| w.min(v)));
+        }
+        actuators.push(Actuator { name: name.clone(), joint, steps_per_unit: chain.steps_per_unit });
+    }
+    if let Some(j) = driven.iter().position(|d| !d) {
+        return Err(src.err(0..0, format!("joint `{}` has no actuator; add an [actuators.NAME] with joint = \"{}\"", joints[j].name, joints[j].name)));
+    }
+
+    // Tools.
+    let mut tools = Vec::new();
+    for (name, t) in &raw.tools {
+        let t = t.get_ref();
+        let kind = match t.kind.get_ref().as_str() {
+            "pen" => ToolKind::Pen,
+            "laser" => ToolKind::Laser,
+            "spindle" => ToolKind::Spindle,
+            other => return Err(src.err(t.kind.span(), format!("tool {name}: unknown kind `{other}`; expected pen, laser or spindle"))),
+        };
+        let settle = t.settle.unwrap_or(match kind {
+            ToolKind::Pen => 0.15,
+            ToolKind::Spindle => 1.0,
+            ToolKind::Laser => 0.0,
+        });
+        if !(settle.is_finite() && settle >= 0.0) {
+            return Err(src.err(t.kind.span(), format!("tool {name}: settle must be a non-negative number of seconds")));
+        }
+        tools.push(Tool { name: name.clone(), kind, settle, on_value: t.on_value.unwrap_or(1.0).clamp(0.0, 1.0) });
+    }
+
+    // Nodes: each actuator on exactly one node, each tool on at most one.
+    let mut nodes = Vec::new();
+    let mut owner: Vec<Option<String>> = vec![None; actuators.len()];
+    let mut tool_owner: Vec<Option<String>> = vec![None; tools.len()];
+    for (name, n) in &raw.nodes {
+        let n = n.get_ref();
+        let mut spec = NodeSpec {
+            name: name.clone(),
+            actuators: vec![],
+            tools: vec![],
+            queue: n.queue.unwrap_or(64),
+            frame_us: n.frame_us.unwrap_or(40.0),
+        };
+        if !(2..=1024).contains(&spec.queue) || !(spec.frame_us.is_finite() && spec.frame_us > 0.0) {
+            return Err(src.err(0..0, format!("node {name}: queue must be 2..=1024 and frame_us positive")));
+        }
+        for a in &n.actuators {
+            let i = actuators.iter().position(|x| x.name == *a.get_ref()).ok_or_else(|| {
+                src.err(a.span(), format!("node {name}: unknown actuator `{}`", a.get_ref()))
+            })?;
+            if let Some(other) = &owner[i] {
+                return Err(src.err(a.span(), format!("actuator `{}` is already on node {other}", a.get_ref())));
+            }
+            owner[i] = Some(name.clone());
+            spec.actuators.push(i);
+        }
+        for t in &n.tools {
+            let i = tools.iter().position(|x| x.name == *t.get_ref()).ok_or_else(|| {
+                src.err(t.span(), format!("node {name}: unknown tool `{}`", t.get_ref()))
+            })?;
+            if let Some(other) = &tool_owner[i] {
+                return Err(src.err(t.span(), format!("tool `{}` is already on node {other}", t.get_ref())));
+            }
+            tool_owner[i] = Some(name.clone());
+            spec.tools.push(i);
+        }
+        if spec.actuators.len() > 8 || spec.tools.len() > 4 {
+            return Err(src.err(0..0, format!("node {name}: at most 8 actuators and 4 tools per node")));
+        }
+        nodes.push(spec);
+    }
+    if raw.nodes.is_empty() {
+        // One node drives everything: the default that works.
+        nodes.push(NodeSpec {
+            name: "main".into(),
+            actuators: (0..actuators.len()).collect(),
+            tools: (0..tools.len()).collect(),
+            queue: 64,
+            frame_us: 40.0,
+        });
+        if actuators.len() > 8 || tools.len() > 4 {
+            return Err(src.err(0..0, "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables"));
+        }
+    } else if let Some(i) = owner.iter().position(|o| o.is_none()) {
+        return Err(src.err(0..0, format!("actuator `{}` is on no node", actuators[i].name)));
+    }
+
+    // Start position.
+    let mut start = [0.0; MAX_AXES];
+    for (i, a) in axes.iter().enumerate() {
+        if a.travel[0] > 0.0 || a.travel[1] < 0.0 {
+            start[i] = a.travel[0];
+        }
+    }
+    for (name, v) in m.start.get_ref() {
+        let i = axis_index(name).ok_or_else(|| src.err(m.start.span(), format!("[motion] start: unknown axis `{name}`")))?;
+        if !(v.is_finite() && *v >= axes[i].travel[0] && *v <= axes[i].travel[1]) {
+            return Err(src.err(m.start.span(), format!("[motion] start: {name} = {v} is outside the axis's travel")));
+        }
+        start[i] = *v;
+    }
+    let slowest = axes.iter().filter(|a| a.path).map(|a| a.max_velocity).fold(f64::INFINITY, f64::min);
+    let draw_feed = m.draw_feed.unwrap_or(if slowest.is_finite() { 0.5 * slowest } else { 10.0 });
+    if !positive(draw_feed) {
+        return Err(src.err(0..0, "[motion] draw_feed must be positive"));
+    }
+
+    Ok(Machine {
+        name: raw.name,
+        file: file.to_path_buf(),
+        axes,
+        kinematics,
+        xy,
+        joints,
+        actuators,
+        tools,
+        nodes,
+        junction_deviation: m.junction_deviation,
+        profile,
+        tolerance: m.tolerance,
+        draw_feed,
+        start,
+        min_radius: m.min_radius,
+        lookahead: m.lookahead.max(2),
+    })
+}

@@ -1,0 +1,162 @@
+//! The machine file as written (TOML), before validation.
+//!
+//! Every table denies unknown keys, and the fields that later checks complain
+//! about are kept with their place in the file.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineFile {
+    pub name: String,
+    #[serde(default)]
+    pub description: Option<String>,
+    #[serde(default)]
+    pub motion: MotionFile,
+    pub axes: BTreeMap<String, Spanned<AxisFile>>,
+    pub actuators: BTreeMap<String, Spanned<ActuatorFile>>,
+    #[serde(default)]
+    pub tools: BTreeMap<String, Spanned<ToolFile>>,
+    #[serde(default)]
+    pub nodes: BTreeMap<String, Spanned<NodeFile>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionFile {
+    #[serde(default = "default_kinematics")]
+    pub kinematics: Spanned<String>,
+    #[serde(default = "default_junction_deviation")]
+    pub junction_deviation: f64,
+    #[serde(default = "default_profile")]
+    pub profile: Spanned<String>,
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    #[serde(default)]
+    pub draw_feed: Option<f64>,
+    /// Where the machine is at the start of a job; axes not named start at 0, or
+    /// at their travel's lower end when 0 is outside it.
+    #[serde(default = "default_start")]
+    pub start: Spanned<BTreeMap<String, f64>>,
+    /// Polar machines: moves may not pass closer than this to the centre, mm.
+    #[serde(default = "default_min_radius")]
+    pub min_radius: f64,
+    #[serde(default = "default_lookahead")]
+    pub lookahead: usize,
+}
+
+impl Default for MotionFile {
+    fn default() -> Self {
+        MotionFile {
+            kinematics: default_kinematics(),
+            junction_deviation: default_junction_deviation(),
+            profile: default_profile(),
+            tolerance: default_tolerance(),
+            draw_feed: None,
+            start: default_start(),
+            min_radius: default_min_radius(),
+            lookahead: default_lookahead(),
+        }
+    }
+}
+
+fn default_start() -> Spanned<BTreeMap<String, f64>> {
+    Spanned::new(0..0, BTreeMap::new())
+}
+fn default_kinematics() -> Spanned<String> {
+    Spanned::new(0..0, "cartesian".into())
+}
+fn default_profile() -> Spanned<String> {
+    Spanned::new(0..0, "trapezoid".into())
+}
+fn default_junction_deviation() -> f64 {
+    0.05
+}
+fn default_tolerance() -> f64 {
+    0.01
+}
+fn default_min_radius() -> f64 {
+    1.0
+}
+fn default_lookahead() -> usize {
+    4096
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisFile {
+    /// `[min, max]`; optional for axes that ride along (extruders).
+    #[serde(default)]
+    pub travel: Option<Spanned<[f64; 2]>>,
+    pub max_velocity: Spanned<f64>,
+    pub max_acceleration: Spanned<f64>,
+    #[serde(default)]
+    pub max_jerk: Option<Spanned<f64>>,
+    /// Counts toward path length; defaults to true except for an axis named `e`.
+    #[serde(default)]
+    pub path: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorFile {
+    pub joint: Spanned<String>,
+    pub chain: Spanned<Vec<Spanned<ElementFile>>>,
+    #[serde(default)]
+    pub max_velocity: Option<f64>,
+    #[serde(default)]
+    pub max_acceleration: Option<f64>,
+}
+
+/// One element of a chain, e.g. `{ pulley = { teeth = 20, belt_pitch = 2 } }`,
+/// `{ microstep = 16 }` or `"invert"`.
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ElementFile {
+    Pulley(PulleyFile),
+    Leadscrew { lead: f64 },
+    Gear { ratio: f64 },
+    Stepper { step_angle: f64 },
+    Microstep(u32),
+    Invert,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PulleyFile {
+    #[serde(default)]
+    pub pitch_diameter: Option<f64>,
+    #[serde(default)]
+    pub teeth: Option<u32>,
+    #[serde(default)]
+    pub belt_pitch: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolFile {
+    pub kind: Spanned<String>,
+    /// Seconds to stand still after switching (servo travel, spin-up).
+    #[serde(default)]
+    pub settle: Option<f64>,
+    /// Value for "on" when a job gives none (pen down = 1, full power = 1).
+    #[serde(default)]
+    pub on_value: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeFile {
+    #[serde(default)]
+    pub actuators: Vec<Spanned<String>>,
+    #[serde(default)]
+    pub tools: Vec<Spanned<String>>,
+    /// Segment queue capacity the node is built with.
+    #[serde(default)]
+    pub queue: Option<usize>,
+    /// Frame period, µs.
+    #[serde(default)]
+    pub frame_us: Option<f64>,
+}

@@ -1,0 +1,152 @@
+//! A channel: one actuator's step output driven by the trajectory.
+//!
+//! The channel follows its joint along the queued segments and steps whenever
+//! the joint, in steps, crosses a half-step boundary, so the executed position
+//! never differs from the commanded one by more than half a step. The time of
+//! each crossing is solved in closed form from the segment's geometry and speed
+//! profile, so steps are placed exactly inside a frame, not rounded to it.
+
+use heapless::Deque;
+use motet_trajectory::{JointPath, Segment};
+use motet_wire::ChannelConfig;
+
+/// A step found but not yet taken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    /// Host time, µs.
+    pub time: f64,
+    /// In the joint's positive direction (before inversion).
+    pub positive: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct Channel {
+    config: ChannelConfig,
+    /// Steps per joint unit, unsigned; the sign lives in `invert`.
+    spu: f64,
+    invert: bool,
+    /// Steps taken, counted in the joint's positive direction.
+    position: i64,
+    /// Index of the segment being followed, relative to the queue's head.
+    seg: usize,
+    path: Option<JointPath>,
+    turn: Option<f64>,
+    /// Distance into the current segment up to which steps are found.
+    s: f64,
+    /// Joint value where the last segment ended, to keep angles continuous.
+    joint_ref: f64,
+    pending: Option<Step>,
+    last_time: f64,
+}
+
+impl Channel {
+    pub fn new(config: ChannelConfig) -> Channel {
+        Channel {
+            config,
+            spu: config.steps_per_unit.abs(),
+            invert: config.steps_per_unit < 0.0,
+            position: 0,
+            seg: 0,
+            path: None,
+            turn: None,
+            s: 0.0,
+            joint_ref: 0.0,
+            pending: None,
+            last_time: f64::NEG_INFINITY,
+        }
+    }
+
+    pub fn config(&self) -> &ChannelConfig {
+        &self.config
+    }
+
+    /// Steps taken so far, in the joint's positive direction.
+    pub fn position(&self) -> i64 {
+        self.position
+    }
+
+    /// Sets the step count from the machine at rest at `p`, without stepping.
+    pub fn set_position(&mut self, p: &motet_trajectory::Point) {
+        let value = self.config.map.value(p, self.joint_ref);
+        self.joint_ref = value;
+        self.position = libm_round(value * self.spu);
+        self.seg = 0;
+        self.path = None;
+        self.pending = None;
+    }
+
+    /// The next step on the queued segments, if they hold one.
+    pub fn next_step<const Q: usize>(&mut self, segments: &Deque<Segment, Q>) -> Option<Step> {
+        if self.pending.is_some() {
+            return self.pending;
+        }
+        loop {
+            let seg = segments.get(self.seg)?;
+            let path = match self.path {
+                Some(p) => p,
+                None => {
+                    if seg.profile.length() <= 0.0 {
+                        self.seg += 1;
+                        continue;
+                    }
+                    let p = JointPath::new(&self.config.map, seg, self.joint_ref);
+                    self.turn = p.turning_point();
+                    self.s = 0.0;
+                    self.path = Some(p);
+                    p
+                }
+            };
+            let len = path.length();
+            let hi = match self.turn {
+                Some(t) if self.s < t => t,
+                _ => len,
+            };
+            let at_hi = path.value_at(hi) * self.spu;
+            let pos = self.position as f64;
+            let (boundary, positive) = if at_hi > pos + 0.5 {
+                (pos + 0.5, true)
+            } else if at_hi < pos - 0.5 {
+                (pos - 0.5, false)
+            } else if hi < len {
+                self.s = hi;
+                continue;
+            } else {
+                self.joint_ref = path.value_at(len);
+                self.path = None;
+                self.seg += 1;
+                continue;
+            };
+            let s = path.solve(boundary / self.spu, self.s, hi);
+            self.s = s;
+            // Never earlier than the step before, whatever the rounding.
+            let time = seg.time_at_distance(s).max(self.last_time);
+            let step = Step { time, positive };
+            self.pending = Some(step);
+            return Some(step);
+        }
+    }
+
+    /// Takes the pending step; returns the direction output.
+    pub fn take_step(&mut self) -> Option<(f64, bool)> {
+        let step = self.pending.take()?;
+        self.position += if step.positive { 1 } else { -1 };
+        self.last_time = step.time;
+        Some((step.time, step.positive != self.invert))
+    }
+
+    /// How many queued segments the channel is completely done with.
+    pub fn segments_done(&self) -> usize {
+        self.seg
+    }
+
+    /// The queue dropped `n` segments from its head.
+    pub fn drop_segments(&mut self, n: usize) {
+        self.seg -= n.min(self.seg);
+    }
+}
+
+fn libm_round(x: f64) -> i64 {
+    // Half-way values round away from zero, like the half-step rule's boundary.
+    let r = if x >= 0.0 { x + 0.5 } else { x - 0.5 };
+    r as i64
+}

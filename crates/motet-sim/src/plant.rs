@@ -1,0 +1,216 @@
+//! The simulated plant: motors that move one step per step pulse, tool outputs,
+//! and an observer that checks every step against the ideal trajectory.
+
+use crate::path::PathRecorder;
+use motet_host::Machine;
+use motet_trajectory::{JointMap, KinematicsKind, Point, Segment, MAX_AXES};
+use std::collections::VecDeque;
+
+/// Something a node did, with its exact time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Output {
+    Step { actuator: usize, forward: bool },
+    Tool { tool: usize, value: f32 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stamped {
+    pub time: f64,
+    pub output: Output,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct ActuatorStats {
+    pub steps: u64,
+    pub position: i64,
+    /// Largest |ideal − executed| seen at step instants, steps.
+    pub max_deviation_steps: f64,
+    /// Largest estimated |step time − ideal crossing time|, µs.
+    pub max_step_error_us: f64,
+}
+
+struct ActuatorModel {
+    map: JointMap,
+    joint: usize,
+    /// Unsigned steps per joint unit.
+    spu: f64,
+    invert: bool,
+    position: i64,
+    stats: ActuatorStats,
+}
+
+/// The machine's mechanics as the simulator sees them.
+pub struct Plant {
+    actuators: Vec<ActuatorModel>,
+    kinematics: KinematicsKind,
+    xy: Option<(usize, usize)>,
+    /// For each joint, the actuators driving it (averaged for the executed path).
+    joint_actuators: Vec<Vec<usize>>,
+    joint_axis: Vec<Option<usize>>,
+    extruder: Option<usize>,
+    pub tools: Vec<f32>,
+    /// Segments sent to nodes and not yet in the past, for the ideal trajectory.
+    window: VecDeque<Segment>,
+    pub recorder: PathRecorder,
+    /// Largest distance between executed and commanded points at step instants, mm.
+    pub max_path_deviation: f64,
+    pub last_time: f64,
+    extruded_since: bool,
+}
+
+impl Plant {
+    pub fn new(machine: &Machine, recorder: PathRecorder) -> Plant {
+        let mut joint_actuators = vec![Vec::new(); machine.joints.len()];
+        let actuators = machine
+            .actuators
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                joint_actuators[a.joint].push(i);
+                let map = machine.joints[a.joint].map;
+                let spu = a.steps_per_unit.abs();
+                let value = map.value(&machine.start, 0.0);
+                let position = (value * spu).round() as i64;
+                ActuatorModel {
+                    map,
+                    joint: a.joint,
+                    spu,
+                    invert: a.steps_per_unit < 0.0,
+                    position,
+                    stats: ActuatorStats { position, ..Default::default() },
+                }
+            })
+            .collect();
+        let joint_axis = machine
+            .joints
+            .iter()
+            .map(|j| match j.map {
+                JointMap::Linear { coeffs } => {
+                    let nz: Vec<usize> = (0..MAX_AXES).filter(|&i| coeffs[i] != 0.0).collect();
+                    (nz.len() == 1 && coeffs[nz[0]] == 1.0).then_some(nz[0])
+                }
+                _ => None,
+            })
+            .collect();
+        Plant {
+            actuators,
+            kinematics: machine.kinematics,
+            xy: machine.xy,
+            joint_actuators,
+            joint_axis,
+            extruder: machine.axis("e"),
+            tools: vec![0.0; machine.tools.len()],
+            window: VecDeque::new(),
+            recorder,
+            max_path_deviation: 0.0,
+            last_time: f64::NEG_INFINITY,
+            extruded_since: false,
+        }
+    }
+
+    /// A segment was sent to the nodes: it becomes part of the ideal trajectory.
+    pub fn planned(&mut self, seg: Segment) {
+        self.window.push_back(seg);
+    }
+
+    /// Applies the outputs of one frame, in time order.
+    pub fn apply(&mut self, outputs: &mut [Stamped]) {
+        outputs.sort_by(|a, b| a.time.total_cmp(&b.time));
+        for o in outputs.iter() {
+            self.last_time = self.last_time.max(o.time);
+            match o.output {
+                Output::Step { actuator, forward } => self.step(o.time, actuator, forward),
+                Output::Tool { tool, value } => {
+                    self.tools[tool] = value;
+                    let p = self.executed_point();
+                    self.recorder.sample(&p, self.tool_on(), true);
+                }
+            }
+        }
+    }
+
+    fn tool_on(&self) -> bool {
+        self.tools.first().is_some_and(|v| *v > 0.0) || self.extruded_since
+    }
+
+    fn segment_at(&mut self, t: f64) -> Option<&Segment> {
+        while self.window.len() > 1 && self.window[0].t1() < t {
+            self.window.pop_front();
+        }
+        self.window.front()
+    }
+
+    fn step(&mut self, t: f64, index: usize, forward: bool) {
+        let Some(seg) = self.segment_at(t).copied() else { return };
+        let a = &mut self.actuators[index];
+        let before = a.position;
+        let positive = forward != a.invert;
+        a.position += if positive { 1 } else { -1 };
+        a.stats.steps += 1;
+        a.stats.position = a.position;
+
+        // Ideal joint value in steps near t, on the branch of the executed value.
+        let reference = before as f64 / a.spu;
+        let ideal = |tt: f64| {
+            let s = if tt < seg.t0 || tt > seg.t1() { None } else { Some(seg.position_at(tt)) };
+            s.map(|p| a.map.value(&p, reference) * a.spu)
+        };
+        if let Some(v) = ideal(t) {
+            let dev = (v - before as f64).abs().max((v - a.position as f64).abs());
+            a.stats.max_deviation_steps = a.stats.max_deviation_steps.max(dev);
+            // Time error: how far the crossing of the half-step boundary is from t,
+            // to first order in the joint's speed.
+            let boundary = before as f64 + if positive { 0.5 } else { -0.5 };
+            let h = 0.5;
+            if let (Some(v0), Some(v1)) = (ideal(t - h), ideal(t + h)) {
+                let rate = (v1 - v0) / (2.0 * h);
+                if rate.abs() > 1e-12 {
+                    let err = ((v - boundary) / rate).abs();
+                    a.stats.max_step_error_us = a.stats.max_step_error_us.max(err);
+                }
+            }
+        }
+        if Some(self.actuators[index].joint).and_then(|j| self.joint_axis[j]) == self.extruder && self.extruder.is_some() && positive {
+            self.extruded_since = true;
+        }
+        let p = self.executed_point();
+        let cmd = seg.position_at(t);
+        let mut d2 = 0.0;
+        for i in 0..MAX_AXES {
+            if Some(i) != self.extruder {
+                d2 += (p[i] - cmd[i]) * (p[i] - cmd[i]);
+            }
+        }
+        self.max_path_deviation = self.max_path_deviation.max(d2.sqrt());
+        let on = self.tool_on();
+        self.recorder.sample(&p, on, false);
+        self.extruded_since = false;
+    }
+
+    /// The machine point the motors are at now (forward kinematics).
+    pub fn executed_point(&self) -> Point {
+        let mut joints = vec![0.0; self.joint_actuators.len()];
+        for (j, acts) in self.joint_actuators.iter().enumerate() {
+            let sum: f64 = acts.iter().map(|&i| self.actuators[i].position as f64 / self.actuators[i].spu).sum();
+            joints[j] = sum / acts.len().max(1) as f64;
+        }
+        let mut p = [0.0; MAX_AXES];
+        let mut k = 0;
+        if let Some((x, y)) = self.xy {
+            let (px, py) = self.kinematics.forward_xy(joints[0], joints[1]);
+            p[x] = px;
+            p[y] = py;
+            k = 2;
+        }
+        for (j, axis) in self.joint_axis.iter().enumerate().skip(k) {
+            if let Some(i) = axis {
+                p[*i] = joints[j];
+            }
+        }
+        p
+    }
+
+    pub fn actuator_stats(&self) -> Vec<ActuatorStats> {
+        self.actuators.iter().map(|a| a.stats.clone()).collect()
+    }
+}

@@ -1,0 +1,283 @@
+//! The simulation: planner → distributor → bytes → nodes → plant, on one
+//! simulated clock.
+
+use crate::path::PathRecorder;
+use crate::plant::{Output, Plant, Stamped};
+use crate::report::{ActuatorReport, AxisReport, JointReport, Report};
+use motet_host::{Distributor, Machine};
+use motet_node::{Board, Node};
+use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
+use motet_render::Stroke;
+use motet_trajectory::{JointMap, JointPath};
+use motet_wire::{encode, HostMessage, NodeMessage, Refusal, MAX_MESSAGE};
+use std::time::Instant;
+
+/// Capacity every simulated node is built with; a machine file may ask for less.
+pub const NODE_QUEUE: usize = 64;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("{loc}: {error}")]
+    Plan { loc: SourceLoc, error: PlanError },
+    #[error("node {node} refused a message: {reason:?}")]
+    Refused { node: String, reason: Refusal },
+}
+
+/// What a run produced.
+pub struct SimResult {
+    pub report: Report,
+    pub strokes: Vec<Stroke>,
+}
+
+/// Progress of a run: commands planned out of the total.
+pub type Progress<'a> = &'a mut dyn FnMut(usize, usize);
+
+/// Collects one node's outputs for the plant, translating its channel and tool
+/// numbers to the machine's actuators and tools.
+struct Collector<'a> {
+    actuators: &'a [usize],
+    tools: &'a [usize],
+    out: &'a mut Vec<Stamped>,
+}
+
+impl Board for Collector<'_> {
+    fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
+        let actuator = self.actuators[channel as usize];
+        self.out.push(Stamped { time: at_us, output: Output::Step { actuator, forward } });
+    }
+    fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
+        let tool = self.tools[output as usize];
+        self.out.push(Stamped { time: at_us, output: Output::Tool { tool, value } });
+    }
+}
+
+struct Sim<'m> {
+    machine: &'m Machine,
+    nodes: Vec<Node<NODE_QUEUE>>,
+    dist: Distributor,
+    plant: Plant,
+    frame: f64,
+    now: f64,
+    outputs: Vec<Stamped>,
+    buf: [u8; MAX_MESSAGE],
+    stats: Stats,
+}
+
+#[derive(Default)]
+struct Stats {
+    segments: usize,
+    events: usize,
+    axes: Vec<AxisReport>,
+    joints: Vec<(usize, JointReport)>,
+    tool_on: bool,
+    extruding_axis: Option<usize>,
+    tool_on_distance: f64,
+    travel_distance: f64,
+}
+
+impl Sim<'_> {
+    fn send(&mut self, node: usize, msg: &HostMessage) -> Result<(), SimError> {
+        // Every message crosses as bytes, as it would over a link.
+        let bytes = encode(msg, &mut self.buf).expect("messages fit MAX_MESSAGE");
+        match self.nodes[node].handle(bytes) {
+            Some(NodeMessage::Refused { reason }) => {
+                Err(SimError::Refused { node: self.machine.nodes[node].name.clone(), reason })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// First frame boundary strictly after `t`.
+    fn frame_after(&self, t: f64) -> f64 {
+        ((t / self.frame).floor() + 1.0) * self.frame
+    }
+
+    /// Runs every node up to `until` and applies their outputs to the plant.
+    fn poll_all(&mut self, until: f64) {
+        if until <= self.now {
+            return;
+        }
+        self.outputs.clear();
+        for (k, node) in self.nodes.iter_mut().enumerate() {
+            let spec = &self.machine.nodes[k];
+            let mut c = Collector { actuators: &spec.actuators, tools: &spec.tools, out: &mut self.outputs };
+            node.poll(until, &mut c);
+        }
+        self.plant.apply(&mut self.outputs);
+        self.now = until;
+    }
+
+    /// Lets time pass until node `k` has room for another segment or event.
+    fn make_room(&mut self, k: usize, segment: bool) {
+        let window = self.machine.nodes[k].queue.min(NODE_QUEUE);
+        loop {
+            let st = self.nodes[k].status();
+            let full = if segment { NODE_QUEUE - st.segment_space >= window } else { st.event_space == 0 };
+            if !full {
+                return;
+            }
+            // Jumping straight to the end of the oldest segment gives the same
+            // outputs as polling every frame up to it: each output has its own time.
+            let target = match self.nodes[k].front_end() {
+                Some(t) => t,
+                None => self.nodes[k].next_deadline().unwrap_or(self.now),
+            };
+            let until = self.frame_after(target.max(self.now));
+            self.poll_all(until);
+        }
+    }
+
+    fn dispatch(&mut self, item: Planned) -> Result<(), SimError> {
+        match &item {
+            Planned::Segment(s) => {
+                self.stats.segments += 1;
+                self.plant.planned(*s);
+                self.account(s);
+            }
+            Planned::Event(e) => {
+                self.stats.events += 1;
+                if e.tool == 0 {
+                    self.stats.tool_on = e.value > 0.0;
+                }
+            }
+        }
+        for k in 0..self.nodes.len() {
+            if let Some(msg) = self.dist.route(k, &item) {
+                self.make_room(k, matches!(msg, HostMessage::Segment(_)));
+                self.send(k, &msg)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Peak speeds and distances from the planned segment.
+    fn account(&mut self, s: &motet_trajectory::Segment) {
+        let p = &s.profile;
+        let (vc, acc) = (p.vc().max(p.v0()).max(p.v1()), p.peak_accel());
+        for (i, a) in self.stats.axes.iter_mut().enumerate() {
+            let u = s.axis_rate(i).abs();
+            a.distance += (s.end[i] - s.start[i]).abs();
+            a.peak_velocity = a.peak_velocity.max(u * vc);
+            a.peak_acceleration = a.peak_acceleration.max(u * acc);
+        }
+        for (j, r) in self.stats.joints.iter_mut() {
+            let map: JointMap = self.machine.joints[*j].map;
+            let path = JointPath::new(&map, s, 0.0);
+            r.peak_velocity = r.peak_velocity.max(path.max_rate(0.0, p.length()) * vc);
+        }
+        let extruding = self.stats.extruding_axis.is_some_and(|e| s.end[e] > s.start[e]);
+        if self.stats.tool_on || extruding {
+            self.stats.tool_on_distance += p.length();
+        } else {
+            self.stats.travel_distance += p.length();
+        }
+    }
+}
+
+/// Plans `commands` on `machine` and executes them on simulated nodes.
+pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], progress: Progress) -> Result<SimResult, SimError> {
+    let started = Instant::now();
+    let (x, y) = (machine.axis("x").unwrap_or(0), machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)));
+    let span = |i: usize| {
+        let t = machine.axes[i].travel;
+        if t[0].is_finite() && t[1].is_finite() { t[1] - t[0] } else { 100.0 }
+    };
+    let resolution = span(x).max(span(y)) / 4000.0;
+    let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
+    let dist = Distributor::new(machine);
+    let frame = machine.nodes.iter().map(|n| n.frame_us).fold(f64::INFINITY, f64::min);
+    let mut sim = Sim {
+        machine,
+        nodes: machine.nodes.iter().map(|_| Node::new()).collect(),
+        dist,
+        plant,
+        frame,
+        now: 0.0,
+        outputs: Vec::new(),
+        buf: [0; MAX_MESSAGE],
+        stats: Stats {
+            axes: machine
+                .axes
+                .iter()
+                .map(|a| AxisReport { name: a.name.clone(), max_velocity: a.max_velocity, max_acceleration: a.max_acceleration, ..Default::default() })
+                .collect(),
+            joints: machine
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(_, j)| !matches!(j.map, JointMap::Linear { coeffs } if coeffs.iter().filter(|c| **c != 0.0).count() == 1))
+                .map(|(i, j)| (i, JointReport { name: j.name.clone(), max_velocity: j.max_velocity, ..Default::default() }))
+                .collect(),
+            extruding_axis: machine.axis("e"),
+            ..Default::default()
+        },
+    };
+    for k in 0..sim.nodes.len() {
+        for msg in sim.dist.setup(machine, k, &machine.start) {
+            sim.send(k, &msg)?;
+        }
+    }
+
+    let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
+    let total = commands.len();
+    for (i, c) in commands.iter().enumerate() {
+        planner.push(&c.item).map_err(|error| SimError::Plan { loc: c.loc, error })?;
+        while let Some(item) = planner.pop() {
+            sim.dispatch(item)?;
+        }
+        if i % 1024 == 0 {
+            progress(i, total);
+        }
+    }
+    planner.finish();
+    while let Some(item) = planner.pop() {
+        sim.dispatch(item)?;
+    }
+    let end = planner.clock();
+    // Run to the end, then until nothing is left to do.
+    sim.poll_all(sim.frame_after(end));
+    while let Some(d) = sim.nodes.iter_mut().filter_map(|n| n.next_deadline()).reduce(f64::min) {
+        let until = sim.frame_after(d.max(sim.now));
+        sim.poll_all(until);
+    }
+    progress(total, total);
+
+    let wall = started.elapsed().as_secs_f64();
+    let duration_s = end * 1e-6;
+    let stats = sim.plant.actuator_stats();
+    let actuators: Vec<ActuatorReport> = machine
+        .actuators
+        .iter()
+        .zip(&stats)
+        .enumerate()
+        .map(|(i, (a, st))| ActuatorReport {
+            name: a.name.clone(),
+            node: machine.nodes.iter().find(|n| n.actuators.contains(&i)).map(|n| n.name.clone()).unwrap_or_default(),
+            steps_per_unit: a.steps_per_unit,
+            steps: st.steps,
+            position: st.position,
+            max_deviation_steps: st.max_deviation_steps,
+            max_step_time_error_us: st.max_step_error_us,
+        })
+        .collect();
+    let report = Report {
+        machine: machine.name.clone(),
+        job: job.to_string(),
+        duration_s,
+        commands: total,
+        segments: sim.stats.segments,
+        tool_events: sim.stats.events,
+        tool_on_distance_mm: sim.stats.tool_on_distance,
+        travel_distance_mm: sim.stats.travel_distance,
+        axes: sim.stats.axes,
+        joints: sim.stats.joints.into_iter().map(|(_, j)| j).collect(),
+        max_path_deviation_mm: sim.plant.max_path_deviation,
+        max_deviation_steps: actuators.iter().map(|a| a.max_deviation_steps).fold(0.0, f64::max),
+        max_step_time_error_us: actuators.iter().map(|a| a.max_step_time_error_us).fold(0.0, f64::max),
+        actuators,
+        underruns: sim.nodes.iter().map(|n| n.status().underruns).sum(),
+        wall_s: wall,
+        speed_factor: if wall > 0.0 { duration_s / wall } else { f64::INFINITY },
+    };
+    Ok(SimResult { report, strokes: std::mem::take(&mut sim.plant.recorder.strokes) })
+}

@@ -1,0 +1,68 @@
+//! `motet bench`: parse, plan and simulate a real slicer's G-code and print the
+//! figures the project tracks.
+
+use crate::{job, run::load_machine};
+use anyhow::Result;
+use motet_planner::{Planned, Planner};
+use std::path::Path;
+use std::time::Instant;
+
+pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) -> Result<()> {
+    let machine = load_machine(machine_path)?;
+    let data = job::read_bytes(job_path)?;
+    let lines = data.iter().filter(|b| **b == b'\n').count();
+    let t = Instant::now();
+    let loaded = job::load(&machine, job_path, true)?;
+    let load_s = t.elapsed().as_secs_f64();
+    let moves = loaded.commands.len();
+    println!("job: {} ({} lines, {:.1} MB, {} commands)", job_path.display(), lines, data.len() as f64 / 1e6, moves);
+    println!("parse + check: {:.3} s ({:.0} MB/s, including decompression)", load_s, data.len() as f64 / 1e6 / load_s);
+
+    let mut best = f64::INFINITY;
+    let mut segments = 0;
+    let mut duration = 0.0;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        let mut p = Planner::new(machine.limits(), machine.start, 0.0);
+        let mut n = 0usize;
+        for c in &loaded.commands {
+            p.push(&c.item)?;
+            while let Some(x) = p.pop() {
+                n += matches!(x, Planned::Segment(_)) as usize;
+            }
+        }
+        p.finish();
+        while let Some(x) = p.pop() {
+            n += matches!(x, Planned::Segment(_)) as usize;
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+        segments = n;
+        duration = p.clock() * 1e-6;
+    }
+    println!(
+        "planning: {} commands -> {} segments in {:.3} s: {:.2} M moves/s (best of {})",
+        moves,
+        segments,
+        best,
+        moves as f64 / best / 1e6,
+        repeat.max(1)
+    );
+    println!("job duration: {:.0} s ({:.2} h)", duration, duration / 3600.0);
+    if !no_sim {
+        let r = motet_sim::simulate(&machine, &job::name(job_path), &loaded.commands, &mut |_, _| {})?;
+        let steps: u64 = r.report.actuators.iter().map(|a| a.steps).sum();
+        println!(
+            "simulation: {:.0} s of motion in {:.2} s wall: {:.0}x real time; {} steps ({:.1} M steps/s)",
+            r.report.duration_s,
+            r.report.wall_s,
+            r.report.speed_factor,
+            steps,
+            steps as f64 / r.report.wall_s / 1e6
+        );
+        println!(
+            "accuracy: step-time error {:.4} µs max, executed path within {:.4} mm ({:.3} steps) of the commanded path",
+            r.report.max_step_time_error_us, r.report.max_path_deviation_mm, r.report.max_deviation_steps
+        );
+    }
+    Ok(())
+}

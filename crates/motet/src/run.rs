@@ -1,0 +1,71 @@
+//! `motet run` and `motet check`.
+
+use crate::job;
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use motet_host::Machine;
+use motet_render::{render_png, render_svg, RenderSpec};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+pub fn load_machine(path: &Path) -> Result<Machine> {
+    Ok(Machine::load(path)?)
+}
+
+pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Result<()> {
+    let m = load_machine(machine)?;
+    println!("{}: ok ({}, {} axes, {} actuators, {} nodes)", machine.display(), m.name, m.axes.len(), m.actuators.len(), m.nodes.len());
+    if let Some(j) = job_path {
+        let loaded = job::load(&m, j, allow_unknown)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        println!("{}: ok ({} commands)", j.display(), loaded.commands.len());
+    }
+    Ok(())
+}
+
+pub fn run(machine_path: &Path, job_path: &Path, out: Option<PathBuf>, allow_unknown: bool, quiet: bool) -> Result<()> {
+    let machine = load_machine(machine_path)?;
+    let loaded = job::load(&machine, job_path, allow_unknown)?;
+    if !quiet {
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let name = job::name(job_path);
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&name));
+
+    let bar = if quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(loaded.commands.len() as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} simulating [{bar:40}] {pos}/{len} commands ({eta})")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        b
+    };
+    let mut progress = |done: usize, _total: usize| bar.set_position(done as u64);
+    let result = motet_sim::simulate(&machine, &name, &loaded.commands, &mut progress)
+        .map_err(|e| anyhow::anyhow!("{}:{e}", job_path.display()))?;
+    bar.finish_and_clear();
+
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let (x, y) = (machine.axis("x").unwrap_or(0), machine.axis("y").unwrap_or(0));
+    let mut bounds = [[machine.axes[x].travel[0], machine.axes[y].travel[0]], [machine.axes[x].travel[1], machine.axes[y].travel[1]]];
+    if !bounds.iter().flatten().all(|v| v.is_finite()) {
+        bounds = [[-100.0, -100.0], [100.0, 100.0]];
+    }
+    let spec = RenderSpec::new(bounds, format!("{} on {}", name, machine.name));
+    let png = render_png(&result.strokes, &spec).context("rendering the tool path")?;
+    std::fs::write(out.join("path.png"), png)?;
+    std::fs::write(out.join("path.svg"), render_svg(&result.strokes, &spec))?;
+    std::fs::write(out.join("report.json"), serde_json::to_string_pretty(&result.report)? + "\n")?;
+    if !quiet {
+        println!("{}", result.report.summary());
+        println!("  wrote {}/{{path.png, path.svg, report.json}}", out.display());
+    }
+    Ok(())
+}
