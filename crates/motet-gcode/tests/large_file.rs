@@ -1,10 +1,9 @@
-//! A 100,000-line slicer-style file must parse quickly.
+//! A 100,000-line slicer-style file parses whole (speed is measured by `motet bench`).
 
 mod common;
 
 use common::*;
 use std::fmt::Write;
-use std::time::Instant;
 
 fn slicer_file(lines: usize) -> String {
     let mut s = String::with_capacity(lines * 40);
@@ -49,22 +48,10 @@ fn slicer_file(lines: usize) -> String {
 }
 
 #[test]
-fn hundred_thousand_lines_parse_fast() {
+fn hundred_thousand_lines_parse() {
+    // Speed is measured by `motet bench`; this checks a large file parses whole.
     let src = slicer_file(100_000);
     let target = printer();
-    let mut best = f64::INFINITY;
-    let mut count = 0;
-    for _ in 0..5 {
-        let t0 = Instant::now();
-        let p = motet_gcode::parse(&src, &target, &Default::default()).unwrap();
-        best = best.min(t0.elapsed().as_secs_f64());
-        count = p.commands.len();
-    }
-    eprintln!(
-        "100k-line file: {count} commands, best of 5: {:.1} ms",
-        best * 1e3
-    );
-    assert!(count > 90_000);
-    // Generous bound for a loaded shared machine; release builds are far faster.
-    assert!(best < 1.0, "took {best} s");
+    let p = motet_gcode::parse(&src, &target, &Default::default()).unwrap();
+    assert!(p.commands.len() > 90_000);
 }
