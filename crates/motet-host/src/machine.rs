@@ -71,6 +71,7 @@ pub struct NodeSpec {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Machine {
     pub name: String,
+    pub description: Option<String>,
     pub file: PathBuf,
     pub axes: Vec<Axis>,
     pub kinematics: KinematicsKind,
@@ -197,8 +198,13 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         other => return Err(src.err(m.profile.span(), format!("unknown profile `{other}`; expected trapezoid or scurve"))),
     };
     let positive = |v: f64| v.is_finite() && v > 0.0;
-    if !positive(m.junction_deviation) || !positive(m.tolerance) || !(m.min_radius >= 0.0) {
-        return Err(src.err(0..0, "[motion]: junction_deviation and tolerance must be positive, min_radius not negative"));
+    for (v, what) in [(&m.junction_deviation, "junction_deviation"), (&m.tolerance, "tolerance")] {
+        if !positive(*v.get_ref()) {
+            return Err(src.err(v.span(), format!("[motion] {what} must be a positive number")));
+        }
+    }
+    if !(*m.min_radius.get_ref() >= 0.0 && m.min_radius.get_ref().is_finite()) {
+        return Err(src.err(m.min_radius.span(), "[motion] min_radius must not be negative"));
     }
 
     // Axes, in file order of their names (BTreeMap: alphabetical) would scramble
@@ -272,8 +278,11 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         }
     };
     let mut joints = Vec::new();
+    // Where each joint comes from, for "no actuator" errors.
+    let mut joint_spans = Vec::new();
     if let Some((x, y)) = xy {
         for (j, name) in kinematics.xy_joints().iter().enumerate() {
+            joint_spans.push(m.kinematics.span());
             let angle = kinematics.joint_is_angle(j);
             joints.push(Joint {
                 name: (*name).to_string(),
@@ -288,6 +297,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         if xy.is_some_and(|(x, y)| i == x || i == y) {
             continue;
         }
+        joint_spans.push(raw.axes[&a.name].span());
         joints.push(Joint { name: a.name.clone(), map: JointMap::axis(i), unit: Unit::Millimetre, max_velocity: None, max_acceleration: None });
     }
     let joint_names = joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ");
@@ -343,7 +353,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         actuators.push(Actuator { name: name.clone(), joint, steps_per_unit: chain.steps_per_unit });
     }
     if let Some(j) = driven.iter().position(|d| !d) {
-        return Err(src.err(0..0, format!("joint `{}` has no actuator; add an [actuators.NAME] with joint = \"{}\"", joints[j].name, joints[j].name)));
+        return Err(src.err(joint_spans[j].clone(), format!("joint `{}` has no actuator; add an [actuators.NAME] with joint = \"{}\"", joints[j].name, joints[j].name)));
     }
 
     // Tools.
@@ -372,6 +382,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
     let mut owner: Vec<Option<String>> = vec![None; actuators.len()];
     let mut tool_owner: Vec<Option<String>> = vec![None; tools.len()];
     for (name, n) in &raw.nodes {
+        let node_span = n.span();
         let n = n.get_ref();
         let mut spec = NodeSpec {
             name: name.clone(),
@@ -381,7 +392,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             frame_us: n.frame_us.unwrap_or(40.0),
         };
         if !(2..=1024).contains(&spec.queue) || !(spec.frame_us.is_finite() && spec.frame_us > 0.0) {
-            return Err(src.err(0..0, format!("node {name}: queue must be 2..=1024 and frame_us positive")));
+            return Err(src.err(node_span.clone(), format!("node {name}: queue must be 2..=1024 and frame_us positive")));
         }
         for a in &n.actuators {
             let i = actuators.iter().position(|x| x.name == *a.get_ref()).ok_or_else(|| {
@@ -404,7 +415,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             spec.tools.push(i);
         }
         if spec.actuators.len() > 8 || spec.tools.len() > 4 {
-            return Err(src.err(0..0, format!("node {name}: at most 8 actuators and 4 tools per node")));
+            return Err(src.err(node_span, format!("node {name}: at most 8 actuators and 4 tools per node")));
         }
         nodes.push(spec);
     }
@@ -418,10 +429,16 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             frame_us: 40.0,
         });
         if actuators.len() > 8 || tools.len() > 4 {
-            return Err(src.err(0..0, "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables"));
+            // Point at the first actuator or tool that does not fit.
+            let span = match raw.actuators.values().nth(8) {
+                Some(a) => a.span(),
+                None => raw.tools.values().nth(4).map_or(0..0, |t| t.span()),
+            };
+            return Err(src.err(span, "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables"));
         }
     } else if let Some(i) = owner.iter().position(|o| o.is_none()) {
-        return Err(src.err(0..0, format!("actuator `{}` is on no node", actuators[i].name)));
+        let span = raw.actuators[&actuators[i].name].span();
+        return Err(src.err(span, format!("actuator `{}` is on no node", actuators[i].name)));
     }
 
     // Start position.
@@ -439,13 +456,15 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         start[i] = *v;
     }
     let slowest = axes.iter().filter(|a| a.path).map(|a| a.max_velocity).fold(f64::INFINITY, f64::min);
-    let draw_feed = m.draw_feed.unwrap_or(if slowest.is_finite() { 0.5 * slowest } else { 10.0 });
+    let draw_feed = m.draw_feed.as_ref().map_or(if slowest.is_finite() { 0.5 * slowest } else { 10.0 }, |d| *d.get_ref());
     if !positive(draw_feed) {
-        return Err(src.err(0..0, "[motion] draw_feed must be positive"));
+        let span = m.draw_feed.as_ref().map_or(0..0, |d| d.span());
+        return Err(src.err(span, "[motion] draw_feed must be positive"));
     }
 
     Ok(Machine {
         name: raw.name,
+        description: raw.description,
         file: file.to_path_buf(),
         axes,
         kinematics,
@@ -454,12 +473,12 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         actuators,
         tools,
         nodes,
-        junction_deviation: m.junction_deviation,
+        junction_deviation: *m.junction_deviation.get_ref(),
         profile,
-        tolerance: m.tolerance,
+        tolerance: *m.tolerance.get_ref(),
         draw_feed,
         start,
-        min_radius: m.min_radius,
+        min_radius: *m.min_radius.get_ref(),
         lookahead: m.lookahead.max(2),
     })
 }

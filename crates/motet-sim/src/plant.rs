@@ -123,7 +123,7 @@ impl Plant {
                 Output::Tool { tool, value } => {
                     self.tools[tool] = value;
                     let p = self.executed_point();
-                    self.recorder.sample(&p, self.tool_on(), true);
+                    self.recorder.sample(&p, self.tool_on());
                 }
             }
         }
@@ -183,7 +183,7 @@ impl Plant {
         }
         self.max_path_deviation = self.max_path_deviation.max(d2.sqrt());
         let on = self.tool_on();
-        self.recorder.sample(&p, on, false);
+        self.recorder.sample(&p, on);
         self.extruded_since = false;
     }
 

@@ -279,5 +279,5 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
         wall_s: wall,
         speed_factor: if wall > 0.0 { duration_s / wall } else { f64::INFINITY },
     };
-    Ok(SimResult { report, strokes: std::mem::take(&mut sim.plant.recorder.strokes) })
+    Ok(SimResult { report, strokes: sim.plant.recorder.finish() })
 }

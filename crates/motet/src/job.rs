@@ -45,7 +45,6 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub struct Loaded {
     pub commands: Vec<Located<Command>>,
     pub warnings: Vec<String>,
-    pub bytes: usize,
 }
 
 /// Reads, parses and checks a job against the machine; errors name file:line:column.
@@ -71,5 +70,5 @@ pub fn load(machine: &Machine, path: &Path, allow_unknown: bool) -> Result<Loade
         }
     };
     check_job(machine, &commands).map_err(|e| anyhow::anyhow!("{file}:{e}"))?;
-    Ok(Loaded { commands, warnings, bytes: data.len() })
+    Ok(Loaded { commands, warnings })
 }

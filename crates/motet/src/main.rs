@@ -55,8 +55,17 @@ enum Cmd {
     },
 }
 
-fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
+fn main() -> std::process::ExitCode {
+    match dispatch(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Cmd::Run { machine, job, out, allow_unknown, quiet } => run::run(&machine, &job, out, allow_unknown, quiet),
         Cmd::Check { machine, job, allow_unknown } => run::check(&machine, job.as_deref(), allow_unknown),

@@ -1,0 +1,89 @@
+//! The `motet` command line end to end: outputs on success, located errors on
+//! bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn motet(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_motet")).args(args).current_dir(root()).output().unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("motet-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn run_writes_render_and_report() {
+    let out = scratch("run");
+    let (ok, stdout, stderr) = motet(&["run", "examples/plotter.toml", "examples/jobs/drawing.svg", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("executed vs commanded"), "summary missing: {stdout}");
+    let png = std::fs::read(out.join("path.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let svg = std::fs::read_to_string(out.join("path.svg")).unwrap();
+    assert!(svg.contains("<polyline"));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    for key in ["duration_s", "tool_on_distance_mm", "travel_distance_mm", "axes", "actuators", "max_path_deviation_mm", "max_step_time_error_us"] {
+        assert!(report.get(key).is_some(), "report lacks {key}");
+    }
+    assert_eq!(report["actuators"].as_array().unwrap().len(), 2);
+    assert!(report["actuators"][0]["steps"].as_u64().unwrap() > 0);
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+#[test]
+fn bad_input_gets_a_located_error_and_no_output() {
+    let dir = scratch("bad");
+    let printer = "examples/printer.toml";
+    let plotter = "examples/plotter.toml";
+    // (machine, job file name, job text, expected substring of the error)
+    let cases: &[(&str, &str, &str, &str)] = &[
+        (printer, "nofeed.gcode", "G21\nG90\nG1 X10 Y10\n", "nofeed.gcode:3:1"),
+        (printer, "beyond.gcode", "G21\nG1 X10 F600\nG1 X500 F600\n", "beyond.gcode:3"),
+        (printer, "unknown.gcode", "G1 X1 F100\nG38.2 X5\n", "unknown.gcode:2:1"),
+        (printer, "garbage.gcode", "G1 X1..2 F100\n", "garbage.gcode:1:"),
+        (plotter, "broken.svg", "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10mm\" height=\"10mm\">\n<path d=\"M0 0 L5 5\"\n", "broken.svg:"),
+        (plotter, "z.gcode", "G1 Z1 F100\n", "z.gcode:1:"),
+        (printer, "job.docx", "hello", "unknown job type"),
+    ];
+    for (machine, name, text, want) in cases {
+        let job = write(&dir, name, text);
+        let out = dir.join(format!("out-{name}"));
+        let (ok, _, stderr) = motet(&["run", machine, &job, "--out", out.to_str().unwrap(), "--quiet"]);
+        assert!(!ok, "{name} should fail");
+        assert!(stderr.contains(want), "{name}: error should contain `{want}`, got: {stderr}");
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert!(!out.exists(), "{name}: nothing should be written for a refused job");
+    }
+}
+
+#[test]
+fn bad_machine_file_gets_a_located_error() {
+    let dir = scratch("machine");
+    let good = std::fs::read_to_string(root().join("examples/printer.toml")).unwrap();
+    let cases: &[(&str, String, &str)] = &[
+        ("typo.toml", good.replace("max_velocity = 300          # mm/s", "max_velocty = 300"), "typo.toml:15:1"),
+        ("chain.toml", good.replace("{ stepper = { step_angle = 1.8 } }, { microstep = 16 }]\n\n[actuators.y_motor]", "{ microstep = 16 }, { stepper = { step_angle = 1.8 } }]\n\n[actuators.y_motor]"), "impossible element chain"),
+        ("joint.toml", good.replace("joint = \"z\"", "joint = \"w\""), "unknown joint `w`"),
+    ];
+    for (name, text, want) in cases {
+        let m = write(&dir, name, text);
+        let (ok, _, stderr) = motet(&["check", &m]);
+        assert!(!ok, "{name} should fail");
+        assert!(stderr.contains(want), "{name}: error should contain `{want}`, got: {stderr}");
+    }
+    let (ok, _, stderr) = motet(&["check", "no/such/machine.toml"]);
+    assert!(!ok && stderr.contains("cannot read machine file"), "{stderr}");
+}

@@ -1,0 +1,138 @@
+//! Every example machine runs its example job on simulated nodes within its
+//! limits, and the executed path follows the commanded one.
+
+use motet_host::Machine;
+use motet_planner::{Command, Located};
+use motet_sim::{simulate, SimResult};
+use std::path::PathBuf;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn run(machine: &str, job: &str) -> (Machine, Vec<Located<Command>>, SimResult) {
+    let m = Machine::load(&root().join("examples").join(machine)).unwrap();
+    let path = root().join("examples/jobs").join(job);
+    let data = std::fs::read(&path).unwrap();
+    let target = m.job_target();
+    let cmds = if job.ends_with(".svg") {
+        motet_svg::parse(&data, &target, &Default::default()).unwrap()
+    } else {
+        let text = String::from_utf8(data).unwrap();
+        motet_gcode::parse(&text, &target, &motet_gcode::GcodeOptions { allow_unknown: false }).unwrap().commands
+    };
+    motet_host::check_job(&m, &cmds).unwrap();
+    let r = simulate(&m, job, &cmds, &mut |_, _| {}).unwrap();
+    (m, cmds, r)
+}
+
+const EXAMPLES: &[(&str, &str)] = &[
+    ("plotter.toml", "drawing.svg"),
+    ("printer.toml", "printer-vase-layers.gcode"),
+    ("laser.toml", "laser-badge.gcode"),
+    ("clay-printer.toml", "clay-vase.gcode"),
+    ("gestalt-3axis.toml", "gestalt-3d.gcode"),
+];
+
+#[test]
+fn every_example_runs_within_limits_and_on_time() {
+    for (machine, job) in EXAMPLES {
+        let (m, cmds, r) = run(machine, job);
+        let rep = &r.report;
+        let ctx = format!("{machine} {job}");
+        assert!(rep.duration_s > 0.0 && rep.segments > 0, "{ctx}: nothing ran");
+        assert_eq!(rep.underruns, 0, "{ctx}: a node ran dry");
+        assert!(rep.max_deviation_steps <= 0.5 + 1e-6, "{ctx}: deviation {} steps", rep.max_deviation_steps);
+        assert!(rep.max_step_time_error_us <= 1.0, "{ctx}: step time error {} µs", rep.max_step_time_error_us);
+        for a in &rep.axes {
+            assert!(a.peak_velocity <= a.max_velocity * (1.0 + 1e-9), "{ctx}: axis {} speed {} > {}", a.name, a.peak_velocity, a.max_velocity);
+            assert!(
+                a.peak_acceleration <= a.max_acceleration * (1.0 + 1e-9),
+                "{ctx}: axis {} accel {} > {}",
+                a.name,
+                a.peak_acceleration,
+                a.max_acceleration
+            );
+        }
+        for j in &rep.joints {
+            if let Some(max) = j.max_velocity {
+                assert!(j.peak_velocity <= max * (1.0 + 1e-6), "{ctx}: joint {} speed {} > {max}", j.name, j.peak_velocity);
+            }
+        }
+        // Every actuator ends exactly where the last target puts it.
+        let last = cmds.iter().rev().find_map(|c| if let Command::Move(mv) = c.item { Some(mv.target) } else { None }).unwrap();
+        for (a, ar) in m.actuators.iter().zip(&rep.actuators) {
+            let joint = &m.joints[a.joint];
+            let reference = ar.position as f64 / a.steps_per_unit.abs();
+            let want = (joint.map.value(&last, reference) * a.steps_per_unit.abs()).round() as i64;
+            assert_eq!(ar.position, want, "{ctx}: actuator {} ends at {} steps, want {want}", a.name, ar.position);
+            assert!(ar.steps > 0, "{ctx}: actuator {} never moved", a.name);
+        }
+    }
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (wx, wy) = (b[0] - a[0], b[1] - a[1]);
+    let ww = wx * wx + wy * wy;
+    let t = if ww > 0.0 { (((p[0] - a[0]) * wx + (p[1] - a[1]) * wy) / ww).clamp(0.0, 1.0) } else { 0.0 };
+    ((p[0] - a[0] - wx * t).powi(2) + (p[1] - a[1] - wy * t).powi(2)).sqrt()
+}
+
+#[test]
+fn plotter_draws_the_svg_within_one_step() {
+    let (m, cmds, r) = run("plotter.toml", "drawing.svg");
+    // The commanded pen-down polylines.
+    let mut lines: Vec<([f64; 2], [f64; 2])> = vec![];
+    let (mut pos, mut down) = ([m.start[0], m.start[1]], false);
+    for c in &cmds {
+        match c.item {
+            Command::Tool { value, .. } => down = value > 0.0,
+            Command::Move(mv) => {
+                let next = [mv.target[0], mv.target[1]];
+                if down {
+                    lines.push((pos, next));
+                }
+                pos = next;
+            }
+            Command::Dwell { .. } => {}
+        }
+    }
+    let step = 1.0 / m.actuators[0].steps_per_unit.abs();
+    // CoreXY: half a step on each motor is at most one step in x or y.
+    let allowed = step + 1e-9;
+    let mut checked = 0;
+    for s in r.strokes.iter().filter(|s| s.tool_on) {
+        for p in &s.points {
+            let d = lines.iter().map(|(a, b)| dist(*p, *a, *b)).fold(f64::INFINITY, f64::min);
+            assert!(d <= allowed, "executed point {p:?} is {d} mm from the drawing (one step = {step} mm)");
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "too few executed points checked: {checked}");
+    // And all of the drawing was drawn: executed pen-down length matches.
+    let commanded: f64 = lines.iter().map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()).sum();
+    let drawn = r.report.tool_on_distance_mm;
+    assert!((drawn - commanded).abs() < 1e-6 * commanded, "drew {drawn} mm of {commanded} mm");
+}
+
+#[test]
+fn laser_gantry_motors_mirror_each_other() {
+    let (_, _, r) = run("laser.toml", "laser-badge.gcode");
+    let by = |n: &str| r.report.actuators.iter().find(|a| a.name == n).unwrap().clone();
+    let (l, rt) = (by("y_left"), by("y_right"));
+    assert_eq!(l.steps, rt.steps);
+    assert_eq!(l.position, rt.position, "positions count in joint direction, so mirrored motors agree");
+    assert!(r.report.tool_events >= 8, "laser power changes: {}", r.report.tool_events);
+}
+
+#[test]
+fn gestalt_nodes_each_drive_their_own_axis() {
+    let (m, _, r) = run("gestalt-3axis.toml", "gestalt-3d.gcode");
+    assert_eq!(m.nodes.len(), 3);
+    for a in &r.report.actuators {
+        let node = m.nodes.iter().find(|n| n.name == a.node).unwrap();
+        assert_eq!(node.actuators.len(), 1);
+        assert!(a.steps > 0);
+    }
+}
