@@ -31,7 +31,6 @@ pub struct ActuatorStats {
 
 struct ActuatorModel {
     map: JointMap,
-    joint: usize,
     /// Unsigned steps per joint unit.
     spu: f64,
     invert: bool,
@@ -55,7 +54,6 @@ pub struct Plant {
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
     pub last_time: f64,
-    extruded_since: bool,
 }
 
 impl Plant {
@@ -73,7 +71,7 @@ impl Plant {
                 let position = (value * spu).round() as i64;
                 ActuatorModel {
                     map,
-                    joint: a.joint,
+
                     spu,
                     invert: a.steps_per_unit < 0.0,
                     position,
@@ -104,7 +102,6 @@ impl Plant {
             recorder,
             max_path_deviation: 0.0,
             last_time: f64::NEG_INFINITY,
-            extruded_since: false,
         }
     }
 
@@ -115,7 +112,10 @@ impl Plant {
 
     /// Applies the outputs of one frame, in time order.
     pub fn apply(&mut self, outputs: &mut [Stamped]) {
-        outputs.sort_by(|a, b| a.time.total_cmp(&b.time));
+        // Each node emits in time order; only several nodes need merging.
+        if !outputs.is_sorted_by(|a, b| a.time <= b.time) {
+            outputs.sort_by(|a, b| a.time.total_cmp(&b.time));
+        }
         for o in outputs.iter() {
             self.last_time = self.last_time.max(o.time);
             match o.output {
@@ -129,8 +129,14 @@ impl Plant {
         }
     }
 
+    /// Whether the tool works: the first tool is on, or the planned segment
+    /// being executed extrudes.
     fn tool_on(&self) -> bool {
-        self.tools.first().is_some_and(|v| *v > 0.0) || self.extruded_since
+        let extruding = match (self.extruder, self.window.front()) {
+            (Some(e), Some(seg)) => seg.end[e] > seg.start[e],
+            _ => false,
+        };
+        self.tools.first().is_some_and(|v| *v > 0.0) || extruding
     }
 
     fn segment_at(&mut self, t: f64) -> Option<&Segment> {
@@ -170,9 +176,6 @@ impl Plant {
                 }
             }
         }
-        if Some(self.actuators[index].joint).and_then(|j| self.joint_axis[j]) == self.extruder && self.extruder.is_some() && positive {
-            self.extruded_since = true;
-        }
         let p = self.executed_point();
         let cmd = seg.position_at(t);
         let mut d2 = 0.0;
@@ -184,7 +187,6 @@ impl Plant {
         self.max_path_deviation = self.max_path_deviation.max(d2.sqrt());
         let on = self.tool_on();
         self.recorder.sample(&p, on);
-        self.extruded_since = false;
     }
 
     /// The machine point the motors are at now (forward kinematics).

@@ -182,7 +182,8 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
         let t = machine.axes[i].travel;
         if t[0].is_finite() && t[1].is_finite() { t[1] - t[0] } else { 100.0 }
     };
-    let resolution = span(x).max(span(y)) / 4000.0;
+    // About a pixel of the default render.
+    let resolution = span(x).max(span(y)) / 2000.0;
     let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
     let dist = Distributor::new(machine);
     let frame = machine.nodes.iter().map(|n| n.frame_us).fold(f64::INFINITY, f64::min);

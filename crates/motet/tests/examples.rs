@@ -109,7 +109,10 @@ fn plotter_draws_the_svg_within_one_step() {
             checked += 1;
         }
     }
-    assert!(checked > 1000, "too few executed points checked: {checked}");
+    assert!(checked > 500, "too few executed points checked: {checked}");
+    // The rendered points are a thinned subset; the report checks every step
+    // instant against the commanded path, which is the SVG's polylines.
+    assert!(r.report.max_path_deviation_mm <= allowed, "deviation {} mm", r.report.max_path_deviation_mm);
     // And all of the drawing was drawn: executed pen-down length matches.
     let commanded: f64 = lines.iter().map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()).sum();
     let drawn = r.report.tool_on_distance_mm;
