@@ -3,8 +3,10 @@
 use crate::board::Board;
 use crate::channel::Channel;
 use heapless::{Deque, Vec};
-use motet_trajectory::{Point, Profile, Segment, MAX_AXES};
-use motet_wire::{decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig};
+use motet_trajectory::{JointMap, Point, Profile, Segment, MAX_AXES};
+use motet_wire::{
+    decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig,
+};
 
 /// Segment queue capacity (MAXL's maximum buffer).
 pub const DEFAULT_QUEUE: usize = 64;
@@ -68,7 +70,11 @@ impl<const Q: usize> Node<Q> {
     pub fn handle(&mut self, bytes: &[u8]) -> Option<NodeMessage> {
         let msg: HostMessage = match decode(bytes) {
             Ok(m) => m,
-            Err(_) => return Some(NodeMessage::Refused { reason: Refusal::Malformed }),
+            Err(_) => {
+                return Some(NodeMessage::Refused {
+                    reason: Refusal::Malformed,
+                })
+            }
         };
         let result = match msg {
             HostMessage::Reset => {
@@ -80,7 +86,15 @@ impl<const Q: usize> Node<Q> {
             HostMessage::SetPosition { position } => self.set_position(&position),
             HostMessage::Segment(s) => self.push_segment(&s),
             HostMessage::Event { track, time, value } => {
-                self.events.push_back(Event { track, time, value }).map_err(|_| Refusal::QueueFull)
+                // A NaN time would never come due and block the event queue for good.
+                if !(time.is_finite() && value.is_finite()) {
+                    return Some(NodeMessage::Refused {
+                        reason: Refusal::Malformed,
+                    });
+                }
+                self.events
+                    .push_back(Event { track, time, value })
+                    .map_err(|_| Refusal::QueueFull)
             }
             HostMessage::Status => return Some(self.status_message()),
         };
@@ -88,11 +102,16 @@ impl<const Q: usize> Node<Q> {
     }
 
     fn configure_channel(&mut self, c: ChannelConfig) -> Result<(), Refusal> {
-        if !(c.steps_per_unit.is_finite() && c.steps_per_unit != 0.0) || !self.segments.is_empty() {
+        let valid = c.steps_per_unit.is_finite() && c.steps_per_unit != 0.0 && map_is_valid(&c.map);
+        if !valid || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
         }
         let ch = Channel::new(c);
-        match self.channels.iter_mut().find(|x| x.config().channel == c.channel) {
+        match self
+            .channels
+            .iter_mut()
+            .find(|x| x.config().channel == c.channel)
+        {
             Some(existing) => *existing = ch,
             None => self.channels.push(ch).map_err(|_| Refusal::BadConfig)?,
         }
@@ -108,6 +127,9 @@ impl<const Q: usize> Node<Q> {
     }
 
     fn set_position(&mut self, p: &Point) -> Result<(), Refusal> {
+        if !p.iter().all(|x| x.is_finite()) {
+            return Err(Refusal::Malformed);
+        }
         if !self.segments.is_empty() {
             return Err(Refusal::NotAtRest);
         }
@@ -120,7 +142,10 @@ impl<const Q: usize> Node<Q> {
 
     fn push_segment(&mut self, m: &SegmentMsg) -> Result<(), Refusal> {
         if m.seq != self.next_seq {
-            return Err(Refusal::OutOfOrder { expected: self.next_seq, got: m.seq });
+            return Err(Refusal::OutOfOrder {
+                expected: self.next_seq,
+                got: m.seq,
+            });
         }
         if self.segments.is_full() {
             return Err(Refusal::QueueFull);
@@ -136,10 +161,18 @@ impl<const Q: usize> Node<Q> {
             end[i] = span.to;
         }
         let p = &m.profile;
-        if ![p.length, p.v0, p.vc, p.v1, p.accel, p.jerk, p.dwell, m.t0].iter().all(|x| x.is_finite()) {
+        if ![p.length, p.v0, p.vc, p.v1, p.accel, p.jerk, p.dwell, m.t0]
+            .iter()
+            .all(|x| x.is_finite())
+        {
             return Err(Refusal::Malformed);
         }
-        let seg = Segment { t0: m.t0, start, end, profile: Profile::from_params(p) };
+        let seg = Segment {
+            t0: m.t0,
+            start,
+            end,
+            profile: Profile::from_params(p),
+        };
         // Checked above: the queue has room.
         let _ = self.segments.push_back(seg);
         self.tail = end;
@@ -235,7 +268,12 @@ impl<const Q: usize> Node<Q> {
 
     /// Drops segments that every channel is done with and whose time has passed.
     fn retire(&mut self) {
-        let done = self.channels.iter().map(|c| c.segments_done()).min().unwrap_or(usize::MAX);
+        let done = self
+            .channels
+            .iter()
+            .map(|c| c.segments_done())
+            .min()
+            .unwrap_or(usize::MAX);
         let mut n = 0;
         let mut exit_speed = 0.0;
         while n < done {
@@ -255,6 +293,19 @@ impl<const Q: usize> Node<Q> {
             // Out of trajectory while not at rest: the host fell behind.
             self.underruns += 1;
             self.starved = true;
+        }
+    }
+}
+
+/// Whether a joint map only names axes a point has and has finite coefficients:
+/// a polar map naming axis 6 or more would index out of every point (a panic on
+/// the next SetPosition or poll), a non-finite coefficient makes every joint
+/// value NaN (a channel that silently never steps).
+fn map_is_valid(map: &JointMap) -> bool {
+    match *map {
+        JointMap::Linear { coeffs } => coeffs.iter().all(|c| c.is_finite()),
+        JointMap::PolarRadius { x, y } | JointMap::PolarAngle { x, y } => {
+            (x as usize) < MAX_AXES && (y as usize) < MAX_AXES
         }
     }
 }
