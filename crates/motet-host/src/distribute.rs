@@ -36,7 +36,11 @@ impl Distributor {
                 for &a in &n.actuators {
                     axes |= machine.joints[machine.actuators[a].joint].map.axis_mask();
                 }
-                Subscription { axes, tracks: n.tools.iter().map(|&t| t as u8).collect(), next_seq: 0 }
+                Subscription {
+                    axes,
+                    tracks: n.tools.iter().map(|&t| t as u8).collect(),
+                    next_seq: 0,
+                }
             })
             .collect();
         Distributor { subscriptions }
@@ -55,7 +59,10 @@ impl Distributor {
             }));
         }
         for (output, &t) in spec.tools.iter().enumerate() {
-            out.push(HostMessage::ConfigureTool(ToolConfig { output: output as u8, track: t as u8 }));
+            out.push(HostMessage::ConfigureTool(ToolConfig {
+                output: output as u8,
+                track: t as u8,
+            }));
         }
         out.push(HostMessage::SetPosition { position: *start });
         out
@@ -73,17 +80,27 @@ impl Distributor {
                 for i in 0..MAX_AXES {
                     if sub.axes & (1 << i) != 0 {
                         // Cannot overflow: at most MAX_AXES entries.
-                        let _ = axes.push(AxisSpan { axis: i as u8, from: s.start[i], to: s.end[i] });
+                        let _ = axes.push(AxisSpan {
+                            axis: i as u8,
+                            from: s.start[i],
+                            to: s.end[i],
+                        });
                     }
                 }
                 let seq = sub.next_seq;
                 sub.next_seq = sub.next_seq.wrapping_add(1);
-                Some(HostMessage::Segment(SegmentMsg { seq, t0: s.t0, profile: s.profile.params(), axes }))
+                Some(HostMessage::Segment(SegmentMsg {
+                    seq,
+                    t0: s.t0,
+                    profile: s.profile.params(),
+                    axes,
+                }))
             }
-            Planned::Event(e) => sub
-                .tracks
-                .contains(&e.tool)
-                .then_some(HostMessage::Event { track: e.tool, time: e.time, value: e.value }),
+            Planned::Event(e) => sub.tracks.contains(&e.tool).then_some(HostMessage::Event {
+                track: e.tool,
+                time: e.time,
+                value: e.value,
+            }),
         }
     }
 }

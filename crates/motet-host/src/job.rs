@@ -27,7 +27,11 @@ pub fn check_job(machine: &Machine, commands: &[Located<Command>]) -> Result<(),
             let (px, py) = (pos[x], pos[y]);
             let (wx, wy) = (m.target[x] - px, m.target[y] - py);
             let ww = wx * wx + wy * wy;
-            let t = if ww > 0.0 { (-(px * wx + py * wy) / ww).clamp(0.0, 1.0) } else { 0.0 };
+            let t = if ww > 0.0 {
+                (-(px * wx + py * wy) / ww).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let d = ((px + wx * t).powi(2) + (py + wy * t).powi(2)).sqrt();
             if d < machine.min_radius && (ww > 0.0 || d == 0.0) {
                 return Err(SourceError {

@@ -102,7 +102,12 @@ impl Source<'_> {
         let before = &self.text[..at];
         let line = before.matches('\n').count() + 1;
         let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-        MachineError { file: self.file.clone(), line, column, message: message.into() }
+        MachineError {
+            file: self.file.clone(),
+            line,
+            column,
+            message: message.into(),
+        }
     }
 }
 
@@ -120,7 +125,10 @@ impl Machine {
 
     /// Validates a machine description given as TOML text.
     pub fn parse(text: &str, file: &Path) -> Result<Machine, MachineError> {
-        let src = Source { file: file.display().to_string(), text };
+        let src = Source {
+            file: file.display().to_string(),
+            text,
+        };
         let raw: MachineFile = toml::from_str(text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             src.err(span, e.message().to_string())
@@ -153,7 +161,14 @@ impl Machine {
                 .collect(),
             junction_deviation: self.junction_deviation,
             profile: self.profile,
-            tools: self.tools.iter().map(|t| ToolTiming { stop: t.kind != ToolKind::Laser, settle: t.settle }).collect(),
+            tools: self
+                .tools
+                .iter()
+                .map(|t| ToolTiming {
+                    stop: t.kind != ToolKind::Laser,
+                    settle: t.settle,
+                })
+                .collect(),
             lookahead: self.lookahead,
         }
     }
@@ -161,11 +176,23 @@ impl Machine {
     /// What job sources need to know.
     pub fn job_target(&self) -> JobTarget {
         JobTarget {
-            axes: self.axes.iter().map(|a| AxisInfo { name: a.name.clone(), travel: a.travel, path: a.path }).collect(),
+            axes: self
+                .axes
+                .iter()
+                .map(|a| AxisInfo {
+                    name: a.name.clone(),
+                    travel: a.travel,
+                    path: a.path,
+                })
+                .collect(),
             tools: self
                 .tools
                 .iter()
-                .map(|t| ToolInfo { name: t.name.clone(), kind: t.kind, on_value: t.on_value })
+                .map(|t| ToolInfo {
+                    name: t.name.clone(),
+                    kind: t.kind,
+                    on_value: t.on_value,
+                })
                 .collect(),
             start: self.start,
             tolerance: self.tolerance,
@@ -195,22 +222,41 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
     let profile = match m.profile.get_ref().as_str() {
         "trapezoid" => ProfileKind::Trapezoid,
         "scurve" => ProfileKind::SCurve,
-        other => return Err(src.err(m.profile.span(), format!("unknown profile `{other}`; expected trapezoid or scurve"))),
+        other => {
+            return Err(src.err(
+                m.profile.span(),
+                format!("unknown profile `{other}`; expected trapezoid or scurve"),
+            ))
+        }
     };
     let positive = |v: f64| v.is_finite() && v > 0.0;
-    for (v, what) in [(&m.junction_deviation, "junction_deviation"), (&m.tolerance, "tolerance")] {
+    for (v, what) in [
+        (&m.junction_deviation, "junction_deviation"),
+        (&m.tolerance, "tolerance"),
+    ] {
         if !positive(*v.get_ref()) {
-            return Err(src.err(v.span(), format!("[motion] {what} must be a positive number")));
+            return Err(src.err(
+                v.span(),
+                format!("[motion] {what} must be a positive number"),
+            ));
         }
     }
     if !(*m.min_radius.get_ref() >= 0.0 && m.min_radius.get_ref().is_finite()) {
-        return Err(src.err(m.min_radius.span(), "[motion] min_radius must not be negative"));
+        return Err(src.err(
+            m.min_radius.span(),
+            "[motion] min_radius must not be negative",
+        ));
     }
 
     // Axes, in file order of their names (BTreeMap: alphabetical) would scramble
     // x, y, z: order them by the conventional letters first.
     let mut names: Vec<&String> = raw.axes.keys().collect();
-    let rank = |n: &str| ["x", "y", "z", "e", "a", "b", "c"].iter().position(|k| *k == n).unwrap_or(99);
+    let rank = |n: &str| {
+        ["x", "y", "z", "e", "a", "b", "c"]
+            .iter()
+            .position(|k| *k == n)
+            .unwrap_or(99)
+    };
     names.sort_by_key(|n| (rank(n), (*n).clone()));
     if names.is_empty() {
         return Err(src.err(0..0, "the machine has no [axes]"));
@@ -225,28 +271,43 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         let span = a.span();
         let a = a.get_ref();
         if !name.chars().all(|c| c.is_ascii_lowercase()) || name.is_empty() {
-            return Err(src.err(span, format!("axis name `{name}` must be lower-case letters")));
+            return Err(src.err(
+                span,
+                format!("axis name `{name}` must be lower-case letters"),
+            ));
         }
         let path = a.path.unwrap_or(name.as_str() != "e");
         let travel = match &a.travel {
             Some(t) => {
                 let [lo, hi] = *t.get_ref();
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                    return Err(src.err(t.span(), format!("axis {name}: travel must be [min, max] with min < max")));
+                    return Err(src.err(
+                        t.span(),
+                        format!("axis {name}: travel must be [min, max] with min < max"),
+                    ));
                 }
                 [lo, hi]
             }
             None if !path => [f64::NEG_INFINITY, f64::INFINITY],
             None => return Err(src.err(span, format!("axis {name}: missing field `travel`"))),
         };
-        for (v, what) in [(&a.max_velocity, "max_velocity"), (&a.max_acceleration, "max_acceleration")] {
+        for (v, what) in [
+            (&a.max_velocity, "max_velocity"),
+            (&a.max_acceleration, "max_acceleration"),
+        ] {
             if !positive(*v.get_ref()) {
-                return Err(src.err(v.span(), format!("axis {name}: {what} must be a positive number")));
+                return Err(src.err(
+                    v.span(),
+                    format!("axis {name}: {what} must be a positive number"),
+                ));
             }
         }
         if let Some(j) = &a.max_jerk {
             if !positive(*j.get_ref()) {
-                return Err(src.err(j.span(), format!("axis {name}: max_jerk must be a positive number")));
+                return Err(src.err(
+                    j.span(),
+                    format!("axis {name}: max_jerk must be a positive number"),
+                ));
             }
         }
         axes.push(Axis {
@@ -259,7 +320,10 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         });
     }
     if profile == ProfileKind::SCurve && axes.iter().all(|a| a.max_jerk.is_none()) {
-        return Err(src.err(m.profile.span(), "profile = \"scurve\" needs max_jerk on at least one axis"));
+        return Err(src.err(
+            m.profile.span(),
+            "profile = \"scurve\" needs max_jerk on at least one axis",
+        ));
     }
     let axis_index = |n: &str| axes.iter().position(|a| a.name == n);
 
@@ -287,7 +351,11 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             joints.push(Joint {
                 name: (*name).to_string(),
                 map: kinematics.xy_joint_map(j, x, y),
-                unit: if angle { Unit::Degree } else { Unit::Millimetre },
+                unit: if angle {
+                    Unit::Degree
+                } else {
+                    Unit::Millimetre
+                },
                 max_velocity: None,
                 max_acceleration: None,
             });
@@ -298,21 +366,38 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             continue;
         }
         joint_spans.push(raw.axes[&a.name].span());
-        joints.push(Joint { name: a.name.clone(), map: JointMap::axis(i), unit: Unit::Millimetre, max_velocity: None, max_acceleration: None });
+        joints.push(Joint {
+            name: a.name.clone(),
+            map: JointMap::axis(i),
+            unit: Unit::Millimetre,
+            max_velocity: None,
+            max_acceleration: None,
+        });
     }
-    let joint_names = joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ");
+    let joint_names = joints
+        .iter()
+        .map(|j| j.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
 
     // Actuators and their element chains.
     let mut actuators = Vec::new();
     let mut driven = vec![false; joints.len()];
     for (name, a) in &raw.actuators {
         let a = a.get_ref();
-        let joint = joints.iter().position(|j| j.name == *a.joint.get_ref()).ok_or_else(|| {
-            src.err(
-                a.joint.span(),
-                format!("actuator {name}: unknown joint `{}`; this machine's joints are {}", a.joint.get_ref(), joint_names),
-            )
-        })?;
+        let joint = joints
+            .iter()
+            .position(|j| j.name == *a.joint.get_ref())
+            .ok_or_else(|| {
+                src.err(
+                    a.joint.span(),
+                    format!(
+                        "actuator {name}: unknown joint `{}`; this machine's joints are {}",
+                        a.joint.get_ref(),
+                        joint_names
+                    ),
+                )
+            })?;
         driven[joint] = true;
         let mut elements = Vec::new();
         for e in a.chain.get_ref() {
@@ -332,15 +417,24 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                 }
                 ElementFile::Leadscrew { lead } => Element::Leadscrew { lead: *lead },
                 ElementFile::Gear { ratio } => Element::Gear { ratio: *ratio },
-                ElementFile::Stepper { step_angle } => Element::Stepper { step_angle: *step_angle },
+                ElementFile::Stepper { step_angle } => Element::Stepper {
+                    step_angle: *step_angle,
+                },
                 ElementFile::Microstep(n) => Element::Microstep { divisions: *n },
                 ElementFile::Invert => Element::Invert,
             };
             elements.push(el);
         }
         let chain = ElementChain::new(joints[joint].unit, &elements).map_err(|e| {
-            let span = a.chain.get_ref().get(e.index).map_or(a.chain.span(), |x| x.span());
-            src.err(span, format!("actuator {name}: impossible element chain: {e}"))
+            let span = a
+                .chain
+                .get_ref()
+                .get(e.index)
+                .map_or(a.chain.span(), |x| x.span());
+            src.err(
+                span,
+                format!("actuator {name}: impossible element chain: {e}"),
+            )
         })?;
         if let Some(v) = a.max_velocity {
             let j = &mut joints[joint];
@@ -350,10 +444,20 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             let j = &mut joints[joint];
             j.max_acceleration = Some(j.max_acceleration.map_or(v, |w| w.min(v)));
         }
-        actuators.push(Actuator { name: name.clone(), joint, steps_per_unit: chain.steps_per_unit });
+        actuators.push(Actuator {
+            name: name.clone(),
+            joint,
+            steps_per_unit: chain.steps_per_unit,
+        });
     }
     if let Some(j) = driven.iter().position(|d| !d) {
-        return Err(src.err(joint_spans[j].clone(), format!("joint `{}` has no actuator; add an [actuators.NAME] with joint = \"{}\"", joints[j].name, joints[j].name)));
+        return Err(src.err(
+            joint_spans[j].clone(),
+            format!(
+                "joint `{}` has no actuator; add an [actuators.NAME] with joint = \"{}\"",
+                joints[j].name, joints[j].name
+            ),
+        ));
     }
 
     // Tools.
@@ -364,7 +468,12 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             "pen" => ToolKind::Pen,
             "laser" => ToolKind::Laser,
             "spindle" => ToolKind::Spindle,
-            other => return Err(src.err(t.kind.span(), format!("tool {name}: unknown kind `{other}`; expected pen, laser or spindle"))),
+            other => {
+                return Err(src.err(
+                    t.kind.span(),
+                    format!("tool {name}: unknown kind `{other}`; expected pen, laser or spindle"),
+                ))
+            }
         };
         let settle = t.settle.unwrap_or(match kind {
             ToolKind::Pen => 0.15,
@@ -372,9 +481,17 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             ToolKind::Laser => 0.0,
         });
         if !(settle.is_finite() && settle >= 0.0) {
-            return Err(src.err(t.kind.span(), format!("tool {name}: settle must be a non-negative number of seconds")));
+            return Err(src.err(
+                t.kind.span(),
+                format!("tool {name}: settle must be a non-negative number of seconds"),
+            ));
         }
-        tools.push(Tool { name: name.clone(), kind, settle, on_value: t.on_value.unwrap_or(1.0).clamp(0.0, 1.0) });
+        tools.push(Tool {
+            name: name.clone(),
+            kind,
+            settle,
+            on_value: t.on_value.unwrap_or(1.0).clamp(0.0, 1.0),
+        });
     }
 
     // Nodes: each actuator on exactly one node, each tool on at most one.
@@ -391,31 +508,55 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             queue: n.queue.unwrap_or(64),
             frame_us: n.frame_us.unwrap_or(40.0),
         };
-        if !(2..=1024).contains(&spec.queue) || !(spec.frame_us.is_finite() && spec.frame_us > 0.0) {
-            return Err(src.err(node_span.clone(), format!("node {name}: queue must be 2..=1024 and frame_us positive")));
+        if !((2..=64).contains(&spec.queue) && spec.frame_us.is_finite() && spec.frame_us > 0.0) {
+            return Err(src.err(
+                node_span.clone(),
+                format!("node {name}: queue must be 2..=64 and frame_us positive"),
+            ));
         }
         for a in &n.actuators {
-            let i = actuators.iter().position(|x| x.name == *a.get_ref()).ok_or_else(|| {
-                src.err(a.span(), format!("node {name}: unknown actuator `{}`", a.get_ref()))
-            })?;
+            let i = actuators
+                .iter()
+                .position(|x| x.name == *a.get_ref())
+                .ok_or_else(|| {
+                    src.err(
+                        a.span(),
+                        format!("node {name}: unknown actuator `{}`", a.get_ref()),
+                    )
+                })?;
             if let Some(other) = &owner[i] {
-                return Err(src.err(a.span(), format!("actuator `{}` is already on node {other}", a.get_ref())));
+                return Err(src.err(
+                    a.span(),
+                    format!("actuator `{}` is already on node {other}", a.get_ref()),
+                ));
             }
             owner[i] = Some(name.clone());
             spec.actuators.push(i);
         }
         for t in &n.tools {
-            let i = tools.iter().position(|x| x.name == *t.get_ref()).ok_or_else(|| {
-                src.err(t.span(), format!("node {name}: unknown tool `{}`", t.get_ref()))
-            })?;
+            let i = tools
+                .iter()
+                .position(|x| x.name == *t.get_ref())
+                .ok_or_else(|| {
+                    src.err(
+                        t.span(),
+                        format!("node {name}: unknown tool `{}`", t.get_ref()),
+                    )
+                })?;
             if let Some(other) = &tool_owner[i] {
-                return Err(src.err(t.span(), format!("tool `{}` is already on node {other}", t.get_ref())));
+                return Err(src.err(
+                    t.span(),
+                    format!("tool `{}` is already on node {other}", t.get_ref()),
+                ));
             }
             tool_owner[i] = Some(name.clone());
             spec.tools.push(i);
         }
         if spec.actuators.len() > 8 || spec.tools.len() > 4 {
-            return Err(src.err(node_span, format!("node {name}: at most 8 actuators and 4 tools per node")));
+            return Err(src.err(
+                node_span,
+                format!("node {name}: at most 8 actuators and 4 tools per node"),
+            ));
         }
         nodes.push(spec);
     }
@@ -434,11 +575,17 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                 Some(a) => a.span(),
                 None => raw.tools.values().nth(4).map_or(0..0, |t| t.span()),
             };
-            return Err(src.err(span, "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables"));
+            return Err(src.err(
+                span,
+                "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables",
+            ));
         }
     } else if let Some(i) = owner.iter().position(|o| o.is_none()) {
         let span = raw.actuators[&actuators[i].name].span();
-        return Err(src.err(span, format!("actuator `{}` is on no node", actuators[i].name)));
+        return Err(src.err(
+            span,
+            format!("actuator `{}` is on no node", actuators[i].name),
+        ));
     }
 
     // Start position.
@@ -449,14 +596,33 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         }
     }
     for (name, v) in m.start.get_ref() {
-        let i = axis_index(name).ok_or_else(|| src.err(m.start.span(), format!("[motion] start: unknown axis `{name}`")))?;
+        let i = axis_index(name).ok_or_else(|| {
+            src.err(
+                m.start.span(),
+                format!("[motion] start: unknown axis `{name}`"),
+            )
+        })?;
         if !(v.is_finite() && *v >= axes[i].travel[0] && *v <= axes[i].travel[1]) {
-            return Err(src.err(m.start.span(), format!("[motion] start: {name} = {v} is outside the axis's travel")));
+            return Err(src.err(
+                m.start.span(),
+                format!("[motion] start: {name} = {v} is outside the axis's travel"),
+            ));
         }
         start[i] = *v;
     }
-    let slowest = axes.iter().filter(|a| a.path).map(|a| a.max_velocity).fold(f64::INFINITY, f64::min);
-    let draw_feed = m.draw_feed.as_ref().map_or(if slowest.is_finite() { 0.5 * slowest } else { 10.0 }, |d| *d.get_ref());
+    let slowest = axes
+        .iter()
+        .filter(|a| a.path)
+        .map(|a| a.max_velocity)
+        .fold(f64::INFINITY, f64::min);
+    let draw_feed = m.draw_feed.as_ref().map_or(
+        if slowest.is_finite() {
+            0.5 * slowest
+        } else {
+            10.0
+        },
+        |d| *d.get_ref(),
+    );
     if !positive(draw_feed) {
         let span = m.draw_feed.as_ref().map_or(0..0, |d| d.span());
         return Err(src.err(span, "[motion] draw_feed must be positive"));

@@ -29,20 +29,20 @@ pub struct MotionFile {
     #[serde(default = "default_kinematics")]
     pub kinematics: Spanned<String>,
     #[serde(default = "default_junction_deviation")]
-    pub junction_deviation: f64,
+    pub junction_deviation: Spanned<f64>,
     #[serde(default = "default_profile")]
     pub profile: Spanned<String>,
     #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
+    pub tolerance: Spanned<f64>,
     #[serde(default)]
-    pub draw_feed: Option<f64>,
+    pub draw_feed: Option<Spanned<f64>>,
     /// Where the machine is at the start of a job; axes not named start at 0, or
     /// at their travel's lower end when 0 is outside it.
     #[serde(default = "default_start")]
     pub start: Spanned<BTreeMap<String, f64>>,
     /// Polar machines: moves may not pass closer than this to the centre, mm.
     #[serde(default = "default_min_radius")]
-    pub min_radius: f64,
+    pub min_radius: Spanned<f64>,
     #[serde(default = "default_lookahead")]
     pub lookahead: usize,
 }
@@ -71,14 +71,14 @@ fn default_kinematics() -> Spanned<String> {
 fn default_profile() -> Spanned<String> {
     Spanned::new(0..0, "trapezoid".into())
 }
-fn default_junction_deviation() -> f64 {
-    0.05
+fn default_junction_deviation() -> Spanned<f64> {
+    Spanned::new(0..0, 0.05)
 }
-fn default_tolerance() -> f64 {
-    0.01
+fn default_tolerance() -> Spanned<f64> {
+    Spanned::new(0..0, 0.01)
 }
-fn default_min_radius() -> f64 {
-    1.0
+fn default_min_radius() -> Spanned<f64> {
+    Spanned::new(0..0, 1.0)
 }
 fn default_lookahead() -> usize {
     4096
@@ -87,9 +87,10 @@ fn default_lookahead() -> usize {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AxisFile {
-    /// `[min, max]`; optional for axes that ride along (extruders).
+    /// `[min, max]`; optional for axes that ride along (extruders). A `Vec`, not
+    /// `[f64; 2]`: the TOML deserializer would silently drop a third number.
     #[serde(default)]
-    pub travel: Option<Spanned<[f64; 2]>>,
+    pub travel: Option<Spanned<Vec<f64>>>,
     pub max_velocity: Spanned<f64>,
     pub max_acceleration: Spanned<f64>,
     #[serde(default)]
@@ -105,9 +106,9 @@ pub struct ActuatorFile {
     pub joint: Spanned<String>,
     pub chain: Spanned<Vec<Spanned<ElementFile>>>,
     #[serde(default)]
-    pub max_velocity: Option<f64>,
+    pub max_velocity: Option<Spanned<f64>>,
     #[serde(default)]
-    pub max_acceleration: Option<f64>,
+    pub max_acceleration: Option<Spanned<f64>>,
 }
 
 /// One element of a chain, e.g. `{ pulley = { teeth = 20, belt_pitch = 2 } }`,
@@ -140,10 +141,10 @@ pub struct ToolFile {
     pub kind: Spanned<String>,
     /// Seconds to stand still after switching (servo travel, spin-up).
     #[serde(default)]
-    pub settle: Option<f64>,
+    pub settle: Option<Spanned<f64>>,
     /// Value for "on" when a job gives none (pen down = 1, full power = 1).
     #[serde(default)]
-    pub on_value: Option<f32>,
+    pub on_value: Option<Spanned<f32>>,
 }
 
 #[derive(Debug, Deserialize)]

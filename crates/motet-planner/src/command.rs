@@ -67,8 +67,13 @@ pub struct Move {
 pub enum Command {
     Move(Move),
     /// Stand still for this many seconds after the previous move has ended.
-    Dwell { seconds: f64 },
+    Dwell {
+        seconds: f64,
+    },
     /// Set a tool output (index into [`crate::JobTarget::tools`]) to a value:
     /// pen 1.0 down / 0.0 up, laser or spindle power 0.0..=1.0.
-    Tool { tool: u8, value: f32 },
+    Tool {
+        tool: u8,
+        value: f32,
+    },
 }

@@ -27,6 +27,7 @@ pub struct ToolEvent {
 
 /// What the planner produces, in time order.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // segments are the common case; boxing them would cost an allocation each
 pub enum Planned {
     Segment(Segment),
     Event(ToolEvent),
@@ -135,11 +136,19 @@ impl Planner {
                 Ok(())
             }
             Command::Tool { tool, value } => {
-                let timing = *self.limits.tools.get(tool as usize).ok_or(PlanError::UnknownTool(tool))?;
+                let timing = *self
+                    .limits
+                    .tools
+                    .get(tool as usize)
+                    .ok_or(PlanError::UnknownTool(tool))?;
                 if timing.stop {
                     self.flush();
                     self.emit_loose_events();
-                    self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool, value }));
+                    self.out.push_back(Planned::Event(ToolEvent {
+                        time: self.clock,
+                        tool,
+                        value,
+                    }));
                     if timing.settle > 0.0 {
                         self.emit_dwell(timing.settle);
                     }
@@ -176,7 +185,7 @@ impl Planner {
         let feed = match m.kind {
             MoveKind::Rapid => f64::INFINITY,
             MoveKind::Feed => {
-                if !(m.feed > 0.0) {
+                if m.feed.is_nan() || m.feed <= 0.0 {
                     return Err(PlanError::BadFeed(m.feed));
                 }
                 m.feed
@@ -229,7 +238,14 @@ impl Planner {
     }
 
     /// Speed cap, acceleration and jerk for a move along `unit`.
-    fn move_limits(&self, start: &Point, end: &Point, unit: &Point, length: f64, feed: f64) -> (f64, f64, f64) {
+    fn move_limits(
+        &self,
+        start: &Point,
+        end: &Point,
+        unit: &Point,
+        length: f64,
+        feed: f64,
+    ) -> (f64, f64, f64) {
         let mut v = feed;
         let mut a = f64::INFINITY;
         let mut j = f64::INFINITY;
@@ -278,11 +294,8 @@ impl Planner {
     fn junction_speed(&self, prev: &Pending, unit: &Point, v_cap: f64, accel: f64) -> f64 {
         let norm = |u: &Point| u.iter().map(|x| x * x).sum::<f64>().sqrt();
         let (n0, n1) = (norm(&prev.unit), norm(unit));
-        let mut cos = 0.0;
-        for i in 0..MAX_AXES {
-            cos -= prev.unit[i] * unit[i];
-        }
-        cos /= n0 * n1;
+        let dot: f64 = prev.unit.iter().zip(unit).map(|(a, b)| a * b).sum();
+        let cos = -dot / (n0 * n1);
         let cap = prev.v_cap.min(v_cap);
         if cos <= -0.999_999 {
             // Straight on.
@@ -347,7 +360,11 @@ impl Planner {
     fn emit_front_as_is(&mut self) {
         let m = &self.queue[0];
         let forward = reachable_speed(self.emitted_exit, m.length, m.accel, m.jerk);
-        let exit = if self.queue.len() >= 2 { forward.min(self.queue[1].entry) } else { 0.0 };
+        let exit = if self.queue.len() >= 2 {
+            forward.min(self.queue[1].entry)
+        } else {
+            0.0
+        };
         self.emit_front(exit);
         if let Some(next) = self.queue.front_mut() {
             next.end_limited = false;
@@ -356,15 +373,34 @@ impl Planner {
     }
 
     fn emit_front(&mut self, exit: f64) {
-        let m = self.queue.pop_front().expect("emit_front on an empty queue");
+        let m = self
+            .queue
+            .pop_front()
+            .expect("emit_front on an empty queue");
         for (tool, value) in &m.events {
-            self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool: *tool, value: *value }));
+            self.out.push_back(Planned::Event(ToolEvent {
+                time: self.clock,
+                tool: *tool,
+                value: *value,
+            }));
         }
         let entry = self.emitted_exit;
         // Rounding can leave the exit a hair above what the move can reach.
         let exit = exit.min(reachable_speed(entry, m.length, m.accel, m.jerk));
-        let profile = fastest(m.length, entry, exit, m.v_cap.max(entry).max(exit), m.accel, m.jerk);
-        let seg = Segment { t0: self.clock, start: m.start, end: m.end, profile };
+        let profile = fastest(
+            m.length,
+            entry,
+            exit,
+            m.v_cap.max(entry).max(exit),
+            m.accel,
+            m.jerk,
+        );
+        let seg = Segment {
+            t0: self.clock,
+            start: m.start,
+            end: m.end,
+            profile,
+        };
         self.clock = seg.t1();
         self.emitted_pos = m.end;
         self.emitted_exit = exit;
@@ -392,12 +428,21 @@ impl Planner {
 
     fn emit_loose_events(&mut self) {
         for (tool, value) in std::mem::take(&mut self.loose_events) {
-            self.out.push_back(Planned::Event(ToolEvent { time: self.clock, tool, value }));
+            self.out.push_back(Planned::Event(ToolEvent {
+                time: self.clock,
+                tool,
+                value,
+            }));
         }
     }
 
     fn emit_dwell(&mut self, seconds: f64) {
-        let seg = Segment { t0: self.clock, start: self.emitted_pos, end: self.emitted_pos, profile: Profile::dwell(seconds) };
+        let seg = Segment {
+            t0: self.clock,
+            start: self.emitted_pos,
+            end: self.emitted_pos,
+            profile: Profile::dwell(seconds),
+        };
         self.clock = seg.t1();
         self.out.push_back(Planned::Segment(seg));
     }

@@ -56,7 +56,10 @@ impl JobTarget {
 
     /// The first tool of the given kind, as an index for [`crate::Command::Tool`].
     pub fn tool_of_kind(&self, kind: ToolKind) -> Option<u8> {
-        self.tools.iter().position(|t| t.kind == kind).map(|i| i as u8)
+        self.tools
+            .iter()
+            .position(|t| t.kind == kind)
+            .map(|i| i as u8)
     }
 
     /// The tool that G-code M3/M5 and SVG strokes switch: the first tool.

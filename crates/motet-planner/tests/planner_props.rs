@@ -5,19 +5,46 @@ use motet_trajectory::{kinematics::KinematicsKind, JointMap, Point, ProfileKind,
 use proptest::prelude::*;
 
 fn limits(profile: ProfileKind, joints: Vec<JointLimits>) -> Limits {
-    let axis = |v: f64, a: f64, path: bool| AxisLimits { max_velocity: v, max_acceleration: a, max_jerk: Some(a * 20.0), path };
+    let axis = |v: f64, a: f64, path: bool| AxisLimits {
+        max_velocity: v,
+        max_acceleration: a,
+        max_jerk: Some(a * 20.0),
+        path,
+    };
     Limits {
-        axes: vec![axis(300.0, 3000.0, true), axis(200.0, 2000.0, true), axis(20.0, 200.0, true), axis(50.0, 5000.0, false)],
+        axes: vec![
+            axis(300.0, 3000.0, true),
+            axis(200.0, 2000.0, true),
+            axis(20.0, 200.0, true),
+            axis(50.0, 5000.0, false),
+        ],
         joints,
         junction_deviation: 0.05,
         profile,
-        tools: vec![ToolTiming { stop: true, settle: 0.1 }, ToolTiming { stop: false, settle: 0.0 }],
+        tools: vec![
+            ToolTiming {
+                stop: true,
+                settle: 0.1,
+            },
+            ToolTiming {
+                stop: false,
+                settle: 0.0,
+            },
+        ],
         lookahead: 10_000,
     }
 }
 
 fn mv(p: [f64; 4], feed: f64) -> Command {
-    Command::Move(Move { target: [p[0], p[1], p[2], p[3], 0.0, 0.0], feed, kind: if feed.is_finite() { MoveKind::Feed } else { MoveKind::Rapid } })
+    Command::Move(Move {
+        target: [p[0], p[1], p[2], p[3], 0.0, 0.0],
+        feed,
+        kind: if feed.is_finite() {
+            MoveKind::Feed
+        } else {
+            MoveKind::Rapid
+        },
+    })
 }
 
 fn plan(l: &Limits, cmds: &[Command], one_by_one: bool) -> Vec<Planned> {
@@ -43,7 +70,15 @@ fn plan_from(l: &Limits, cmds: &[Command], one_by_one: bool, start: Point) -> Ve
 }
 
 fn segments(out: &[Planned]) -> Vec<Segment> {
-    out.iter().filter_map(|p| if let Planned::Segment(s) = p { Some(*s) } else { None }).collect()
+    out.iter()
+        .filter_map(|p| {
+            if let Planned::Segment(s) = p {
+                Some(*s)
+            } else {
+                None
+            }
+        })
+        .collect()
 }
 
 /// Samples each segment and checks axis and joint speeds and accelerations.
@@ -57,8 +92,18 @@ fn check_limits(l: &Limits, segs: &[Segment]) {
             let (_, v, a) = s.profile.state(t);
             for (i, ax) in l.axes.iter().enumerate() {
                 let u = s.axis_rate(i).abs();
-                assert!(u * v <= ax.max_velocity * (1.0 + 1e-6) + 1e-9, "axis {i} speed {} > {}", u * v, ax.max_velocity);
-                assert!(u * a.abs() <= ax.max_acceleration * (1.0 + 1e-6) + 1e-9, "axis {i} accel {} > {}", u * a.abs(), ax.max_acceleration);
+                assert!(
+                    u * v <= ax.max_velocity * (1.0 + 1e-6) + 1e-9,
+                    "axis {i} speed {} > {}",
+                    u * v,
+                    ax.max_velocity
+                );
+                assert!(
+                    u * a.abs() <= ax.max_acceleration * (1.0 + 1e-6) + 1e-9,
+                    "axis {i} accel {} > {}",
+                    u * a.abs(),
+                    ax.max_acceleration
+                );
             }
             // Joints by finite differences along time.
             for j in &l.joints {
@@ -75,31 +120,55 @@ fn check_limits(l: &Limits, segs: &[Segment]) {
                     continue; // angle branch cut between samples
                 }
                 let vel = (a2 - a0) / (2.0 * h);
-                assert!(vel.abs() <= j.max_velocity * 1.001 + 1e-6, "joint speed {vel} > {}", j.max_velocity);
+                assert!(
+                    vel.abs() <= j.max_velocity * 1.001 + 1e-6,
+                    "joint speed {vel} > {}",
+                    j.max_velocity
+                );
                 let acc = (a2 - 2.0 * a1 + a0) / (h * h);
                 // The finite difference of a ramp corner overshoots; allow a margin.
-                assert!(acc.abs() <= j.max_acceleration * 1.05 + 1.0, "joint accel {acc} > {}", j.max_acceleration);
+                assert!(
+                    acc.abs() <= j.max_acceleration * 1.05 + 1.0,
+                    "joint accel {acc} > {}",
+                    j.max_acceleration
+                );
             }
         }
     }
 }
 
 fn check_continuity(segs: &[Segment], targets: &[Point]) {
-    assert_eq!(segs.first().map(|s| s.profile.v0()), Some(0.0).filter(|_| !segs.is_empty()));
-    assert_eq!(segs.last().unwrap().profile.v1(), 0.0, "does not end at rest");
+    assert_eq!(
+        segs.first().map(|s| s.profile.v0()),
+        Some(0.0).filter(|_| !segs.is_empty())
+    );
+    assert_eq!(
+        segs.last().unwrap().profile.v1(),
+        0.0,
+        "does not end at rest"
+    );
     for w in segs.windows(2) {
         assert_eq!(w[0].end, w[1].start);
         assert_eq!(w[0].profile.v1(), w[1].profile.v0());
         assert_eq!(w[0].t1(), w[1].t0);
     }
-    let ends: Vec<Point> = segs.iter().filter(|s| s.profile.length() > 0.0).map(|s| s.end).collect();
+    let ends: Vec<Point> = segs
+        .iter()
+        .filter(|s| s.profile.length() > 0.0)
+        .map(|s| s.end)
+        .collect();
     assert_eq!(&ends, targets, "does not reach every target in order");
 }
 
 fn arb_moves() -> impl Strategy<Value = Vec<([f64; 4], f64)>> {
     prop::collection::vec(
         (
-            (-100.0..100.0f64, -100.0..100.0f64, -5.0..5.0f64, -2.0..10.0f64),
+            (
+                -100.0..100.0f64,
+                -100.0..100.0f64,
+                -5.0..5.0f64,
+                -2.0..10.0f64,
+            ),
             prop_oneof![Just(f64::INFINITY), 1.0..400.0f64],
             0.0..1.0f64,
         )
@@ -197,9 +266,15 @@ fn tool_events_and_dwells_are_placed_in_time() {
     let l = limits(ProfileKind::Trapezoid, vec![]);
     let cmds = vec![
         mv([10.0, 0.0, 0.0, 0.0], 100.0),
-        Command::Tool { tool: 0, value: 1.0 }, // stopping tool: pen down
+        Command::Tool {
+            tool: 0,
+            value: 1.0,
+        }, // stopping tool: pen down
         mv([20.0, 0.0, 0.0, 0.0], 100.0),
-        Command::Tool { tool: 1, value: 0.5 }, // inline tool: laser power
+        Command::Tool {
+            tool: 1,
+            value: 0.5,
+        }, // inline tool: laser power
         mv([30.0, 0.0, 0.0, 0.0], 100.0),
         Command::Dwell { seconds: 0.5 },
     ];
@@ -209,9 +284,21 @@ fn tool_events_and_dwells_are_placed_in_time() {
     assert_eq!(segs.len(), 5);
     assert_eq!(segs[0].profile.v1(), 0.0, "stopping tool needs rest");
     assert!((segs[1].profile.duration() - 0.1).abs() < 1e-12);
-    assert!(segs[2].profile.v1() > 0.0, "inline tool must not stop motion");
+    assert!(
+        segs[2].profile.v1() > 0.0,
+        "inline tool must not stop motion"
+    );
     assert!((segs[4].profile.duration() - 0.5).abs() < 1e-12);
-    let events: Vec<ToolEvent> = out.iter().filter_map(|p| if let Planned::Event(e) = p { Some(*e) } else { None }).collect();
+    let events: Vec<ToolEvent> = out
+        .iter()
+        .filter_map(|p| {
+            if let Planned::Event(e) = p {
+                Some(*e)
+            } else {
+                None
+            }
+        })
+        .collect();
     assert_eq!(events.len(), 2);
     assert_eq!(events[0].time, segs[0].t1());
     assert_eq!(events[1].time, segs[3].t0);
@@ -222,13 +309,23 @@ fn tool_events_and_dwells_are_placed_in_time() {
 fn junction_speed_follows_junction_deviation() {
     let l = limits(ProfileKind::Trapezoid, vec![]);
     // A 90° corner in xy: v² = a δ sin(45°) / (1 − sin(45°)).
-    let cmds = vec![mv([100.0, 0.0, 0.0, 0.0], 150.0), mv([100.0, 100.0, 0.0, 0.0], 150.0)];
+    let cmds = vec![
+        mv([100.0, 0.0, 0.0, 0.0], 150.0),
+        mv([100.0, 100.0, 0.0, 0.0], 150.0),
+    ];
     let segs = segments(&plan(&l, &cmds, false));
     let s = (0.5f64).sqrt();
     let want = (2000.0 * 0.05 * s / (1.0 - s)).sqrt();
-    assert!((segs[0].profile.v1() - want).abs() < 1e-9, "{} vs {want}", segs[0].profile.v1());
+    assert!(
+        (segs[0].profile.v1() - want).abs() < 1e-9,
+        "{} vs {want}",
+        segs[0].profile.v1()
+    );
     // Straight on: full speed through the junction.
-    let cmds = vec![mv([50.0, 0.0, 0.0, 0.0], 150.0), mv([100.0, 0.0, 0.0, 0.0], 150.0)];
+    let cmds = vec![
+        mv([50.0, 0.0, 0.0, 0.0], 150.0),
+        mv([100.0, 0.0, 0.0, 0.0], 150.0),
+    ];
     let segs = segments(&plan(&l, &cmds, false));
     assert_eq!(segs[0].profile.v1(), 150.0);
 }
@@ -243,7 +340,12 @@ fn bad_commands_are_refused_without_touching_the_queue() {
     assert!(p.push(&mv([1.0, 0.0, 0.0, 0.0], 0.0)).is_err());
     assert!(p.push(&mv([1.0, 0.0, 0.0, 0.0], -3.0)).is_err());
     assert!(p.push(&Command::Dwell { seconds: -1.0 }).is_err());
-    assert!(p.push(&Command::Tool { tool: 9, value: 1.0 }).is_err());
+    assert!(p
+        .push(&Command::Tool {
+            tool: 9,
+            value: 1.0
+        })
+        .is_err());
     assert_eq!(p.queued(), before);
     assert_eq!(p.tail(), [10.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
 }

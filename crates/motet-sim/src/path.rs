@@ -16,7 +16,13 @@ pub struct PathRecorder {
 
 impl PathRecorder {
     pub fn new(x: usize, y: usize, resolution: f64) -> PathRecorder {
-        PathRecorder { x, y, resolution, strokes: Vec::new(), current: None }
+        PathRecorder {
+            x,
+            y,
+            resolution,
+            strokes: Vec::new(),
+            current: None,
+        }
     }
 
     /// Adds the machine's position after a step or a tool change.
@@ -40,7 +46,10 @@ impl PathRecorder {
             self.strokes.push(Stroke { points, tool_on });
         }
         if let Some(s) = self.strokes.last_mut() {
-            if s.points.last().is_none_or(|l| dist(*l, q) >= self.resolution) {
+            if s.points
+                .last()
+                .is_none_or(|l| dist(*l, q) >= self.resolution)
+            {
                 s.points.push(q);
             }
         }

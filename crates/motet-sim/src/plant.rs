@@ -75,7 +75,10 @@ impl Plant {
                     spu,
                     invert: a.steps_per_unit < 0.0,
                     position,
-                    stats: ActuatorStats { position, ..Default::default() },
+                    stats: ActuatorStats {
+                        position,
+                        ..Default::default()
+                    },
                 }
             })
             .collect();
@@ -147,7 +150,9 @@ impl Plant {
     }
 
     fn step(&mut self, t: f64, index: usize, forward: bool) {
-        let Some(seg) = self.segment_at(t).copied() else { return };
+        let Some(seg) = self.segment_at(t).copied() else {
+            return;
+        };
         let a = &mut self.actuators[index];
         let before = a.position;
         let positive = forward != a.invert;
@@ -158,7 +163,11 @@ impl Plant {
         // Ideal joint value in steps near t, on the branch of the executed value.
         let reference = before as f64 / a.spu;
         let ideal = |tt: f64| {
-            let s = if tt < seg.t0 || tt > seg.t1() { None } else { Some(seg.position_at(tt)) };
+            let s = if tt < seg.t0 || tt > seg.t1() {
+                None
+            } else {
+                Some(seg.position_at(tt))
+            };
             s.map(|p| a.map.value(&p, reference) * a.spu)
         };
         if let Some(v) = ideal(t) {
@@ -193,7 +202,10 @@ impl Plant {
     pub fn executed_point(&self) -> Point {
         let mut joints = vec![0.0; self.joint_actuators.len()];
         for (j, acts) in self.joint_actuators.iter().enumerate() {
-            let sum: f64 = acts.iter().map(|&i| self.actuators[i].position as f64 / self.actuators[i].spu).sum();
+            let sum: f64 = acts
+                .iter()
+                .map(|&i| self.actuators[i].position as f64 / self.actuators[i].spu)
+                .sum();
             joints[j] = sum / acts.len().max(1) as f64;
         }
         let mut p = [0.0; MAX_AXES];

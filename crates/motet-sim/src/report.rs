@@ -69,8 +69,16 @@ impl Report {
     pub fn summary(&self) -> String {
         let mut s = String::new();
         let dur = self.duration_s;
-        let hms = format!("{}h{:02}m{:05.2}s", (dur / 3600.0) as u64, ((dur % 3600.0) / 60.0) as u64, dur % 60.0);
-        s += &format!("{} on {}: {} ({} commands, {} segments)\n", self.job, self.machine, hms, self.commands, self.segments);
+        let hms = format!(
+            "{}h{:02}m{:05.2}s",
+            (dur / 3600.0) as u64,
+            ((dur % 3600.0) / 60.0) as u64,
+            dur % 60.0
+        );
+        s += &format!(
+            "{} on {}: {} ({} commands, {} segments)\n",
+            self.job, self.machine, hms, self.commands, self.segments
+        );
         s += &format!(
             "  path: {:.1} mm with the tool on, {:.1} mm travel\n",
             self.tool_on_distance_mm, self.travel_distance_mm
@@ -82,13 +90,19 @@ impl Report {
             );
         }
         for a in &self.actuators {
-            s += &format!("  actuator {:<10} on {:<8} {:>12} steps\n", a.name, a.node, a.steps);
+            s += &format!(
+                "  actuator {:<10} on {:<8} {:>12} steps\n",
+                a.name, a.node, a.steps
+            );
         }
         s += &format!(
             "  executed vs commanded: {:.4} mm max ({:.3} steps); step timing error {:.4} µs max\n",
             self.max_path_deviation_mm, self.max_deviation_steps, self.max_step_time_error_us
         );
-        s += &format!("  simulated in {:.2} s wall ({:.0}x real time)", self.wall_s, self.speed_factor);
+        s += &format!(
+            "  simulated in {:.2} s wall ({:.0}x real time)",
+            self.wall_s, self.speed_factor
+        );
         s
     }
 }

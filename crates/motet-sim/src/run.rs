@@ -43,11 +43,17 @@ struct Collector<'a> {
 impl Board for Collector<'_> {
     fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
         let actuator = self.actuators[channel as usize];
-        self.out.push(Stamped { time: at_us, output: Output::Step { actuator, forward } });
+        self.out.push(Stamped {
+            time: at_us,
+            output: Output::Step { actuator, forward },
+        });
     }
     fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
         let tool = self.tools[output as usize];
-        self.out.push(Stamped { time: at_us, output: Output::Tool { tool, value } });
+        self.out.push(Stamped {
+            time: at_us,
+            output: Output::Tool { tool, value },
+        });
     }
 }
 
@@ -80,9 +86,10 @@ impl Sim<'_> {
         // Every message crosses as bytes, as it would over a link.
         let bytes = encode(msg, &mut self.buf).expect("messages fit MAX_MESSAGE");
         match self.nodes[node].handle(bytes) {
-            Some(NodeMessage::Refused { reason }) => {
-                Err(SimError::Refused { node: self.machine.nodes[node].name.clone(), reason })
-            }
+            Some(NodeMessage::Refused { reason }) => Err(SimError::Refused {
+                node: self.machine.nodes[node].name.clone(),
+                reason,
+            }),
             _ => Ok(()),
         }
     }
@@ -100,7 +107,11 @@ impl Sim<'_> {
         self.outputs.clear();
         for (k, node) in self.nodes.iter_mut().enumerate() {
             let spec = &self.machine.nodes[k];
-            let mut c = Collector { actuators: &spec.actuators, tools: &spec.tools, out: &mut self.outputs };
+            let mut c = Collector {
+                actuators: &spec.actuators,
+                tools: &spec.tools,
+                out: &mut self.outputs,
+            };
             node.poll(until, &mut c);
         }
         self.plant.apply(&mut self.outputs);
@@ -112,7 +123,11 @@ impl Sim<'_> {
         let window = self.machine.nodes[k].queue.min(NODE_QUEUE);
         loop {
             let st = self.nodes[k].status();
-            let full = if segment { NODE_QUEUE - st.segment_space >= window } else { st.event_space == 0 };
+            let full = if segment {
+                NODE_QUEUE - st.segment_space >= window
+            } else {
+                st.event_space == 0
+            };
             if !full {
                 return;
             }
@@ -165,7 +180,10 @@ impl Sim<'_> {
             let path = JointPath::new(&map, s, 0.0);
             r.peak_velocity = r.peak_velocity.max(path.max_rate(0.0, p.length()) * vc);
         }
-        let extruding = self.stats.extruding_axis.is_some_and(|e| s.end[e] > s.start[e]);
+        let extruding = self
+            .stats
+            .extruding_axis
+            .is_some_and(|e| s.end[e] > s.start[e]);
         if self.stats.tool_on || extruding {
             self.stats.tool_on_distance += p.length();
         } else {
@@ -175,18 +193,34 @@ impl Sim<'_> {
 }
 
 /// Plans `commands` on `machine` and executes them on simulated nodes.
-pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], progress: Progress) -> Result<SimResult, SimError> {
+pub fn simulate(
+    machine: &Machine,
+    job: &str,
+    commands: &[Located<Command>],
+    progress: Progress,
+) -> Result<SimResult, SimError> {
     let started = Instant::now();
-    let (x, y) = (machine.axis("x").unwrap_or(0), machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)));
+    let (x, y) = (
+        machine.axis("x").unwrap_or(0),
+        machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)),
+    );
     let span = |i: usize| {
         let t = machine.axes[i].travel;
-        if t[0].is_finite() && t[1].is_finite() { t[1] - t[0] } else { 100.0 }
+        if t[0].is_finite() && t[1].is_finite() {
+            t[1] - t[0]
+        } else {
+            100.0
+        }
     };
     // About a pixel of the default render.
     let resolution = span(x).max(span(y)) / 2000.0;
     let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
     let dist = Distributor::new(machine);
-    let frame = machine.nodes.iter().map(|n| n.frame_us).fold(f64::INFINITY, f64::min);
+    let frame = machine
+        .nodes
+        .iter()
+        .map(|n| n.frame_us)
+        .fold(f64::INFINITY, f64::min);
     let mut sim = Sim {
         machine,
         nodes: machine.nodes.iter().map(|_| Node::new()).collect(),
@@ -222,7 +256,9 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
     let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
     let total = commands.len();
     for (i, c) in commands.iter().enumerate() {
-        planner.push(&c.item).map_err(|error| SimError::Plan { loc: c.loc, error })?;
+        planner
+            .push(&c.item)
+            .map_err(|error| SimError::Plan { loc: c.loc, error })?;
         while let Some(item) = planner.pop() {
             sim.dispatch(item)?;
         }
@@ -237,7 +273,12 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
     let end = planner.clock();
     // Run to the end, then until nothing is left to do.
     sim.poll_all(sim.frame_after(end));
-    while let Some(d) = sim.nodes.iter_mut().filter_map(|n| n.next_deadline()).reduce(f64::min) {
+    while let Some(d) = sim
+        .nodes
+        .iter_mut()
+        .filter_map(|n| n.next_deadline())
+        .reduce(f64::min)
+    {
         let until = sim.frame_after(d.max(sim.now));
         sim.poll_all(until);
     }
@@ -253,7 +294,12 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
         .enumerate()
         .map(|(i, (a, st))| ActuatorReport {
             name: a.name.clone(),
-            node: machine.nodes.iter().find(|n| n.actuators.contains(&i)).map(|n| n.name.clone()).unwrap_or_default(),
+            node: machine
+                .nodes
+                .iter()
+                .find(|n| n.actuators.contains(&i))
+                .map(|n| n.name.clone())
+                .unwrap_or_default(),
             steps_per_unit: a.steps_per_unit,
             steps: st.steps,
             position: st.position,
@@ -273,12 +319,25 @@ pub fn simulate(machine: &Machine, job: &str, commands: &[Located<Command>], pro
         axes: sim.stats.axes,
         joints: sim.stats.joints.into_iter().map(|(_, j)| j).collect(),
         max_path_deviation_mm: sim.plant.max_path_deviation,
-        max_deviation_steps: actuators.iter().map(|a| a.max_deviation_steps).fold(0.0, f64::max),
-        max_step_time_error_us: actuators.iter().map(|a| a.max_step_time_error_us).fold(0.0, f64::max),
+        max_deviation_steps: actuators
+            .iter()
+            .map(|a| a.max_deviation_steps)
+            .fold(0.0, f64::max),
+        max_step_time_error_us: actuators
+            .iter()
+            .map(|a| a.max_step_time_error_us)
+            .fold(0.0, f64::max),
         actuators,
         underruns: sim.nodes.iter().map(|n| n.status().underruns).sum(),
         wall_s: wall,
-        speed_factor: if wall > 0.0 { duration_s / wall } else { f64::INFINITY },
+        speed_factor: if wall > 0.0 {
+            duration_s / wall
+        } else {
+            f64::INFINITY
+        },
     };
-    Ok(SimResult { report, strokes: sim.plant.recorder.finish() })
+    Ok(SimResult {
+        report,
+        strokes: sim.plant.recorder.finish(),
+    })
 }

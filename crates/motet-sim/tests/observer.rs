@@ -23,7 +23,13 @@ chain = [{ leadscrew = { lead = 8.0 } }, { stepper = { step_angle = 1.8 } }, { m
 struct Collect(Vec<Stamped>);
 impl Board for Collect {
     fn step(&mut self, _channel: u8, forward: bool, at_us: f64) {
-        self.0.push(Stamped { time: at_us, output: Output::Step { actuator: 0, forward } });
+        self.0.push(Stamped {
+            time: at_us,
+            output: Output::Step {
+                actuator: 0,
+                forward,
+            },
+        });
     }
     fn set_tool(&mut self, _: u8, _: f32, _: f64) {}
 }
@@ -36,7 +42,13 @@ fn ideal_run() -> (Machine, Vec<motet_trajectory::Segment>, Vec<Stamped>) {
     for x in [10.0, 4.0, 30.0] {
         let mut target = m.start;
         target[0] = x;
-        planner.push(&Command::Move(Move { target, feed: 60.0, kind: MoveKind::Feed })).unwrap();
+        planner
+            .push(&Command::Move(Move {
+                target,
+                feed: 60.0,
+                kind: MoveKind::Feed,
+            }))
+            .unwrap();
     }
     planner.finish();
     let mut segs = vec![];
@@ -75,7 +87,10 @@ fn exact_steps_measure_as_exact() {
     let (m, segs, mut steps) = ideal_run();
     assert!(steps.len() > 1000);
     let (err, dev) = observe(&m, &segs, &mut steps);
-    assert!(err < 0.01, "step time error {err} µs on the node's own steps");
+    assert!(
+        err < 0.01,
+        "step time error {err} µs on the node's own steps"
+    );
     assert!(dev <= 0.5 + 1e-6, "deviation {dev}");
 }
 
@@ -90,7 +105,10 @@ fn shifted_steps_are_caught() {
             }
         }
         let (err, _) = observe(&m, &segs, &mut steps);
-        assert!((err - f64::abs(shift)).abs() < 0.05 * f64::abs(shift), "shift {shift} measured as {err}");
+        assert!(
+            (err - f64::abs(shift)).abs() < 0.05 * f64::abs(shift),
+            "shift {shift} measured as {err}"
+        );
     }
 }
 

@@ -62,7 +62,10 @@ impl Element {
             if input == want {
                 Ok((out, factor))
             } else {
-                Err(ChainErrorKind::WrongInput { expected: want, got: input })
+                Err(ChainErrorKind::WrongInput {
+                    expected: want,
+                    got: input,
+                })
             }
         };
         let positive = |v: f64, what: &'static str| {
@@ -73,12 +76,16 @@ impl Element {
             }
         };
         match *self {
-            Element::Pulley { circumference } => {
-                need(Unit::Millimetre, Unit::Revolution, 1.0 / positive(circumference, "circumference")?)
-            }
-            Element::Leadscrew { lead } => {
-                need(Unit::Millimetre, Unit::Revolution, 1.0 / positive(lead, "lead")?)
-            }
+            Element::Pulley { circumference } => need(
+                Unit::Millimetre,
+                Unit::Revolution,
+                1.0 / positive(circumference, "circumference")?,
+            ),
+            Element::Leadscrew { lead } => need(
+                Unit::Millimetre,
+                Unit::Revolution,
+                1.0 / positive(lead, "lead")?,
+            ),
             Element::Gear { ratio } => {
                 let ratio = positive(ratio, "ratio")?;
                 match input {
@@ -107,10 +114,17 @@ impl Element {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ChainErrorKind {
-    WrongInput { expected: Unit, got: Unit },
-    BadValue { what: &'static str },
+    WrongInput {
+        expected: Unit,
+        got: Unit,
+    },
+    BadValue {
+        what: &'static str,
+    },
     /// The chain does not end at the motor's steps.
-    Incomplete { ends_in: Unit },
+    Incomplete {
+        ends_in: Unit,
+    },
 }
 
 /// Why a chain is impossible, and at which element (0-based).
@@ -131,7 +145,12 @@ impl core::fmt::Display for ChainError {
                 got.name()
             ),
             ChainErrorKind::BadValue { what } => {
-                write!(f, "element {}: {} must be a positive number", self.index + 1, what)
+                write!(
+                    f,
+                    "element {}: {} must be a positive number",
+                    self.index + 1,
+                    what
+                )
             }
             ChainErrorKind::Incomplete { ends_in } => write!(
                 f,
@@ -160,8 +179,13 @@ impl ElementChain {
             factor *= k;
         }
         match unit {
-            Unit::FullStep | Unit::Microstep => Ok(ElementChain { steps_per_unit: factor }),
-            ends_in => Err(ChainError { index: elements.len(), kind: ChainErrorKind::Incomplete { ends_in } }),
+            Unit::FullStep | Unit::Microstep => Ok(ElementChain {
+                steps_per_unit: factor,
+            }),
+            ends_in => Err(ChainError {
+                index: elements.len(),
+                kind: ChainErrorKind::Incomplete { ends_in },
+            }),
         }
     }
 }
@@ -178,37 +202,67 @@ mod tests {
             // GT2 belt, 20 teeth, 1.8° stepper, 16 microsteps: 80 steps/mm.
             (
                 Unit::Millimetre,
-                &[Element::Pulley { circumference: 40.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                &[
+                    Element::Pulley {
+                        circumference: 40.0,
+                    },
+                    Element::Stepper { step_angle: 1.8 },
+                    Element::Microstep { divisions: 16 },
+                ],
                 80.0,
             ),
             // 8 mm lead screw: 400 steps/mm.
             (
                 Unit::Millimetre,
-                &[Element::Leadscrew { lead: 8.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                &[
+                    Element::Leadscrew { lead: 8.0 },
+                    Element::Stepper { step_angle: 1.8 },
+                    Element::Microstep { divisions: 16 },
+                ],
                 400.0,
             ),
             // Pulley by pitch diameter, inverted.
             (
                 Unit::Millimetre,
-                &[Element::Pulley { circumference: PI * 10.0 }, Element::Invert, Element::Stepper { step_angle: 0.9 }],
+                &[
+                    Element::Pulley {
+                        circumference: PI * 10.0,
+                    },
+                    Element::Invert,
+                    Element::Stepper { step_angle: 0.9 },
+                ],
                 -400.0 / (PI * 10.0),
             ),
             // Turntable: 5:1 reduction, 1.8° motor, 8 microsteps: 5*200*8/360 steps/°.
             (
                 Unit::Degree,
-                &[Element::Gear { ratio: 5.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 8 }],
+                &[
+                    Element::Gear { ratio: 5.0 },
+                    Element::Stepper { step_angle: 1.8 },
+                    Element::Microstep { divisions: 8 },
+                ],
                 5.0 * 200.0 * 8.0 / 360.0,
             ),
             // Extruder drive gear with a 3:1 reduction.
             (
                 Unit::Millimetre,
-                &[Element::Pulley { circumference: PI * 7.5 }, Element::Gear { ratio: 3.0 }, Element::Stepper { step_angle: 1.8 }, Element::Microstep { divisions: 16 }],
+                &[
+                    Element::Pulley {
+                        circumference: PI * 7.5,
+                    },
+                    Element::Gear { ratio: 3.0 },
+                    Element::Stepper { step_angle: 1.8 },
+                    Element::Microstep { divisions: 16 },
+                ],
                 3.0 * 3200.0 / (PI * 7.5),
             ),
         ];
         for (unit, chain, want) in cases {
             let got = ElementChain::new(*unit, chain).unwrap().steps_per_unit;
-            assert!((got - want).abs() < 1e-9 * want.abs(), "{chain:?}: {got} != {want}");
+            assert!(
+                (got - want).abs() < 1e-9 * want.abs(),
+                "{chain:?}: {got} != {want}"
+            );
         }
     }
 
@@ -216,15 +270,48 @@ mod tests {
     fn impossible_chains_are_refused() {
         let cases: &[(Unit, &[Element], usize)] = &[
             // Microstep before the stepper.
-            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }, Element::Microstep { divisions: 16 }], 1),
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Pulley {
+                        circumference: 40.0,
+                    },
+                    Element::Microstep { divisions: 16 },
+                ],
+                1,
+            ),
             // No stepper at all.
-            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }], 1),
+            (
+                Unit::Millimetre,
+                &[Element::Pulley {
+                    circumference: 40.0,
+                }],
+                1,
+            ),
             // Two pulleys in a row.
-            (Unit::Millimetre, &[Element::Pulley { circumference: 40.0 }, Element::Pulley { circumference: 40.0 }], 1),
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Pulley {
+                        circumference: 40.0,
+                    },
+                    Element::Pulley {
+                        circumference: 40.0,
+                    },
+                ],
+                1,
+            ),
             // Linear joint straight into a stepper.
             (Unit::Millimetre, &[Element::Stepper { step_angle: 1.8 }], 0),
             // Zero lead.
-            (Unit::Millimetre, &[Element::Leadscrew { lead: 0.0 }, Element::Stepper { step_angle: 1.8 }], 0),
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Leadscrew { lead: 0.0 },
+                    Element::Stepper { step_angle: 1.8 },
+                ],
+                0,
+            ),
             // Negative step angle.
             (Unit::Degree, &[Element::Stepper { step_angle: -1.8 }], 0),
             // Empty chain.

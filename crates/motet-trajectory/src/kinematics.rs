@@ -167,7 +167,11 @@ enum Shape {
     /// value = |p0 + w·s|
     Radius { p0: (f64, f64), w: (f64, f64) },
     /// value = θ0 + angle from p0 to p0 + w·s (degrees)
-    Angle { p0: (f64, f64), w: (f64, f64), theta0: f64 },
+    Angle {
+        p0: (f64, f64),
+        w: (f64, f64),
+        theta0: f64,
+    },
 }
 
 impl JointPath {
@@ -178,13 +182,22 @@ impl JointPath {
     }
 
     /// The joint along the straight line from `start` to `end`, `length` long.
-    pub fn between(map: &JointMap, start: &Point, end: &Point, length: f64, reference: f64) -> JointPath {
+    pub fn between(
+        map: &JointMap,
+        start: &Point,
+        end: &Point,
+        length: f64,
+        reference: f64,
+    ) -> JointPath {
         let inv = if length > 0.0 { 1.0 / length } else { 0.0 };
         let shape = match *map {
             JointMap::Linear { .. } => {
                 let a0 = map.value(start, reference);
                 let a1 = map.value(end, reference);
-                Shape::Linear { a0, k: (a1 - a0) * inv }
+                Shape::Linear {
+                    a0,
+                    k: (a1 - a0) * inv,
+                }
             }
             JointMap::PolarRadius { x, y } | JointMap::PolarAngle { x, y } => {
                 let (x, y) = (x as usize, y as usize);
@@ -193,7 +206,11 @@ impl JointPath {
                 if let JointMap::PolarRadius { .. } = map {
                     Shape::Radius { p0, w }
                 } else {
-                    Shape::Angle { p0, w, theta0: map.value(start, reference) }
+                    Shape::Angle {
+                        p0,
+                        w,
+                        theta0: map.value(start, reference),
+                    }
                 }
             }
         };
@@ -208,7 +225,11 @@ impl JointPath {
             Shape::Radius { p0, w } | Shape::Angle { p0, w, .. } => (p0, w),
         };
         let ww = w.0 * w.0 + w.1 * w.1;
-        let s_min = if ww > 0.0 { (-(p0.0 * w.0 + p0.1 * w.1) / ww).clamp(s_lo, s_hi) } else { s_lo };
+        let s_min = if ww > 0.0 {
+            (-(p0.0 * w.0 + p0.1 * w.1) / ww).clamp(s_lo, s_hi)
+        } else {
+            s_lo
+        };
         let (x, y) = (p0.0 + w.0 * s_min, p0.1 + w.1 * s_min);
         let r = sqrt(x * x + y * y);
         let cross = (p0.0 * w.1 - p0.1 * w.0).abs();
@@ -279,7 +300,11 @@ impl JointPath {
                     x * x + y * y
                 };
                 let ww = w.0 * w.0 + w.1 * w.1;
-                let mut s_min = if ww > 0.0 { -(p0.0 * w.0 + p0.1 * w.1) / ww } else { s_lo };
+                let mut s_min = if ww > 0.0 {
+                    -(p0.0 * w.0 + p0.1 * w.1) / ww
+                } else {
+                    s_lo
+                };
                 s_min = s_min.clamp(s_lo, s_hi);
                 let cross = (p0.0 * w.1 - p0.1 * w.0).abs();
                 let m = r2(s_min);
@@ -354,7 +379,12 @@ mod tests {
         for i in 0..3 {
             d += (end[i] - start[i]) * (end[i] - start[i]);
         }
-        Segment { t0: 0.0, start, end, profile: fastest(sqrt(d), 0.0, 0.0, 100.0, 1000.0, 0.0) }
+        Segment {
+            t0: 0.0,
+            start,
+            end,
+            profile: fastest(sqrt(d), 0.0, 0.0, 100.0, 1000.0, 0.0),
+        }
     }
 
     fn pt(x: f64, y: f64) -> Point {
@@ -364,7 +394,12 @@ mod tests {
     #[test]
     fn forward_inverts_inverse() {
         let points = [(0.0, 0.0), (10.0, -3.5), (-120.0, 44.0), (1e-3, 250.0)];
-        for kind in [KinematicsKind::Cartesian, KinematicsKind::CoreXY, KinematicsKind::HBot, KinematicsKind::Polar] {
+        for kind in [
+            KinematicsKind::Cartesian,
+            KinematicsKind::CoreXY,
+            KinematicsKind::HBot,
+            KinematicsKind::Polar,
+        ] {
             for (x, y) in points {
                 if kind == KinematicsKind::Polar && x == 0.0 && y == 0.0 {
                     continue;
@@ -373,7 +408,10 @@ mod tests {
                 let j0 = kind.xy_joint_map(0, 0, 1).value(&p, 0.0);
                 let j1 = kind.xy_joint_map(1, 0, 1).value(&p, 0.0);
                 let (fx, fy) = kind.forward_xy(j0, j1);
-                assert!((fx - x).abs() < 1e-9 && (fy - y).abs() < 1e-9, "{kind:?} ({x},{y}) -> ({fx},{fy})");
+                assert!(
+                    (fx - x).abs() < 1e-9 && (fy - y).abs() < 1e-9,
+                    "{kind:?} ({x},{y}) -> ({fx},{fy})"
+                );
             }
         }
     }
@@ -381,8 +419,14 @@ mod tests {
     #[test]
     fn corexy_rows() {
         let p = pt(3.0, 2.0);
-        assert_eq!(KinematicsKind::CoreXY.xy_joint_map(0, 0, 1).value(&p, 0.0), 5.0);
-        assert_eq!(KinematicsKind::CoreXY.xy_joint_map(1, 0, 1).value(&p, 0.0), 1.0);
+        assert_eq!(
+            KinematicsKind::CoreXY.xy_joint_map(0, 0, 1).value(&p, 0.0),
+            5.0
+        );
+        assert_eq!(
+            KinematicsKind::CoreXY.xy_joint_map(1, 0, 1).value(&p, 0.0),
+            1.0
+        );
     }
 
     #[test]

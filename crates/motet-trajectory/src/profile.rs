@@ -44,17 +44,45 @@ impl Ramp {
         let sign = if dv < 0.0 { -1.0 } else { 1.0 };
         let dv = dv * sign;
         if dv <= 0.0 || accel <= 0.0 {
-            return Ramp { v_from, sign, accel: 0.0, jerk: 0.0, t_jerk: 0.0, t_const: 0.0 };
+            return Ramp {
+                v_from,
+                sign,
+                accel: 0.0,
+                jerk: 0.0,
+                t_jerk: 0.0,
+                t_const: 0.0,
+            };
         }
         if jerk <= 0.0 {
-            return Ramp { v_from, sign, accel, jerk: 0.0, t_jerk: 0.0, t_const: dv / accel };
+            return Ramp {
+                v_from,
+                sign,
+                accel,
+                jerk: 0.0,
+                t_jerk: 0.0,
+                t_const: dv / accel,
+            };
         }
         if dv * jerk >= accel * accel {
             let t_jerk = accel / jerk;
-            Ramp { v_from, sign, accel, jerk, t_jerk, t_const: dv / accel - t_jerk }
+            Ramp {
+                v_from,
+                sign,
+                accel,
+                jerk,
+                t_jerk,
+                t_const: dv / accel - t_jerk,
+            }
         } else {
             let t_jerk = sqrt(dv / jerk);
-            Ramp { v_from, sign, accel: jerk * t_jerk, jerk, t_jerk, t_const: 0.0 }
+            Ramp {
+                v_from,
+                sign,
+                accel: jerk * t_jerk,
+                jerk,
+                t_jerk,
+                t_const: 0.0,
+            }
         }
     }
 
@@ -86,7 +114,11 @@ impl Ramp {
         let v1 = v0 + s * 0.5 * j * tj * tj;
         let d1 = v0 * tj + s * j * tj * tj * tj / 6.0;
         if t <= tj {
-            return (v0 * t + s * j * t * t * t / 6.0, v0 + s * 0.5 * j * t * t, s * j * t);
+            return (
+                v0 * t + s * j * t * t * t / 6.0,
+                v0 + s * 0.5 * j * t * t,
+                s * j * t,
+            );
         }
         let tc = self.t_const;
         if t <= tj + tc {
@@ -117,7 +149,11 @@ impl Ramp {
             let disc = self.v_from * self.v_from + 2.0 * self.sign * self.accel * d;
             let root = sqrt(disc.max(0.0));
             let denom = self.v_from + root;
-            return if denom > 0.0 { (2.0 * d / denom).min(total) } else { total };
+            return if denom > 0.0 {
+                (2.0 * d / denom).min(total)
+            } else {
+                total
+            };
         }
         // Newton on the cubic pieces, kept inside a bracket; distance is monotone
         // because speed never goes negative within a ramp.
@@ -138,8 +174,16 @@ impl Ramp {
             if err.abs() <= 1e-15 * (1.0 + d) || hi - lo <= 1e-15 {
                 break;
             }
-            let next = if v > 0.0 { t - err / v } else { 0.5 * (lo + hi) };
-            t = if next > lo && next < hi { next } else { 0.5 * (lo + hi) };
+            let next = if v > 0.0 {
+                t - err / v
+            } else {
+                0.5 * (lo + hi)
+            };
+            t = if next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
         }
         t
     }
@@ -183,7 +227,17 @@ impl Profile {
         let ramp_out = Ramp::new(vc, v1, accel, jerk);
         let rest = length - ramp_in.distance() - ramp_out.distance();
         let cruise = if vc > 0.0 { (rest / vc).max(0.0) } else { 0.0 };
-        Profile { length, v0, vc, v1, ramp_in, ramp_out, cruise, accel, jerk }
+        Profile {
+            length,
+            v0,
+            vc,
+            v1,
+            ramp_in,
+            ramp_out,
+            cruise,
+            accel,
+            jerk,
+        }
     }
 
     /// Standing still for `seconds`.
@@ -292,7 +346,11 @@ impl Profile {
 pub fn ramp_distance(v_from: f64, v_to: f64, accel: f64, jerk: f64) -> f64 {
     if jerk <= 0.0 {
         let d = (v_to * v_to - v_from * v_from).abs();
-        return if accel > 0.0 { d / (2.0 * accel) } else { f64::INFINITY };
+        return if accel > 0.0 {
+            d / (2.0 * accel)
+        } else {
+            f64::INFINITY
+        };
     }
     Ramp::new(v_from, v_to, accel, jerk).distance()
 }
@@ -409,7 +467,11 @@ mod tests {
 
     #[test]
     fn scurve_ramp_distance_is_mean_speed_times_time() {
-        for (a, b, acc, j) in [(0.0, 100.0, 1000.0, 10_000.0), (50.0, 10.0, 500.0, 1e6), (0.0, 1.0, 1000.0, 1e4)] {
+        for (a, b, acc, j) in [
+            (0.0, 100.0, 1000.0, 10_000.0),
+            (50.0, 10.0, 500.0, 1e6),
+            (0.0, 1.0, 1000.0, 1e4),
+        ] {
             let r = Ramp::new(a, b, acc, j);
             let (d, v, _) = r.state(r.duration());
             assert!((v - b).abs() < 1e-9);

@@ -10,7 +10,9 @@
 
 pub mod message;
 
-pub use message::{AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE};
+pub use message::{
+    AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,
+};
 
 /// Why bytes could not be turned into a message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,7 +33,10 @@ impl core::fmt::Display for WireError {
 }
 
 /// Encodes `msg` into `buf`, returning the bytes used.
-pub fn encode<'a, T: serde::Serialize>(msg: &T, buf: &'a mut [u8]) -> Result<&'a mut [u8], WireError> {
+pub fn encode<'a, T: serde::Serialize>(
+    msg: &T,
+    buf: &'a mut [u8],
+) -> Result<&'a mut [u8], WireError> {
     postcard::to_slice(msg, buf).map_err(|_| WireError::TooLong)
 }
 

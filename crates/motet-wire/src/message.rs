@@ -52,10 +52,16 @@ pub enum HostMessage {
     ConfigureTool(ToolConfig),
     /// The machine is at rest at this point: set every channel's step count from
     /// it without stepping. Only valid with an empty segment queue.
-    SetPosition { position: Point },
+    SetPosition {
+        position: Point,
+    },
     Segment(SegmentMsg),
     /// An event-track change at a time.
-    Event { track: u8, time: f64, value: f32 },
+    Event {
+        track: u8,
+        time: f64,
+        value: f32,
+    },
     /// Ask for a [`NodeMessage::Status`].
     Status,
 }
@@ -95,15 +101,43 @@ mod tests {
     #[test]
     fn messages_round_trip() {
         let mut axes = Vec::new();
-        axes.push(AxisSpan { axis: 0, from: 1.5, to: -3.25 }).unwrap();
-        axes.push(AxisSpan { axis: 3, from: 0.0, to: 0.04 }).unwrap();
+        axes.push(AxisSpan {
+            axis: 0,
+            from: 1.5,
+            to: -3.25,
+        })
+        .unwrap();
+        axes.push(AxisSpan {
+            axis: 3,
+            from: 0.0,
+            to: 0.04,
+        })
+        .unwrap();
         let msgs = [
             HostMessage::Reset,
-            HostMessage::ConfigureChannel(ChannelConfig { channel: 2, map: JointMap::PolarAngle { x: 0, y: 1 }, steps_per_unit: -44.4 }),
-            HostMessage::ConfigureTool(ToolConfig { output: 0, track: 1 }),
-            HostMessage::SetPosition { position: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0] },
-            HostMessage::Segment(SegmentMsg { seq: 7, t0: 123456.75, profile: fastest(4.0, 0.0, 3.0, 50.0, 1000.0, 0.0).params(), axes }),
-            HostMessage::Event { track: 1, time: 99.5, value: 0.25 },
+            HostMessage::ConfigureChannel(ChannelConfig {
+                channel: 2,
+                map: JointMap::PolarAngle { x: 0, y: 1 },
+                steps_per_unit: -44.4,
+            }),
+            HostMessage::ConfigureTool(ToolConfig {
+                output: 0,
+                track: 1,
+            }),
+            HostMessage::SetPosition {
+                position: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            },
+            HostMessage::Segment(SegmentMsg {
+                seq: 7,
+                t0: 123456.75,
+                profile: fastest(4.0, 0.0, 3.0, 50.0, 1000.0, 0.0).params(),
+                axes,
+            }),
+            HostMessage::Event {
+                track: 1,
+                time: 99.5,
+                value: 0.25,
+            },
             HostMessage::Status,
         ];
         let mut buf = [0u8; MAX_MESSAGE];
@@ -118,9 +152,19 @@ mod tests {
     fn largest_message_fits() {
         let mut axes = Vec::new();
         for i in 0..MAX_AXES as u8 {
-            axes.push(AxisSpan { axis: i, from: 1e300, to: -1e300 }).unwrap();
+            axes.push(AxisSpan {
+                axis: i,
+                from: 1e300,
+                to: -1e300,
+            })
+            .unwrap();
         }
-        let m = HostMessage::Segment(SegmentMsg { seq: u32::MAX, t0: 1e300, profile: fastest(4.0, 0.0, 3.0, 50.0, 1000.0, 0.0).params(), axes });
+        let m = HostMessage::Segment(SegmentMsg {
+            seq: u32::MAX,
+            t0: 1e300,
+            profile: fastest(4.0, 0.0, 3.0, 50.0, 1000.0, 0.0).params(),
+            axes,
+        });
         let mut buf = [0u8; MAX_MESSAGE];
         assert!(encode(&m, &mut buf).is_ok());
     }

@@ -15,8 +15,18 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
     let loaded = job::load(&machine, job_path, true)?;
     let load_s = t.elapsed().as_secs_f64();
     let moves = loaded.commands.len();
-    println!("job: {} ({} lines, {:.1} MB, {} commands)", job_path.display(), lines, data.len() as f64 / 1e6, moves);
-    println!("parse + check: {:.3} s ({:.0} MB/s, including decompression)", load_s, data.len() as f64 / 1e6 / load_s);
+    println!(
+        "job: {} ({} lines, {:.1} MB, {} commands)",
+        job_path.display(),
+        lines,
+        data.len() as f64 / 1e6,
+        moves
+    );
+    println!(
+        "parse + check: {:.3} s ({:.0} MB/s, including decompression)",
+        load_s,
+        data.len() as f64 / 1e6 / load_s
+    );
 
     let mut best = f64::INFINITY;
     let mut segments = 0;
@@ -47,9 +57,18 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         moves as f64 / best / 1e6,
         repeat.max(1)
     );
-    println!("job duration: {:.0} s ({:.2} h)", duration, duration / 3600.0);
+    println!(
+        "job duration: {:.0} s ({:.2} h)",
+        duration,
+        duration / 3600.0
+    );
     if !no_sim {
-        let r = motet_sim::simulate(&machine, &job::name(job_path), &loaded.commands, &mut |_, _| {})?;
+        let r = motet_sim::simulate(
+            &machine,
+            &job::name(job_path),
+            &loaded.commands,
+            &mut |_, _| {},
+        )?;
         let steps: u64 = r.report.actuators.iter().map(|a| a.steps).sum();
         println!(
             "simulation: {:.0} s of motion in {:.2} s wall: {:.0}x real time; {} steps ({:.1} M steps/s)",

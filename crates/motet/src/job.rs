@@ -13,13 +13,20 @@ pub enum Kind {
 
 /// The job's kind from its name (`.gz` is looked through).
 pub fn kind(path: &Path) -> Result<Kind> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_ascii_lowercase();
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or_default()
+        .to_ascii_lowercase();
     let name = name.strip_suffix(".gz").unwrap_or(&name);
     let ext = name.rsplit('.').next().unwrap_or_default();
     Ok(match ext {
         "gcode" | "gco" | "g" | "nc" | "ngc" | "tap" => Kind::Gcode,
         "svg" => Kind::Svg,
-        _ => bail!("{}: unknown job type `.{ext}`; expected G-code (.gcode, .nc, .g) or SVG (.svg)", path.display()),
+        _ => bail!(
+            "{}: unknown job type `.{ext}`; expected G-code (.gcode, .nc, .g) or SVG (.svg)",
+            path.display()
+        ),
     })
 }
 
@@ -56,16 +63,29 @@ pub fn load(machine: &Machine, path: &Path, allow_unknown: bool) -> Result<Loade
     let (commands, warnings) = match kind {
         Kind::Gcode => {
             let text = std::str::from_utf8(&data).map_err(|e| {
-                let line = data[..e.valid_up_to()].iter().filter(|b| **b == b'\n').count() + 1;
+                let line = data[..e.valid_up_to()]
+                    .iter()
+                    .filter(|b| **b == b'\n')
+                    .count()
+                    + 1;
                 anyhow::anyhow!("{file}:{line}: G-code is not valid UTF-8 text")
             })?;
             let opts = motet_gcode::GcodeOptions { allow_unknown };
-            let parsed = motet_gcode::parse(text, &target, &opts).map_err(|e| anyhow::anyhow!("{file}:{e}"))?;
-            (parsed.commands, parsed.warnings.iter().map(|w| format!("{file}:{w}")).collect())
+            let parsed = motet_gcode::parse(text, &target, &opts)
+                .map_err(|e| anyhow::anyhow!("{file}:{e}"))?;
+            (
+                parsed.commands,
+                parsed
+                    .warnings
+                    .iter()
+                    .map(|w| format!("{file}:{w}"))
+                    .collect(),
+            )
         }
         Kind::Svg => {
             let opts = motet_svg::SvgOptions::default();
-            let commands = motet_svg::parse(&data, &target, &opts).map_err(|e| anyhow::anyhow!("{file}:{e}"))?;
+            let commands = motet_svg::parse(&data, &target, &opts)
+                .map_err(|e| anyhow::anyhow!("{file}:{e}"))?;
             (commands, vec![])
         }
     };

@@ -9,7 +9,11 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "motet", version, about = "Describe a machine, drive it from G-code and SVG, on simulated nodes")]
+#[command(
+    name = "motet",
+    version,
+    about = "Describe a machine, drive it from G-code and SVG, on simulated nodes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
@@ -67,8 +71,23 @@ fn main() -> std::process::ExitCode {
 
 fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Cmd::Run { machine, job, out, allow_unknown, quiet } => run::run(&machine, &job, out, allow_unknown, quiet),
-        Cmd::Check { machine, job, allow_unknown } => run::check(&machine, job.as_deref(), allow_unknown),
-        Cmd::Bench { machine, job, repeat, no_sim } => bench::bench(&machine, &job, repeat, no_sim),
+        Cmd::Run {
+            machine,
+            job,
+            out,
+            allow_unknown,
+            quiet,
+        } => run::run(&machine, &job, out, allow_unknown, quiet),
+        Cmd::Check {
+            machine,
+            job,
+            allow_unknown,
+        } => run::check(&machine, job.as_deref(), allow_unknown),
+        Cmd::Bench {
+            machine,
+            job,
+            repeat,
+            no_sim,
+        } => bench::bench(&machine, &job, repeat, no_sim),
     }
 }

@@ -14,7 +14,14 @@ pub fn load_machine(path: &Path) -> Result<Machine> {
 
 pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Result<()> {
     let m = load_machine(machine)?;
-    println!("{}: ok ({}, {} axes, {} actuators, {} nodes)", machine.display(), m.name, m.axes.len(), m.actuators.len(), m.nodes.len());
+    println!(
+        "{}: ok ({}, {} axes, {} actuators, {} nodes)",
+        machine.display(),
+        m.name,
+        m.axes.len(),
+        m.actuators.len(),
+        m.nodes.len()
+    );
     if let Some(j) = job_path {
         let loaded = job::load(&m, j, allow_unknown)?;
         for w in &loaded.warnings {
@@ -25,7 +32,13 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
     Ok(())
 }
 
-pub fn run(machine_path: &Path, job_path: &Path, out: Option<PathBuf>, allow_unknown: bool, quiet: bool) -> Result<()> {
+pub fn run(
+    machine_path: &Path,
+    job_path: &Path,
+    out: Option<PathBuf>,
+    allow_unknown: bool,
+    quiet: bool,
+) -> Result<()> {
     let machine = load_machine(machine_path)?;
     let loaded = job::load(&machine, job_path, allow_unknown)?;
     if !quiet {
@@ -41,9 +54,11 @@ pub fn run(machine_path: &Path, job_path: &Path, out: Option<PathBuf>, allow_unk
     } else {
         let b = ProgressBar::new(loaded.commands.len() as u64);
         b.set_style(
-            ProgressStyle::with_template("{spinner} simulating [{bar:40}] {pos}/{len} commands ({eta})")
-                .expect("static template")
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{spinner} simulating [{bar:40}] {pos}/{len} commands ({eta})",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
         );
         b
     };
@@ -53,8 +68,14 @@ pub fn run(machine_path: &Path, job_path: &Path, out: Option<PathBuf>, allow_unk
     bar.finish_and_clear();
 
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    let (x, y) = (machine.axis("x").unwrap_or(0), machine.axis("y").unwrap_or(0));
-    let mut bounds = [[machine.axes[x].travel[0], machine.axes[y].travel[0]], [machine.axes[x].travel[1], machine.axes[y].travel[1]]];
+    let (x, y) = (
+        machine.axis("x").unwrap_or(0),
+        machine.axis("y").unwrap_or(0),
+    );
+    let mut bounds = [
+        [machine.axes[x].travel[0], machine.axes[y].travel[0]],
+        [machine.axes[x].travel[1], machine.axes[y].travel[1]],
+    ];
     if !bounds.iter().flatten().all(|v| v.is_finite()) {
         bounds = [[-100.0, -100.0], [100.0, 100.0]];
     }
@@ -62,10 +83,16 @@ pub fn run(machine_path: &Path, job_path: &Path, out: Option<PathBuf>, allow_unk
     let png = render_png(&result.strokes, &spec).context("rendering the tool path")?;
     std::fs::write(out.join("path.png"), png)?;
     std::fs::write(out.join("path.svg"), render_svg(&result.strokes, &spec))?;
-    std::fs::write(out.join("report.json"), serde_json::to_string_pretty(&result.report)? + "\n")?;
+    std::fs::write(
+        out.join("report.json"),
+        serde_json::to_string_pretty(&result.report)? + "\n",
+    )?;
     if !quiet {
         println!("{}", result.report.summary());
-        println!("  wrote {}/{{path.png, path.svg, report.json}}", out.display());
+        println!(
+            "  wrote {}/{{path.png, path.svg, report.json}}",
+            out.display()
+        );
     }
     Ok(())
 }

@@ -9,8 +9,16 @@ fn root() -> PathBuf {
 }
 
 fn motet(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_motet")).args(args).current_dir(root()).output().unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+    let out = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -22,15 +30,33 @@ fn scratch(name: &str) -> PathBuf {
 #[test]
 fn run_writes_render_and_report() {
     let out = scratch("run");
-    let (ok, stdout, stderr) = motet(&["run", "examples/plotter.toml", "examples/jobs/drawing.svg", "--out", out.to_str().unwrap()]);
+    let (ok, stdout, stderr) = motet(&[
+        "run",
+        "examples/plotter.toml",
+        "examples/jobs/drawing.svg",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("executed vs commanded"), "summary missing: {stdout}");
+    assert!(
+        stdout.contains("executed vs commanded"),
+        "summary missing: {stdout}"
+    );
     let png = std::fs::read(out.join("path.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     let svg = std::fs::read_to_string(out.join("path.svg")).unwrap();
     assert!(svg.contains("<polyline"));
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    for key in ["duration_s", "tool_on_distance_mm", "travel_distance_mm", "axes", "actuators", "max_path_deviation_mm", "max_step_time_error_us"] {
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    for key in [
+        "duration_s",
+        "tool_on_distance_mm",
+        "travel_distance_mm",
+        "axes",
+        "actuators",
+        "max_path_deviation_mm",
+        "max_step_time_error_us",
+    ] {
         assert!(report.get(key).is_some(), "report lacks {key}");
     }
     assert_eq!(report["actuators"].as_array().unwrap().len(), 2);
@@ -61,11 +87,24 @@ fn bad_input_gets_a_located_error_and_no_output() {
     for (machine, name, text, want) in cases {
         let job = write(&dir, name, text);
         let out = dir.join(format!("out-{name}"));
-        let (ok, _, stderr) = motet(&["run", machine, &job, "--out", out.to_str().unwrap(), "--quiet"]);
+        let (ok, _, stderr) = motet(&[
+            "run",
+            machine,
+            &job,
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
         assert!(!ok, "{name} should fail");
-        assert!(stderr.contains(want), "{name}: error should contain `{want}`, got: {stderr}");
+        assert!(
+            stderr.contains(want),
+            "{name}: error should contain `{want}`, got: {stderr}"
+        );
         assert!(!stderr.contains("panicked"), "{name}: {stderr}");
-        assert!(!out.exists(), "{name}: nothing should be written for a refused job");
+        assert!(
+            !out.exists(),
+            "{name}: nothing should be written for a refused job"
+        );
     }
 }
 
@@ -74,16 +113,37 @@ fn bad_machine_file_gets_a_located_error() {
     let dir = scratch("machine");
     let good = std::fs::read_to_string(root().join("examples/printer.toml")).unwrap();
     let cases: &[(&str, String, &str)] = &[
-        ("typo.toml", good.replace("max_velocity = 300          # mm/s", "max_velocty = 300"), "typo.toml:15:1"),
-        ("chain.toml", good.replace("{ stepper = { step_angle = 1.8 } }, { microstep = 16 }]\n\n[actuators.y_motor]", "{ microstep = 16 }, { stepper = { step_angle = 1.8 } }]\n\n[actuators.y_motor]"), "impossible element chain"),
-        ("joint.toml", good.replace("joint = \"z\"", "joint = \"w\""), "unknown joint `w`"),
+        (
+            "typo.toml",
+            good.replace("max_velocity = 300          # mm/s", "max_velocty = 300"),
+            "typo.toml:15:1",
+        ),
+        (
+            "chain.toml",
+            good.replace(
+                "{ stepper = { step_angle = 1.8 } }, { microstep = 16 }]\n\n[actuators.y_motor]",
+                "{ microstep = 16 }, { stepper = { step_angle = 1.8 } }]\n\n[actuators.y_motor]",
+            ),
+            "impossible element chain",
+        ),
+        (
+            "joint.toml",
+            good.replace("joint = \"z\"", "joint = \"w\""),
+            "unknown joint `w`",
+        ),
     ];
     for (name, text, want) in cases {
         let m = write(&dir, name, text);
         let (ok, _, stderr) = motet(&["check", &m]);
         assert!(!ok, "{name} should fail");
-        assert!(stderr.contains(want), "{name}: error should contain `{want}`, got: {stderr}");
+        assert!(
+            stderr.contains(want),
+            "{name}: error should contain `{want}`, got: {stderr}"
+        );
     }
     let (ok, _, stderr) = motet(&["check", "no/such/machine.toml"]);
-    assert!(!ok && stderr.contains("cannot read machine file"), "{stderr}");
+    assert!(
+        !ok && stderr.contains("cannot read machine file"),
+        "{stderr}"
+    );
 }

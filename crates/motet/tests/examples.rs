@@ -19,7 +19,15 @@ fn run(machine: &str, job: &str) -> (Machine, Vec<Located<Command>>, SimResult) 
         motet_svg::parse(&data, &target, &Default::default()).unwrap()
     } else {
         let text = String::from_utf8(data).unwrap();
-        motet_gcode::parse(&text, &target, &motet_gcode::GcodeOptions { allow_unknown: false }).unwrap().commands
+        motet_gcode::parse(
+            &text,
+            &target,
+            &motet_gcode::GcodeOptions {
+                allow_unknown: false,
+            },
+        )
+        .unwrap()
+        .commands
     };
     motet_host::check_job(&m, &cmds).unwrap();
     let r = simulate(&m, job, &cmds, &mut |_, _| {}).unwrap();
@@ -40,12 +48,29 @@ fn every_example_runs_within_limits_and_on_time() {
         let (m, cmds, r) = run(machine, job);
         let rep = &r.report;
         let ctx = format!("{machine} {job}");
-        assert!(rep.duration_s > 0.0 && rep.segments > 0, "{ctx}: nothing ran");
+        assert!(
+            rep.duration_s > 0.0 && rep.segments > 0,
+            "{ctx}: nothing ran"
+        );
         assert_eq!(rep.underruns, 0, "{ctx}: a node ran dry");
-        assert!(rep.max_deviation_steps <= 0.5 + 1e-6, "{ctx}: deviation {} steps", rep.max_deviation_steps);
-        assert!(rep.max_step_time_error_us <= 1.0, "{ctx}: step time error {} µs", rep.max_step_time_error_us);
+        assert!(
+            rep.max_deviation_steps <= 0.5 + 1e-6,
+            "{ctx}: deviation {} steps",
+            rep.max_deviation_steps
+        );
+        assert!(
+            rep.max_step_time_error_us <= 1.0,
+            "{ctx}: step time error {} µs",
+            rep.max_step_time_error_us
+        );
         for a in &rep.axes {
-            assert!(a.peak_velocity <= a.max_velocity * (1.0 + 1e-9), "{ctx}: axis {} speed {} > {}", a.name, a.peak_velocity, a.max_velocity);
+            assert!(
+                a.peak_velocity <= a.max_velocity * (1.0 + 1e-9),
+                "{ctx}: axis {} speed {} > {}",
+                a.name,
+                a.peak_velocity,
+                a.max_velocity
+            );
             assert!(
                 a.peak_acceleration <= a.max_acceleration * (1.0 + 1e-9),
                 "{ctx}: axis {} accel {} > {}",
@@ -56,16 +81,35 @@ fn every_example_runs_within_limits_and_on_time() {
         }
         for j in &rep.joints {
             if let Some(max) = j.max_velocity {
-                assert!(j.peak_velocity <= max * (1.0 + 1e-6), "{ctx}: joint {} speed {} > {max}", j.name, j.peak_velocity);
+                assert!(
+                    j.peak_velocity <= max * (1.0 + 1e-6),
+                    "{ctx}: joint {} speed {} > {max}",
+                    j.name,
+                    j.peak_velocity
+                );
             }
         }
         // Every actuator ends exactly where the last target puts it.
-        let last = cmds.iter().rev().find_map(|c| if let Command::Move(mv) = c.item { Some(mv.target) } else { None }).unwrap();
+        let last = cmds
+            .iter()
+            .rev()
+            .find_map(|c| {
+                if let Command::Move(mv) = c.item {
+                    Some(mv.target)
+                } else {
+                    None
+                }
+            })
+            .unwrap();
         for (a, ar) in m.actuators.iter().zip(&rep.actuators) {
             let joint = &m.joints[a.joint];
             let reference = ar.position as f64 / a.steps_per_unit.abs();
             let want = (joint.map.value(&last, reference) * a.steps_per_unit.abs()).round() as i64;
-            assert_eq!(ar.position, want, "{ctx}: actuator {} ends at {} steps, want {want}", a.name, ar.position);
+            assert_eq!(
+                ar.position, want,
+                "{ctx}: actuator {} ends at {} steps, want {want}",
+                a.name, ar.position
+            );
             assert!(ar.steps > 0, "{ctx}: actuator {} never moved", a.name);
         }
     }
@@ -75,7 +119,11 @@ fn every_example_runs_within_limits_and_on_time() {
 fn dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (wx, wy) = (b[0] - a[0], b[1] - a[1]);
     let ww = wx * wx + wy * wy;
-    let t = if ww > 0.0 { (((p[0] - a[0]) * wx + (p[1] - a[1]) * wy) / ww).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if ww > 0.0 {
+        (((p[0] - a[0]) * wx + (p[1] - a[1]) * wy) / ww).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     ((p[0] - a[0] - wx * t).powi(2) + (p[1] - a[1] - wy * t).powi(2)).sqrt()
 }
 
@@ -104,29 +152,59 @@ fn plotter_draws_the_svg_within_one_step() {
     let mut checked = 0;
     for s in r.strokes.iter().filter(|s| s.tool_on) {
         for p in &s.points {
-            let d = lines.iter().map(|(a, b)| dist(*p, *a, *b)).fold(f64::INFINITY, f64::min);
-            assert!(d <= allowed, "executed point {p:?} is {d} mm from the drawing (one step = {step} mm)");
+            let d = lines
+                .iter()
+                .map(|(a, b)| dist(*p, *a, *b))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= allowed,
+                "executed point {p:?} is {d} mm from the drawing (one step = {step} mm)"
+            );
             checked += 1;
         }
     }
     assert!(checked > 500, "too few executed points checked: {checked}");
     // The rendered points are a thinned subset; the report checks every step
     // instant against the commanded path, which is the SVG's polylines.
-    assert!(r.report.max_path_deviation_mm <= allowed, "deviation {} mm", r.report.max_path_deviation_mm);
+    assert!(
+        r.report.max_path_deviation_mm <= allowed,
+        "deviation {} mm",
+        r.report.max_path_deviation_mm
+    );
     // And all of the drawing was drawn: executed pen-down length matches.
-    let commanded: f64 = lines.iter().map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()).sum();
+    let commanded: f64 = lines
+        .iter()
+        .map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt())
+        .sum();
     let drawn = r.report.tool_on_distance_mm;
-    assert!((drawn - commanded).abs() < 1e-6 * commanded, "drew {drawn} mm of {commanded} mm");
+    assert!(
+        (drawn - commanded).abs() < 1e-6 * commanded,
+        "drew {drawn} mm of {commanded} mm"
+    );
 }
 
 #[test]
 fn laser_gantry_motors_mirror_each_other() {
     let (_, _, r) = run("laser.toml", "laser-badge.gcode");
-    let by = |n: &str| r.report.actuators.iter().find(|a| a.name == n).unwrap().clone();
+    let by = |n: &str| {
+        r.report
+            .actuators
+            .iter()
+            .find(|a| a.name == n)
+            .unwrap()
+            .clone()
+    };
     let (l, rt) = (by("y_left"), by("y_right"));
     assert_eq!(l.steps, rt.steps);
-    assert_eq!(l.position, rt.position, "positions count in joint direction, so mirrored motors agree");
-    assert!(r.report.tool_events >= 8, "laser power changes: {}", r.report.tool_events);
+    assert_eq!(
+        l.position, rt.position,
+        "positions count in joint direction, so mirrored motors agree"
+    );
+    assert!(
+        r.report.tool_events >= 8,
+        "laser power changes: {}",
+        r.report.tool_events
+    );
 }
 
 #[test]
