@@ -279,7 +279,10 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         let path = a.path.unwrap_or(name.as_str() != "e");
         let travel = match &a.travel {
             Some(t) => {
-                let [lo, hi] = *t.get_ref();
+                let (lo, hi) = match t.get_ref()[..] {
+                    [lo, hi] => (lo, hi),
+                    _ => (f64::NAN, f64::NAN),
+                };
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) {
                     return Err(src.err(
                         t.span(),
@@ -436,11 +439,34 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                 format!("actuator {name}: impossible element chain: {e}"),
             )
         })?;
-        if let Some(v) = a.max_velocity {
+        // Each element is sane, yet extreme values can overflow or underflow.
+        if !(chain.steps_per_unit.is_finite() && chain.steps_per_unit != 0.0) {
+            return Err(src.err(
+                a.chain.span(),
+                format!(
+                    "actuator {name}: the chain gives {} steps per unit of its joint",
+                    chain.steps_per_unit
+                ),
+            ));
+        }
+        for (v, what) in [
+            (&a.max_velocity, "max_velocity"),
+            (&a.max_acceleration, "max_acceleration"),
+        ] {
+            if let Some(v) = v {
+                if !positive(*v.get_ref()) {
+                    return Err(src.err(
+                        v.span(),
+                        format!("actuator {name}: {what} must be a positive number"),
+                    ));
+                }
+            }
+        }
+        if let Some(v) = a.max_velocity.as_ref().map(|v| *v.get_ref()) {
             let j = &mut joints[joint];
             j.max_velocity = Some(j.max_velocity.map_or(v, |w| w.min(v)));
         }
-        if let Some(v) = a.max_acceleration {
+        if let Some(v) = a.max_acceleration.as_ref().map(|v| *v.get_ref()) {
             let j = &mut joints[joint];
             j.max_acceleration = Some(j.max_acceleration.map_or(v, |w| w.min(v)));
         }
@@ -475,22 +501,32 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                 ))
             }
         };
-        let settle = t.settle.unwrap_or(match kind {
+        let default_settle = match kind {
             ToolKind::Pen => 0.15,
             ToolKind::Spindle => 1.0,
             ToolKind::Laser => 0.0,
-        });
+        };
+        let settle = t.settle.as_ref().map_or(default_settle, |s| *s.get_ref());
         if !(settle.is_finite() && settle >= 0.0) {
+            let span = t.settle.as_ref().map_or(t.kind.span(), |s| s.span());
             return Err(src.err(
-                t.kind.span(),
+                span,
                 format!("tool {name}: settle must be a non-negative number of seconds"),
+            ));
+        }
+        let on_value = t.on_value.as_ref().map_or(1.0, |v| *v.get_ref());
+        if on_value.is_nan() {
+            let span = t.on_value.as_ref().map_or(t.kind.span(), |v| v.span());
+            return Err(src.err(
+                span,
+                format!("tool {name}: on_value must be a number from 0 to 1"),
             ));
         }
         tools.push(Tool {
             name: name.clone(),
             kind,
             settle,
-            on_value: t.on_value.unwrap_or(1.0).clamp(0.0, 1.0),
+            on_value: on_value.clamp(0.0, 1.0),
         });
     }
 

@@ -1247,7 +1247,7 @@ const CASES: &[Case] = &[
         ],
         9,
         None,
-        "node n: queue must be 2..=1024 and frame_us positive",
+        "node n: queue must be 2..=",
     ),
     case(
         "more than 8 actuators on one node",
