@@ -8,6 +8,11 @@ use motet_trajectory::{
     Element, ElementChain, JointMap, KinematicsKind, Point, ProfileKind, Unit, MAX_AXES,
 };
 use std::ops::Range;
+
+/// Limits the node runtime enforces, mirrored so a machine file fails early.
+mod motet_node_limits {
+    pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
+}
 use std::path::{Path, PathBuf};
 
 /// A problem in a machine file, with its place.
@@ -440,11 +445,12 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             )
         })?;
         // Each element is sane, yet extreme values can overflow or underflow.
-        if !(chain.steps_per_unit.is_finite() && chain.steps_per_unit != 0.0) {
+        let spu = chain.steps_per_unit.abs();
+        if !(spu.is_finite() && spu >= 1e-6 && spu <= motet_node_limits::MAX_STEPS_PER_UNIT) {
             return Err(src.err(
                 a.chain.span(),
                 format!(
-                    "actuator {name}: the chain gives {} steps per unit of its joint",
+                    "actuator {name}: the chain gives {} steps per unit of its joint; a node takes 1e-6 to 1e6",
                     chain.steps_per_unit
                 ),
             ));
@@ -645,6 +651,17 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             ));
         }
         start[i] = *v;
+    }
+    if let (KinematicsKind::Polar, Some((x, y))) = (kinematics, xy) {
+        if start[x].hypot(start[y]) < *m.min_radius.get_ref() {
+            return Err(src.err(
+                m.kinematics.span(),
+                format!(
+                    "a polar machine cannot start within min_radius = {} mm of the centre; set [motion] start = {{ x = …, y = … }}",
+                    m.min_radius.get_ref()
+                ),
+            ));
+        }
     }
     let slowest = axes
         .iter()

@@ -15,4 +15,4 @@ pub mod node;
 
 pub use board::Board;
 pub use channel::Channel;
-pub use node::{Node, NodeStatus, DEFAULT_QUEUE, MAX_CHANNELS, MAX_TOOLS};
+pub use node::{Node, NodeStatus, DEFAULT_QUEUE, MAX_CHANNELS, MAX_STEPS_PER_UNIT, MAX_TOOLS};

@@ -12,6 +12,8 @@ use motet_wire::{
 pub const DEFAULT_QUEUE: usize = 64;
 pub const MAX_CHANNELS: usize = 8;
 pub const MAX_TOOLS: usize = 4;
+/// Largest |steps per unit| a channel accepts.
+pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Event {
@@ -102,7 +104,11 @@ impl<const Q: usize> Node<Q> {
     }
 
     fn configure_channel(&mut self, c: ChannelConfig) -> Result<(), Refusal> {
-        let valid = c.steps_per_unit.is_finite() && c.steps_per_unit != 0.0 && map_is_valid(&c.map);
+        // Beyond a million steps per unit the step counter and the poll loop
+        // would run away; no real drive comes near it.
+        let spu = c.steps_per_unit.abs();
+        let valid =
+            spu.is_finite() && spu > 0.0 && spu <= MAX_STEPS_PER_UNIT && map_is_valid(&c.map);
         if !valid || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
         }
