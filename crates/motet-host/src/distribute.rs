@@ -96,11 +96,21 @@ impl Distributor {
                     axes,
                 }))
             }
-            Planned::Event(e) => sub.tracks.contains(&e.tool).then_some(HostMessage::Event {
-                track: e.tool,
-                time: e.time,
-                value: e.value,
+            Planned::Event(e) => sub.tracks.contains(&e.tool).then(|| match e.per_speed {
+                None => HostMessage::Event {
+                    track: e.tool,
+                    time: e.time,
+                    value: e.value,
+                },
+                Some(feed) => HostMessage::EventPerSpeed {
+                    track: e.tool,
+                    time: e.time,
+                    value: e.value,
+                    feed: feed as f32,
+                },
             }),
+            // No node drives auxiliary channels yet, and pauses are the host's.
+            Planned::Aux(_) | Planned::Pause { .. } => None,
         }
     }
 }

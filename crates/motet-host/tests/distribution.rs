@@ -142,6 +142,7 @@ fn sequence_numbers_count_per_node() {
         time: 0.0,
         tool: 0,
         value: 1.0,
+        per_speed: None,
     });
     assert_eq!(d.route(0, &e), None);
     match d.route(0, &Planned::Segment(segment(9))) {
@@ -160,6 +161,7 @@ fn events_go_only_to_the_node_with_that_tool() {
                 time: 1234.5,
                 tool,
                 value: 0.25,
+                per_speed: None,
             };
             for (node, (name, _, tracks)) in nodes.iter().enumerate() {
                 let got = d.route(node, &Planned::Event(e));
@@ -263,6 +265,7 @@ tools = ["pen"]
         time: 5.0,
         tool: 0,
         value: 1.0,
+        per_speed: None,
     });
     assert_eq!(d.route(0, &e), None);
     assert_eq!(
@@ -364,6 +367,7 @@ fn a_planned_job_is_routed_consistently() {
                     events += 1;
                     assert_eq!(receivers, 1, "{file}: an event goes to exactly one node");
                 }
+                Planned::Aux(_) | Planned::Pause { .. } => assert_eq!(receivers, 0),
             }
         }
         assert!(segments >= 12, "{file}: {segments} segments");

@@ -12,6 +12,7 @@
 pub mod board;
 pub mod channel;
 pub mod node;
+pub mod tool;
 
 pub use board::Board;
 pub use channel::Channel;

@@ -2,6 +2,7 @@
 
 use crate::board::Board;
 use crate::channel::Channel;
+use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
 use motet_trajectory::{JointMap, Point, Profile, Segment, MAX_AXES};
 use motet_wire::{
@@ -20,6 +21,8 @@ struct Event {
     track: u8,
     time: f64,
     value: f32,
+    /// Path speed at which the output reaches `value`; 0 for a fixed output.
+    feed: f32,
 }
 
 /// What a node reports about itself.
@@ -34,7 +37,7 @@ pub struct NodeStatus {
 /// A node with a segment queue of `Q` places.
 pub struct Node<const Q: usize = DEFAULT_QUEUE> {
     channels: Vec<Channel, MAX_CHANNELS>,
-    tools: Vec<ToolConfig, MAX_TOOLS>,
+    tools: Vec<ToolOutput, MAX_TOOLS>,
     segments: Deque<Segment, Q>,
     events: Deque<Event, Q>,
     next_seq: u32,
@@ -87,16 +90,19 @@ impl<const Q: usize> Node<Q> {
             HostMessage::ConfigureTool(t) => self.configure_tool(t),
             HostMessage::SetPosition { position } => self.set_position(&position),
             HostMessage::Segment(s) => self.push_segment(&s),
-            HostMessage::Event { track, time, value } => {
-                // A NaN time would never come due and block the event queue for good.
-                if !(time.is_finite() && value.is_finite()) {
+            HostMessage::Event { track, time, value } => self.push_event(track, time, value, 0.0),
+            HostMessage::EventPerSpeed {
+                track,
+                time,
+                value,
+                feed,
+            } => {
+                if !(feed.is_finite() && feed > 0.0) {
                     return Some(NodeMessage::Refused {
                         reason: Refusal::Malformed,
                     });
                 }
-                self.events
-                    .push_back(Event { track, time, value })
-                    .map_err(|_| Refusal::QueueFull)
+                self.push_event(track, time, value, feed)
             }
             HostMessage::Status => return Some(self.status_message()),
         };
@@ -124,12 +130,46 @@ impl<const Q: usize> Node<Q> {
         Ok(())
     }
 
+    fn push_event(&mut self, track: u8, time: f64, value: f32, feed: f32) -> Result<(), Refusal> {
+        // A NaN time would never come due and block the event queue for good.
+        if !(time.is_finite() && value.is_finite()) {
+            return Err(Refusal::Malformed);
+        }
+        self.events
+            .push_back(Event {
+                track,
+                time,
+                value,
+                feed,
+            })
+            .map_err(|_| Refusal::QueueFull)
+    }
+
     fn configure_tool(&mut self, t: ToolConfig) -> Result<(), Refusal> {
-        match self.tools.iter_mut().find(|x| x.output == t.output) {
-            Some(existing) => *existing = t,
-            None => self.tools.push(t).map_err(|_| Refusal::BadConfig)?,
+        let out = ToolOutput::new(t);
+        match self.tools.iter_mut().find(|x| x.output() == t.output) {
+            Some(existing) => *existing = out,
+            None => self.tools.push(out).map_err(|_| Refusal::BadConfig)?,
         }
         Ok(())
+    }
+
+    /// Path speed at host time `t`, from the queued segments; `None` when nothing
+    /// is queued at or after `t`.
+    fn speed_at(&self, t: f64) -> Option<f64> {
+        let last = self.segments.back()?;
+        if t >= last.t1() {
+            return None;
+        }
+        for s in self.segments.iter() {
+            if t < s.t0 {
+                return Some(0.0);
+            }
+            if t < s.t1() {
+                return Some(s.profile.state((t - s.t0) * 1e-6).1);
+            }
+        }
+        None
     }
 
     fn set_position(&mut self, p: &Point) -> Result<(), Refusal> {
@@ -184,6 +224,10 @@ impl<const Q: usize> Node<Q> {
         self.tail = end;
         self.next_seq = self.next_seq.wrapping_add(1);
         self.starved = false;
+        let t0 = m.t0.max(self.now);
+        for t in self.tools.iter_mut() {
+            t.wake(t0);
+        }
         Ok(())
     }
 
@@ -226,6 +270,11 @@ impl<const Q: usize> Node<Q> {
     /// every frame because every output carries its own exact time.
     pub fn next_deadline(&mut self) -> Option<f64> {
         let mut best = self.events.front().map(|e| e.time);
+        for t in self.tools.iter() {
+            if let Some(u) = t.next_update() {
+                best = Some(best.map_or(u, |b: f64| b.min(u)));
+            }
+        }
         for ch in self.channels.iter_mut() {
             if let Some(st) = ch.next_step(&self.segments) {
                 best = Some(best.map_or(st.time, |b: f64| b.min(st.time)));
@@ -247,6 +296,25 @@ impl<const Q: usize> Node<Q> {
                 }
             }
             let event_time = self.events.front().map(|e| e.time).filter(|&t| t < until);
+            let refresh = self
+                .tools
+                .iter()
+                .enumerate()
+                .filter_map(|(i, t)| t.next_update().map(|u| (i, u)))
+                .filter(|&(_, u)| u < until)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            // Ties: events, then refreshes, then steps.
+            let step_time = best.map(|(_, t)| t);
+            if let Some((i, u)) = refresh {
+                if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
+                    let speed = self.speed_at(u);
+                    let tool = &mut self.tools[i];
+                    if let Some(v) = tool.refresh(u, speed) {
+                        board.set_tool(tool.output(), v, u);
+                    }
+                    continue;
+                }
+            }
             match (best, event_time) {
                 (None, None) => break,
                 (Some((_, ts)), Some(te)) if te <= ts => self.fire_event(board),
@@ -266,8 +334,14 @@ impl<const Q: usize> Node<Q> {
 
     fn fire_event<B: Board>(&mut self, board: &mut B) {
         if let Some(e) = self.events.pop_front() {
-            for t in self.tools.iter().filter(|t| t.track == e.track) {
-                board.set_tool(t.output, e.value, e.time);
+            let speed = if e.feed > 0.0 {
+                self.speed_at(e.time)
+            } else {
+                None
+            };
+            for t in self.tools.iter_mut().filter(|t| t.config.track == e.track) {
+                let v = t.set(e.value, e.feed, e.time, speed);
+                board.set_tool(t.output(), v, e.time);
             }
         }
     }

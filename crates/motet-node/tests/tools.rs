@@ -70,7 +70,7 @@ fn tool_events_fire_exactly_on_their_outputs() {
             .iter()
             .filter_map(|p| match p {
                 Planned::Event(e) => Some(*e),
-                Planned::Segment(_) => None,
+                _ => None,
             })
             .collect();
         assert!(

@@ -76,4 +76,39 @@ pub enum Command {
         tool: u8,
         value: f32,
     },
+    /// Laser power that follows the actual speed (G-code M4): the output is
+    /// `value × speed / feed`, so corners and ramps are not burnt darker.
+    ToolPerSpeed {
+        tool: u8,
+        value: f32,
+        feed: f64,
+    },
+    /// Set an auxiliary channel (temperatures, fans, coolant). `wait` asks the
+    /// machine to hold motion until the channel has reached the value.
+    Aux {
+        channel: AuxChannel,
+        value: f32,
+        wait: bool,
+    },
+    /// Come to rest and wait for the person (M0, M1, a pen change).
+    Pause {
+        optional: bool,
+    },
+    /// Come to rest before going on (M400).
+    Sync,
+}
+
+/// Outputs that are not motion and not the working tool.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AuxChannel {
+    /// Hot-end temperature, °C; the index is the extruder.
+    Hotend(u8),
+    /// Bed temperature, °C.
+    Bed,
+    /// Chamber temperature, °C.
+    Chamber,
+    /// Fan speed 0..=1; the index is the fan.
+    Fan(u8),
+    /// Coolant: 0 off, 1 mist, 2 flood.
+    Coolant,
 }

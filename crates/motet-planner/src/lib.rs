@@ -8,10 +8,10 @@
 pub mod command;
 pub mod target;
 
-pub use command::{Command, Located, Move, MoveKind, SourceError, SourceLoc};
+pub use command::{AuxChannel, Command, Located, Move, MoveKind, SourceError, SourceLoc};
 pub use target::{AxisInfo, JobTarget, ToolInfo, ToolKind};
 pub mod limits;
 pub mod planner;
 
 pub use limits::{AxisLimits, JointLimits, Limits, ToolTiming};
-pub use planner::{PlanError, Planned, Planner, ToolEvent};
+pub use planner::{AuxEvent, PlanError, Planned, Planner, ToolEvent};

@@ -8,7 +8,7 @@
 //! change its exit speed, so planning a stream one command at a time gives the
 //! same trajectory, bit for bit, as planning the whole job at once.
 
-use crate::command::{Command, Move, MoveKind};
+use crate::command::{AuxChannel, Command, Move, MoveKind};
 use crate::limits::Limits;
 use motet_trajectory::kinematics::JointPath;
 use motet_trajectory::point::distance_masked;
@@ -23,6 +23,19 @@ pub struct ToolEvent {
     pub time: f64,
     pub tool: u8,
     pub value: f32,
+    /// When set, the output is `value × speed / feed` (capped at `value`): power
+    /// that follows the actual speed along the path.
+    pub per_speed: Option<f64>,
+}
+
+/// An auxiliary channel changing value (temperature, fan, coolant).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AuxEvent {
+    pub time: f64,
+    pub channel: AuxChannel,
+    pub value: f32,
+    /// Motion holds until the channel reaches the value.
+    pub wait: bool,
 }
 
 /// What the planner produces, in time order.
@@ -31,6 +44,20 @@ pub struct ToolEvent {
 pub enum Planned {
     Segment(Segment),
     Event(ToolEvent),
+    Aux(AuxEvent),
+    /// The machine is at rest and waits for the person; `optional` pauses (M1)
+    /// may be skipped.
+    Pause {
+        time: f64,
+        optional: bool,
+    },
+}
+
+/// A change that happens where the next move starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Loose {
+    Tool(u8, f32, Option<f64>),
+    Aux(AuxChannel, f32),
 }
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -65,8 +92,8 @@ struct Pending {
     /// Whether `entry` is held down by the queue's end rather than by a cap;
     /// such a value may still rise when more moves arrive.
     end_limited: bool,
-    /// Inline tool changes that happen where this move starts.
-    events: Vec<(u8, f32)>,
+    /// Inline changes that happen where this move starts.
+    events: Vec<Loose>,
 }
 
 pub struct Planner {
@@ -83,7 +110,7 @@ pub struct Planner {
     emitted_pos: Point,
     out: VecDeque<Planned>,
     /// Inline events with no move after them yet.
-    loose_events: Vec<(u8, f32)>,
+    loose_events: Vec<Loose>,
     /// A stop is required before the next move (after a dwell or stopping tool).
     stopped: bool,
 }
@@ -135,29 +162,73 @@ impl Planner {
                 }
                 Ok(())
             }
-            Command::Tool { tool, value } => {
-                let timing = *self
-                    .limits
-                    .tools
-                    .get(tool as usize)
-                    .ok_or(PlanError::UnknownTool(tool))?;
-                if timing.stop {
+            Command::Tool { tool, value } => self.push_tool(tool, value, None),
+            Command::ToolPerSpeed { tool, value, feed } => {
+                if feed.is_nan() || feed <= 0.0 {
+                    return Err(PlanError::BadFeed(feed));
+                }
+                self.push_tool(tool, value, Some(feed))
+            }
+            Command::Aux {
+                channel,
+                value,
+                wait,
+            } => {
+                if wait {
                     self.flush();
                     self.emit_loose_events();
-                    self.out.push_back(Planned::Event(ToolEvent {
-                        time: self.clock,
-                        tool,
+                    let time = self.clock;
+                    self.out.push_back(Planned::Aux(AuxEvent {
+                        time,
+                        channel,
                         value,
+                        wait,
                     }));
-                    if timing.settle > 0.0 {
-                        self.emit_dwell(timing.settle);
-                    }
                 } else {
-                    self.loose_events.push((tool, value));
+                    self.loose_events.push(Loose::Aux(channel, value));
                 }
                 Ok(())
             }
+            Command::Pause { optional } => {
+                self.flush();
+                self.emit_loose_events();
+                self.out.push_back(Planned::Pause {
+                    time: self.clock,
+                    optional,
+                });
+                Ok(())
+            }
+            Command::Sync => {
+                self.flush();
+                self.emit_loose_events();
+                Ok(())
+            }
         }
+    }
+
+    fn push_tool(&mut self, tool: u8, value: f32, per_speed: Option<f64>) -> Result<(), PlanError> {
+        let timing = *self
+            .limits
+            .tools
+            .get(tool as usize)
+            .ok_or(PlanError::UnknownTool(tool))?;
+        if timing.stop {
+            self.flush();
+            self.emit_loose_events();
+            let time = self.clock;
+            self.out.push_back(Planned::Event(ToolEvent {
+                time,
+                tool,
+                value,
+                per_speed,
+            }));
+            if timing.settle > 0.0 {
+                self.emit_dwell(timing.settle);
+            }
+        } else {
+            self.loose_events.push(Loose::Tool(tool, value, per_speed));
+        }
+        Ok(())
     }
 
     /// Ends the job: everything queued is planned to come to rest.
@@ -377,12 +448,8 @@ impl Planner {
             .queue
             .pop_front()
             .expect("emit_front on an empty queue");
-        for (tool, value) in &m.events {
-            self.out.push_back(Planned::Event(ToolEvent {
-                time: self.clock,
-                tool: *tool,
-                value: *value,
-            }));
+        for e in &m.events {
+            self.emit_loose(*e);
         }
         let entry = self.emitted_exit;
         // Rounding can leave the exit a hair above what the move can reach.
@@ -427,13 +494,27 @@ impl Planner {
     }
 
     fn emit_loose_events(&mut self) {
-        for (tool, value) in std::mem::take(&mut self.loose_events) {
-            self.out.push_back(Planned::Event(ToolEvent {
-                time: self.clock,
+        for e in std::mem::take(&mut self.loose_events) {
+            self.emit_loose(e);
+        }
+    }
+
+    fn emit_loose(&mut self, e: Loose) {
+        let time = self.clock;
+        self.out.push_back(match e {
+            Loose::Tool(tool, value, per_speed) => Planned::Event(ToolEvent {
+                time,
                 tool,
                 value,
-            }));
-        }
+                per_speed,
+            }),
+            Loose::Aux(channel, value) => Planned::Aux(AuxEvent {
+                time,
+                channel,
+                value,
+                wait: false,
+            }),
+        });
     }
 
     fn emit_dwell(&mut self, seconds: f64) {

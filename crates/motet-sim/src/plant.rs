@@ -238,5 +238,8 @@ const MAX_JOINTS: usize = MAX_AXES;
 
 /// The ideal machine point at `t` from the segments around it.
 fn point_at(window: &VecDeque<Segment>, t: f64) -> Option<Point> {
-    window.iter().find(|s| s.t0 <= t && t <= s.t1()).map(|s| s.position_at(t))
+    window
+        .iter()
+        .find(|s| s.t0 <= t && t <= s.t1())
+        .map(|s| s.position_at(t))
 }

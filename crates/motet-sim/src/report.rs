@@ -44,6 +44,10 @@ pub struct Report {
     pub commands: usize,
     pub segments: usize,
     pub tool_events: usize,
+    /// Temperature, fan and coolant changes.
+    pub aux_events: usize,
+    /// Stops for the person (M0/M1, pen changes); the simulation resumes at once.
+    pub pauses: usize,
     /// Distance along the path with the tool working, mm.
     pub tool_on_distance_mm: f64,
     /// Distance along the path with the tool off, mm.

@@ -73,6 +73,8 @@ struct Sim<'m> {
 struct Stats {
     segments: usize,
     events: usize,
+    aux_events: usize,
+    pauses: usize,
     axes: Vec<AxisReport>,
     joints: Vec<(usize, JointReport)>,
     tool_on: bool,
@@ -155,6 +157,9 @@ impl Sim<'_> {
                     self.stats.tool_on = e.value > 0.0;
                 }
             }
+            Planned::Aux(_) => self.stats.aux_events += 1,
+            // The simulated operator resumes at once.
+            Planned::Pause { .. } => self.stats.pauses += 1,
         }
         for k in 0..self.nodes.len() {
             if let Some(msg) = self.dist.route(k, &item) {
@@ -314,6 +319,8 @@ pub fn simulate(
         commands: total,
         segments: sim.stats.segments,
         tool_events: sim.stats.events,
+        aux_events: sim.stats.aux_events,
+        pauses: sim.stats.pauses,
         tool_on_distance_mm: sim.stats.tool_on_distance,
         travel_distance_mm: sim.stats.travel_distance,
         axes: sim.stats.axes,

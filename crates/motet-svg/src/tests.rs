@@ -72,7 +72,7 @@ fn polylines(cmds: &[Located<Command>]) -> Vec<Vec<[f64; 2]>> {
                     assert!(!down, "travel with the pen down");
                 }
             }
-            Command::Dwell { .. } => panic!("no dwells expected"),
+            other => panic!("unexpected {other:?}"),
         }
     }
     out
@@ -88,6 +88,8 @@ fn events(cmds: &[Located<Command>]) -> String {
             Command::Move(m) if m.feed == 20.0 => 'F',
             Command::Move(_) => 'T',
             Command::Dwell { .. } => 'W',
+            Command::Pause { .. } => 'P',
+            _ => '?',
         })
         .collect()
 }

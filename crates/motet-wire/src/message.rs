@@ -62,6 +62,14 @@ pub enum HostMessage {
         time: f64,
         value: f32,
     },
+    /// An event-track change whose output follows the path speed: the tool
+    /// gives `value × speed / feed`, capped at `value` (laser power per mm).
+    EventPerSpeed {
+        track: u8,
+        time: f64,
+        value: f32,
+        feed: f32,
+    },
     /// Ask for a [`NodeMessage::Status`].
     Status,
 }

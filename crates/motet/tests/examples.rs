@@ -143,7 +143,7 @@ fn plotter_draws_the_svg_within_one_step() {
                 }
                 pos = next;
             }
-            Command::Dwell { .. } => {}
+            _ => {}
         }
     }
     let step = 1.0 / m.actuators[0].steps_per_unit.abs();

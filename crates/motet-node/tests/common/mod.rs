@@ -155,7 +155,7 @@ pub fn segments(planned: &[Planned]) -> Vec<Segment> {
         .iter()
         .filter_map(|p| match p {
             Planned::Segment(s) => Some(*s),
-            Planned::Event(_) => None,
+            _ => None,
         })
         .collect()
 }
@@ -280,6 +280,7 @@ impl Machine {
                     time: e.time,
                     value: e.value,
                 }),
+                Planned::Aux(_) | Planned::Pause { .. } => {}
             }
             if let Planned::Segment(_) = p {
                 seq += 1;
