@@ -8,4 +8,4 @@ pub mod report;
 pub mod run;
 
 pub use report::Report;
-pub use run::{simulate, SimError, SimResult, NODE_QUEUE};
+pub use run::{simulate, SimError, SimMachine, SimResult, NODE_QUEUE};

@@ -56,15 +56,16 @@ impl PathRecorder {
         self.current = Some(q);
     }
 
-    /// Ends the last stroke at the final position.
-    pub fn finish(mut self) -> Vec<Stroke> {
+    /// The strokes so far, the last one ended at the current position; the
+    /// next sample starts a new stroke there.
+    pub fn take(&mut self) -> Vec<Stroke> {
         if let (Some(c), Some(s)) = (self.current, self.strokes.last_mut()) {
             if s.points.last() != Some(&c) {
                 s.points.push(c);
             }
             simplify(&mut s.points, 0.5 * self.resolution);
         }
-        self.strokes
+        std::mem::take(&mut self.strokes)
     }
 }
 

@@ -54,6 +54,9 @@ pub struct Plant {
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
     pub last_time: f64,
+    /// Tool outputs executed: (time, tool, value), kept only for observers.
+    pub tool_changes: Vec<(f64, usize, f32)>,
+    pub watch_tools: bool,
 }
 
 impl Plant {
@@ -105,6 +108,8 @@ impl Plant {
             recorder,
             max_path_deviation: 0.0,
             last_time: f64::NEG_INFINITY,
+            tool_changes: Vec::new(),
+            watch_tools: false,
         }
     }
 
@@ -125,6 +130,9 @@ impl Plant {
                 Output::Step { actuator, forward } => self.step(o.time, actuator, forward),
                 Output::Tool { tool, value } => {
                     self.tools[tool] = value;
+                    if self.watch_tools {
+                        self.tool_changes.push((o.time, tool, value));
+                    }
                     let p = self.executed_point();
                     self.recorder.sample(&p, self.tool_on());
                 }

@@ -8,7 +8,7 @@ use motet_host::{Distributor, Machine};
 use motet_node::{Board, Node};
 use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
 use motet_render::Stroke;
-use motet_trajectory::{JointMap, JointPath};
+use motet_trajectory::{JointMap, JointPath, Point};
 use motet_wire::{encode, HostMessage, NodeMessage, Refusal, MAX_MESSAGE};
 use std::time::Instant;
 
@@ -57,8 +57,10 @@ impl Board for Collector<'_> {
     }
 }
 
-struct Sim<'m> {
-    machine: &'m Machine,
+/// A machine of simulated nodes on one simulated clock, fed planned items one
+/// at a time: the engine under both `simulate` and the scripting API.
+pub struct SimMachine {
+    machine: Machine,
     nodes: Vec<Node<NODE_QUEUE>>,
     dist: Distributor,
     plant: Plant,
@@ -83,7 +85,64 @@ struct Stats {
     travel_distance: f64,
 }
 
-impl Sim<'_> {
+impl SimMachine {
+    /// A machine at rest at its start position, nodes configured.
+    pub fn new(machine: &Machine) -> Result<SimMachine, SimError> {
+        let (x, y) = (
+            machine.axis("x").unwrap_or(0),
+            machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)),
+        );
+        let span = |i: usize| {
+            let t = machine.axes[i].travel;
+            if t[0].is_finite() && t[1].is_finite() {
+                t[1] - t[0]
+            } else {
+                100.0
+            }
+        };
+        // About a pixel of the default render.
+        let resolution = span(x).max(span(y)) / 2000.0;
+        let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
+        let dist = Distributor::new(machine);
+        let frame = machine
+            .nodes
+            .iter()
+            .map(|n| n.frame_us)
+            .fold(f64::INFINITY, f64::min);
+        let mut sim = SimMachine {
+            machine: machine.clone(),
+            nodes: machine.nodes.iter().map(|_| Node::new()).collect(),
+            dist,
+            plant,
+            frame,
+            now: 0.0,
+            outputs: Vec::new(),
+            buf: [0; MAX_MESSAGE],
+            stats: Stats {
+                axes: machine
+                    .axes
+                    .iter()
+                    .map(|a| AxisReport { name: a.name.clone(), max_velocity: a.max_velocity, max_acceleration: a.max_acceleration, ..Default::default() })
+                    .collect(),
+                joints: machine
+                    .joints
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, j)| !matches!(j.map, JointMap::Linear { coeffs } if coeffs.iter().filter(|c| **c != 0.0).count() == 1))
+                    .map(|(i, j)| (i, JointReport { name: j.name.clone(), max_velocity: j.max_velocity, ..Default::default() }))
+                    .collect(),
+                extruding_axis: machine.axis("e"),
+                ..Default::default()
+            },
+        };
+        for k in 0..sim.nodes.len() {
+            for msg in sim.dist.setup(machine, k, &machine.start) {
+                sim.send(k, &msg)?;
+            }
+        }
+        Ok(sim)
+    }
+
     fn send(&mut self, node: usize, msg: &HostMessage) -> Result<(), SimError> {
         // Every message crosses as bytes, as it would over a link.
         let bytes = encode(msg, &mut self.buf).expect("messages fit MAX_MESSAGE");
@@ -94,6 +153,118 @@ impl Sim<'_> {
             }),
             _ => Ok(()),
         }
+    }
+
+    /// Simulated time, µs.
+    pub fn now(&self) -> f64 {
+        self.now
+    }
+
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+
+    /// Where the motors are now, as a machine point.
+    pub fn executed_point(&self) -> Point {
+        self.plant.executed_point()
+    }
+
+    /// Keep the tool changes the plant executes for [`SimMachine::take_tool_changes`].
+    pub fn watch_tools(&mut self, on: bool) {
+        self.plant.watch_tools = on;
+    }
+
+    /// Tool changes the plant has executed since the last call, with their times.
+    pub fn take_tool_changes(&mut self) -> Vec<(f64, usize, f32)> {
+        std::mem::take(&mut self.plant.tool_changes)
+    }
+
+    /// Runs the nodes until simulated time `t`.
+    pub fn run_until(&mut self, t: f64) {
+        let until = self.frame_after(t.max(self.now));
+        self.poll_all(until);
+    }
+
+    /// Runs until every node has nothing left to do.
+    pub fn run_to_rest(&mut self) {
+        while let Some(d) = self
+            .nodes
+            .iter_mut()
+            .filter_map(|n| n.next_deadline())
+            .reduce(f64::min)
+        {
+            let until = self.frame_after(d.max(self.now));
+            self.poll_all(until);
+        }
+    }
+
+    /// The report of everything run so far; `end` is the trajectory's end, µs.
+    pub fn report(&self, job: &str, commands: usize, end: f64, wall: f64) -> Report {
+        let duration_s = end * 1e-6;
+        let stats = self.plant.actuator_stats();
+        let actuators: Vec<ActuatorReport> = self
+            .machine
+            .actuators
+            .iter()
+            .zip(&stats)
+            .enumerate()
+            .map(|(i, (a, st))| ActuatorReport {
+                name: a.name.clone(),
+                node: self
+                    .machine
+                    .nodes
+                    .iter()
+                    .find(|n| n.actuators.contains(&i))
+                    .map(|n| n.name.clone())
+                    .unwrap_or_default(),
+                steps_per_unit: a.steps_per_unit,
+                steps: st.steps,
+                position: st.position,
+                max_deviation_steps: st.max_deviation_steps,
+                max_step_time_error_us: st.max_step_error_us,
+            })
+            .collect();
+        Report {
+            machine: self.machine.name.clone(),
+            job: job.to_string(),
+            duration_s,
+            commands,
+            segments: self.stats.segments,
+            tool_events: self.stats.events,
+            aux_events: self.stats.aux_events,
+            pauses: self.stats.pauses,
+            tool_on_distance_mm: self.stats.tool_on_distance,
+            travel_distance_mm: self.stats.travel_distance,
+            axes: self.stats.axes.clone(),
+            joints: self.stats.joints.iter().map(|(_, j)| j.clone()).collect(),
+            max_path_deviation_mm: self.plant.max_path_deviation,
+            max_deviation_steps: actuators
+                .iter()
+                .map(|a| a.max_deviation_steps)
+                .fold(0.0, f64::max),
+            max_step_time_error_us: actuators
+                .iter()
+                .map(|a| a.max_step_time_error_us)
+                .fold(0.0, f64::max),
+            actuators,
+            underruns: self.underruns(),
+            wall_s: wall,
+            speed_factor: if wall > 0.0 {
+                duration_s / wall
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// The executed path so far as strokes; recording starts afresh.
+    pub fn take_strokes(&mut self) -> Vec<Stroke> {
+        self.plant.recorder.take()
+    }
+
+    /// Node underruns so far.
+    pub fn underruns(&self) -> u32 {
+        self.nodes.iter().map(|n| n.status().underruns).sum()
     }
 
     /// First frame boundary strictly after `t`.
@@ -144,7 +315,9 @@ impl Sim<'_> {
         }
     }
 
-    fn dispatch(&mut self, item: Planned) -> Result<(), SimError> {
+    /// Sends one planned item to the nodes that subscribe to it, letting time
+    /// pass when a node's queue is full.
+    pub fn submit(&mut self, item: Planned) -> Result<(), SimError> {
         match &item {
             Planned::Segment(s) => {
                 self.stats.segments += 1;
@@ -205,58 +378,7 @@ pub fn simulate(
     progress: Progress,
 ) -> Result<SimResult, SimError> {
     let started = Instant::now();
-    let (x, y) = (
-        machine.axis("x").unwrap_or(0),
-        machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)),
-    );
-    let span = |i: usize| {
-        let t = machine.axes[i].travel;
-        if t[0].is_finite() && t[1].is_finite() {
-            t[1] - t[0]
-        } else {
-            100.0
-        }
-    };
-    // About a pixel of the default render.
-    let resolution = span(x).max(span(y)) / 2000.0;
-    let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
-    let dist = Distributor::new(machine);
-    let frame = machine
-        .nodes
-        .iter()
-        .map(|n| n.frame_us)
-        .fold(f64::INFINITY, f64::min);
-    let mut sim = Sim {
-        machine,
-        nodes: machine.nodes.iter().map(|_| Node::new()).collect(),
-        dist,
-        plant,
-        frame,
-        now: 0.0,
-        outputs: Vec::new(),
-        buf: [0; MAX_MESSAGE],
-        stats: Stats {
-            axes: machine
-                .axes
-                .iter()
-                .map(|a| AxisReport { name: a.name.clone(), max_velocity: a.max_velocity, max_acceleration: a.max_acceleration, ..Default::default() })
-                .collect(),
-            joints: machine
-                .joints
-                .iter()
-                .enumerate()
-                .filter(|(_, j)| !matches!(j.map, JointMap::Linear { coeffs } if coeffs.iter().filter(|c| **c != 0.0).count() == 1))
-                .map(|(i, j)| (i, JointReport { name: j.name.clone(), max_velocity: j.max_velocity, ..Default::default() }))
-                .collect(),
-            extruding_axis: machine.axis("e"),
-            ..Default::default()
-        },
-    };
-    for k in 0..sim.nodes.len() {
-        for msg in sim.dist.setup(machine, k, &machine.start) {
-            sim.send(k, &msg)?;
-        }
-    }
+    let mut sim = SimMachine::new(machine)?;
 
     let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
     let total = commands.len();
@@ -265,7 +387,7 @@ pub fn simulate(
             .push(&c.item)
             .map_err(|error| SimError::Plan { loc: c.loc, error })?;
         while let Some(item) = planner.pop() {
-            sim.dispatch(item)?;
+            sim.submit(item)?;
         }
         if i % 1024 == 0 {
             progress(i, total);
@@ -273,78 +395,18 @@ pub fn simulate(
     }
     planner.finish();
     while let Some(item) = planner.pop() {
-        sim.dispatch(item)?;
+        sim.submit(item)?;
     }
     let end = planner.clock();
     // Run to the end, then until nothing is left to do.
-    sim.poll_all(sim.frame_after(end));
-    while let Some(d) = sim
-        .nodes
-        .iter_mut()
-        .filter_map(|n| n.next_deadline())
-        .reduce(f64::min)
-    {
-        let until = sim.frame_after(d.max(sim.now));
-        sim.poll_all(until);
-    }
+    sim.run_until(end);
+    sim.run_to_rest();
     progress(total, total);
 
     let wall = started.elapsed().as_secs_f64();
-    let duration_s = end * 1e-6;
-    let stats = sim.plant.actuator_stats();
-    let actuators: Vec<ActuatorReport> = machine
-        .actuators
-        .iter()
-        .zip(&stats)
-        .enumerate()
-        .map(|(i, (a, st))| ActuatorReport {
-            name: a.name.clone(),
-            node: machine
-                .nodes
-                .iter()
-                .find(|n| n.actuators.contains(&i))
-                .map(|n| n.name.clone())
-                .unwrap_or_default(),
-            steps_per_unit: a.steps_per_unit,
-            steps: st.steps,
-            position: st.position,
-            max_deviation_steps: st.max_deviation_steps,
-            max_step_time_error_us: st.max_step_error_us,
-        })
-        .collect();
-    let report = Report {
-        machine: machine.name.clone(),
-        job: job.to_string(),
-        duration_s,
-        commands: total,
-        segments: sim.stats.segments,
-        tool_events: sim.stats.events,
-        aux_events: sim.stats.aux_events,
-        pauses: sim.stats.pauses,
-        tool_on_distance_mm: sim.stats.tool_on_distance,
-        travel_distance_mm: sim.stats.travel_distance,
-        axes: sim.stats.axes,
-        joints: sim.stats.joints.into_iter().map(|(_, j)| j).collect(),
-        max_path_deviation_mm: sim.plant.max_path_deviation,
-        max_deviation_steps: actuators
-            .iter()
-            .map(|a| a.max_deviation_steps)
-            .fold(0.0, f64::max),
-        max_step_time_error_us: actuators
-            .iter()
-            .map(|a| a.max_step_time_error_us)
-            .fold(0.0, f64::max),
-        actuators,
-        underruns: sim.nodes.iter().map(|n| n.status().underruns).sum(),
-        wall_s: wall,
-        speed_factor: if wall > 0.0 {
-            duration_s / wall
-        } else {
-            f64::INFINITY
-        },
-    };
+    let report = sim.report(job, total, end, wall);
     Ok(SimResult {
         report,
-        strokes: sim.plant.recorder.finish(),
+        strokes: sim.take_strokes(),
     })
 }
