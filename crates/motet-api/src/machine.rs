@@ -1,0 +1,317 @@
+//! The scriptable machine.
+
+use motet_host::{check_move, MachineError};
+use motet_planner::{Command, Move, MoveKind, PlanError, Planned, Planner};
+use motet_render::{render_png, render_svg, RenderSpec, Stroke};
+use motet_sim::{Report, SimError, SimMachine};
+use motet_trajectory::Point;
+use std::path::Path;
+use std::time::Instant;
+
+/// Why a call was refused. Nothing queued before the call is affected.
+#[derive(Debug, thiserror::Error)]
+pub enum ApiError {
+    #[error(transparent)]
+    Machine(#[from] MachineError),
+    #[error("unknown axis `{name}`; this machine's axes are {axes}")]
+    UnknownAxis { name: String, axes: String },
+    #[error("unknown tool `{name}`; this machine's tools are {tools}")]
+    UnknownTool { name: String, tools: String },
+    #[error("{0}")]
+    Unreachable(String),
+    #[error("feed must be a positive number of units per second (got {0})")]
+    BadFeed(f64),
+    #[error("dwell must be a non-negative number of seconds (got {0})")]
+    BadDwell(f64),
+    #[error("tool value must be between 0 and 1 (got {0})")]
+    BadToolValue(f32),
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error("cannot write {path}: {error}")]
+    Io { path: String, error: std::io::Error },
+    #[error("render failed: {0}")]
+    Render(String),
+}
+
+/// Something the machine did, with the simulated time in seconds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A tool output changed (pen lifted, laser power set).
+    Tool { time: f64, tool: String, value: f32 },
+    /// The machine came to rest after [`Machine::wait`].
+    Idle { time: f64 },
+}
+
+type Listener = Box<dyn FnMut(&Event)>;
+
+/// A machine you drive call by call.
+pub struct Machine {
+    sim: SimMachine,
+    planner: Planner,
+    /// Where the machine will be after every accepted call.
+    target: Point,
+    /// Feed used when a call gives none, units/s.
+    default_feed: f64,
+    listeners: Vec<Listener>,
+    calls: usize,
+    /// Trajectory end time of everything planned so far, µs.
+    end: f64,
+    started: Instant,
+    strokes: Vec<Stroke>,
+}
+
+impl Machine {
+    /// Opens the machine described by a machine file, at rest at its start
+    /// position, on simulated nodes.
+    pub fn open(path: impl AsRef<Path>) -> Result<Machine, ApiError> {
+        let m = motet_host::Machine::load(path.as_ref())?;
+        Machine::new(m)
+    }
+
+    /// A machine from an already validated description.
+    pub fn new(machine: motet_host::Machine) -> Result<Machine, ApiError> {
+        let mut sim = SimMachine::new(&machine)?;
+        sim.watch_tools(true);
+        let planner = Planner::new(machine.limits(), machine.start, 0.0);
+        Ok(Machine {
+            target: machine.start,
+            default_feed: machine.draw_feed,
+            sim,
+            planner,
+            listeners: Vec::new(),
+            calls: 0,
+            end: 0.0,
+            started: Instant::now(),
+            strokes: Vec::new(),
+        })
+    }
+
+    fn description(&self) -> &motet_host::Machine {
+        self.sim.machine()
+    }
+
+    /// The machine's axis names, in order.
+    pub fn axes(&self) -> Vec<String> {
+        self.description()
+            .axes
+            .iter()
+            .map(|a| a.name.clone())
+            .collect()
+    }
+
+    /// The machine's tool names.
+    pub fn tools(&self) -> Vec<String> {
+        self.description()
+            .tools
+            .iter()
+            .map(|t| t.name.clone())
+            .collect()
+    }
+
+    /// Calls `f` for every [`Event`] from now on.
+    pub fn on_event(&mut self, f: impl FnMut(&Event) + 'static) {
+        self.listeners.push(Box::new(f));
+    }
+
+    /// Moves the named axes to absolute positions (others stay) at `feed`
+    /// units/s along the path, or at the machine's drawing feed.
+    pub fn move_to(&mut self, target: &[(&str, f64)], feed: Option<f64>) -> Result<(), ApiError> {
+        let to = self.resolve(target, false)?;
+        self.queue_move(to, feed.unwrap_or(self.default_feed), MoveKind::Feed)
+    }
+
+    /// Moves the named axes to absolute positions as fast as the limits allow.
+    pub fn rapid_to(&mut self, target: &[(&str, f64)]) -> Result<(), ApiError> {
+        let to = self.resolve(target, false)?;
+        self.queue_move(to, f64::INFINITY, MoveKind::Rapid)
+    }
+
+    /// Moves the named axes by the given amounts.
+    pub fn jog(&mut self, delta: &[(&str, f64)], feed: Option<f64>) -> Result<(), ApiError> {
+        let to = self.resolve(delta, true)?;
+        self.queue_move(to, feed.unwrap_or(self.default_feed), MoveKind::Feed)
+    }
+
+    /// Sets a tool output: pen 1 down / 0 up, laser or spindle power 0..=1.
+    pub fn set_tool(&mut self, tool: &str, value: f32) -> Result<(), ApiError> {
+        if !(0.0..=1.0).contains(&value) {
+            return Err(ApiError::BadToolValue(value));
+        }
+        let index = self
+            .description()
+            .tools
+            .iter()
+            .position(|t| t.name == tool)
+            .ok_or_else(|| ApiError::UnknownTool {
+                name: tool.to_string(),
+                tools: self.tools().join(", "),
+            })?;
+        self.push(Command::Tool {
+            tool: index as u8,
+            value,
+        })
+    }
+
+    /// Stands still for `seconds` after the motion queued before it.
+    pub fn dwell(&mut self, seconds: f64) -> Result<(), ApiError> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(ApiError::BadDwell(seconds));
+        }
+        self.push(Command::Dwell { seconds })
+    }
+
+    /// Blocks until everything queued has been executed and the machine rests.
+    pub fn wait(&mut self) -> Result<(), ApiError> {
+        self.planner.finish();
+        self.drain()?;
+        self.sim.run_until(self.end);
+        self.sim.run_to_rest();
+        self.notify_tools();
+        let now = self.sim.now();
+        // A fresh lookahead starts from rest, on the clock as it is now.
+        self.planner = Planner::new(self.description().limits(), self.target, now);
+        self.end = now;
+        let t = now * 1e-6;
+        self.emit(&Event::Idle { time: t });
+        Ok(())
+    }
+
+    /// Where the motors are now (lags the calls by the lookahead and queues).
+    pub fn position(&self) -> Vec<(String, f64)> {
+        self.named(&self.sim.executed_point())
+    }
+
+    /// Where the machine will be once everything queued has run.
+    pub fn target(&self) -> Vec<(String, f64)> {
+        self.named(&self.target)
+    }
+
+    /// Simulated time, seconds.
+    pub fn time(&self) -> f64 {
+        self.sim.now() * 1e-6
+    }
+
+    /// Planned items (segments, events) still held back for lookahead.
+    pub fn lookahead(&self) -> usize {
+        self.planner.queued()
+    }
+
+    /// The report of everything run so far.
+    pub fn report(&self) -> Report {
+        self.sim.report(
+            "script",
+            self.calls,
+            self.end,
+            self.started.elapsed().as_secs_f64(),
+        )
+    }
+
+    /// Writes `path.png`, `path.svg` and `report.json` of everything executed so
+    /// far into `dir`.
+    pub fn save(&mut self, dir: impl AsRef<Path>) -> Result<(), ApiError> {
+        let dir = dir.as_ref();
+        let io = |e: std::io::Error| ApiError::Io {
+            path: dir.display().to_string(),
+            error: e,
+        };
+        std::fs::create_dir_all(dir).map_err(io)?;
+        self.strokes.extend(self.sim.take_strokes());
+        let m = self.description();
+        let (x, y) = (m.axis("x").unwrap_or(0), m.axis("y").unwrap_or(0));
+        let mut bounds = [
+            [m.axes[x].travel[0], m.axes[y].travel[0]],
+            [m.axes[x].travel[1], m.axes[y].travel[1]],
+        ];
+        if !bounds.iter().flatten().all(|v| v.is_finite()) {
+            bounds = [[-100.0, -100.0], [100.0, 100.0]];
+        }
+        let spec = RenderSpec::new(bounds, format!("script on {}", m.name));
+        let png = render_png(&self.strokes, &spec).map_err(|e| ApiError::Render(e.to_string()))?;
+        std::fs::write(dir.join("path.png"), png).map_err(io)?;
+        std::fs::write(dir.join("path.svg"), render_svg(&self.strokes, &spec)).map_err(io)?;
+        let report = serde_json::to_string_pretty(&self.report()).expect("reports serialise");
+        std::fs::write(dir.join("report.json"), report + "\n").map_err(io)?;
+        Ok(())
+    }
+
+    fn named(&self, p: &Point) -> Vec<(String, f64)> {
+        self.description()
+            .axes
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (a.name.clone(), p[i]))
+            .collect()
+    }
+
+    /// The machine point a call asks for, checked before anything is queued.
+    fn resolve(&self, spec: &[(&str, f64)], relative: bool) -> Result<Point, ApiError> {
+        let m = self.description();
+        let mut to = self.target;
+        for (name, v) in spec {
+            let i = m
+                .axis(&name.to_ascii_lowercase())
+                .ok_or_else(|| ApiError::UnknownAxis {
+                    name: name.to_string(),
+                    axes: self.axes().join(", "),
+                })?;
+            to[i] = if relative { to[i] + v } else { *v };
+        }
+        check_move(m, &self.target, &to).map_err(ApiError::Unreachable)?;
+        Ok(to)
+    }
+
+    fn queue_move(&mut self, to: Point, feed: f64, kind: MoveKind) -> Result<(), ApiError> {
+        if kind == MoveKind::Feed && !(feed.is_finite() && feed > 0.0) {
+            return Err(ApiError::BadFeed(feed));
+        }
+        self.push(Command::Move(Move {
+            target: to,
+            feed,
+            kind,
+        }))?;
+        self.target = to;
+        Ok(())
+    }
+
+    /// Plans a command and streams whatever became final.
+    fn push(&mut self, cmd: Command) -> Result<(), ApiError> {
+        self.planner.push(&cmd)?;
+        self.calls += 1;
+        self.drain()?;
+        self.notify_tools();
+        Ok(())
+    }
+
+    fn drain(&mut self) -> Result<(), ApiError> {
+        while let Some(item) = self.planner.pop() {
+            if let Planned::Segment(s) = &item {
+                self.end = s.t1();
+            }
+            self.sim.submit(item)?;
+        }
+        Ok(())
+    }
+
+    fn notify_tools(&mut self) {
+        if self.listeners.is_empty() {
+            self.sim.take_tool_changes();
+            return;
+        }
+        for (t, tool, value) in self.sim.take_tool_changes() {
+            let name = self.description().tools[tool].name.clone();
+            self.emit(&Event::Tool {
+                time: t * 1e-6,
+                tool: name,
+                value,
+            });
+        }
+    }
+
+    fn emit(&mut self, e: &Event) {
+        for l in self.listeners.iter_mut() {
+            l(e);
+        }
+    }
+}

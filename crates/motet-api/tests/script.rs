@@ -1,0 +1,179 @@
+//! Driving machines call by call.
+
+use motet_api::{ApiError, Event, Machine};
+use std::cell::RefCell;
+use std::rc::Rc;
+
+fn machine(name: &str) -> Machine {
+    Machine::open(format!(
+        "{}/../../examples/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+fn get(v: &[(String, f64)], axis: &str) -> f64 {
+    v.iter().find(|(n, _)| n == axis).unwrap().1
+}
+
+#[test]
+fn moves_are_executed_and_the_machine_ends_where_asked() {
+    let mut m = machine("plotter.toml");
+    m.move_to(&[("x", 20.0), ("y", 30.0)], None).unwrap();
+    m.set_tool("pen", 1.0).unwrap();
+    for k in 0..50 {
+        let a = k as f64 * 0.3;
+        m.move_to(
+            &[("x", 100.0 + 40.0 * a.cos()), ("y", 100.0 + 40.0 * a.sin())],
+            Some(50.0),
+        )
+        .unwrap();
+    }
+    m.jog(&[("x", -5.0)], None).unwrap();
+    m.set_tool("pen", 0.0).unwrap();
+    m.wait().unwrap();
+    let target = m.target();
+    let pos = m.position();
+    for axis in ["x", "y"] {
+        // Within one step of where it was asked to be (113 steps/mm).
+        assert!(
+            (get(&pos, axis) - get(&target, axis)).abs() < 0.01,
+            "{axis}: {pos:?} vs {target:?}"
+        );
+    }
+    let r = m.report();
+    assert_eq!(r.underruns, 0);
+    assert!(r.max_deviation_steps <= 0.5 + 1e-6);
+    assert!(r.tool_on_distance_mm > 100.0);
+}
+
+#[test]
+fn streaming_starts_before_the_script_ends() {
+    // Segments reach the nodes while calls are still coming: after many moves
+    // the machine has already moved, with only the lookahead held back.
+    let mut m = machine("plotter.toml");
+    for k in 0..400 {
+        let x = 10.0 + (k % 2) as f64 * 100.0;
+        let y = 10.0 + k as f64 * 0.4;
+        m.move_to(&[("x", x), ("y", y)], Some(200.0)).unwrap();
+    }
+    assert!(
+        m.time() > 0.0,
+        "the simulated machine should be running before wait()"
+    );
+    assert!(
+        m.lookahead() < 50,
+        "lookahead holds {} moves",
+        m.lookahead()
+    );
+    m.wait().unwrap();
+    assert_eq!(m.report().underruns, 0);
+}
+
+#[test]
+fn refused_calls_leave_queued_motion_untouched() {
+    let mut m = machine("printer.toml");
+    m.move_to(&[("x", 50.0), ("y", 50.0)], Some(100.0)).unwrap();
+    let before = m.target();
+    // (call, expected error)
+    let bad: Vec<(Box<dyn Fn(&mut Machine) -> Result<(), ApiError>>, &str)> = vec![
+        (
+            Box::new(|m| m.move_to(&[("x", 500.0)], None)),
+            "beyond the axis's travel",
+        ),
+        (
+            Box::new(|m| m.move_to(&[("q", 1.0)], None)),
+            "unknown axis `q`",
+        ),
+        (
+            Box::new(|m| m.move_to(&[("x", 10.0)], Some(-1.0))),
+            "feed must be a positive",
+        ),
+        (
+            Box::new(|m| m.move_to(&[("x", f64::NAN)], None)),
+            "beyond the axis's travel",
+        ),
+        (
+            Box::new(|m| m.jog(&[("z", -1.0)], None)),
+            "beyond the axis's travel",
+        ),
+        (
+            Box::new(|m| m.set_tool("laser", 1.0)),
+            "unknown tool `laser`",
+        ),
+        (Box::new(|m| m.dwell(-2.0)), "dwell must be"),
+    ];
+    for (call, want) in bad {
+        let err = call(&mut m).unwrap_err().to_string();
+        assert!(err.contains(want), "{err} should contain {want}");
+        assert_eq!(m.target(), before);
+    }
+    m.wait().unwrap();
+    assert!((get(&m.position(), "x") - 50.0).abs() < 0.02);
+}
+
+#[test]
+fn polar_centre_is_refused() {
+    let mut m = machine("clay-printer.toml");
+    let err = m.move_to(&[("x", -100.0), ("y", 0.0)], None).unwrap_err();
+    assert!(matches!(err, ApiError::Unreachable(_)), "{err}");
+    m.move_to(&[("x", 0.0), ("y", 100.0)], Some(30.0)).unwrap();
+    m.wait().unwrap();
+}
+
+#[test]
+fn events_report_tool_changes_in_time_order() {
+    let mut m = machine("plotter.toml");
+    let seen = Rc::new(RefCell::new(Vec::new()));
+    let s = seen.clone();
+    m.on_event(move |e| s.borrow_mut().push(e.clone()));
+    m.move_to(&[("x", 10.0)], None).unwrap();
+    m.set_tool("pen", 1.0).unwrap();
+    m.move_to(&[("x", 40.0)], None).unwrap();
+    m.set_tool("pen", 0.0).unwrap();
+    m.wait().unwrap();
+    let seen = seen.borrow();
+    let tools: Vec<(String, f32)> = seen
+        .iter()
+        .filter_map(|e| {
+            if let Event::Tool { tool, value, .. } = e {
+                Some((tool.clone(), *value))
+            } else {
+                None
+            }
+        })
+        .collect();
+    assert_eq!(
+        tools,
+        vec![("pen".to_string(), 1.0), ("pen".to_string(), 0.0)]
+    );
+    let times: Vec<f64> = seen
+        .iter()
+        .map(|e| match e {
+            Event::Tool { time, .. } | Event::Idle { time } => *time,
+        })
+        .collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "{times:?}");
+    assert!(matches!(seen.last(), Some(Event::Idle { .. })));
+}
+
+#[test]
+fn the_machine_can_go_on_after_wait() {
+    let mut m = machine("gestalt-3axis.toml");
+    m.move_to(&[("x", 30.0), ("y", 20.0), ("z", 5.0)], Some(20.0))
+        .unwrap();
+    m.wait().unwrap();
+    let t1 = m.time();
+    m.move_to(&[("x", 10.0)], Some(20.0)).unwrap();
+    m.dwell(0.5).unwrap();
+    m.wait().unwrap();
+    assert!(
+        m.time() >= t1 + 0.5 + 20.0 / 20.0 - 1e-6,
+        "time {} after {t1}",
+        m.time()
+    );
+    assert!((get(&m.position(), "x") - 10.0).abs() < 0.01);
+    let dir = std::env::temp_dir().join(format!("motet-api-{}", std::process::id()));
+    m.save(&dir).unwrap();
+    assert!(dir.join("path.png").exists() && dir.join("report.json").exists());
+}
