@@ -1,0 +1,66 @@
+from types import TracebackType
+from typing import Any, Callable, Dict, List, Optional, Type
+
+class MotetError(Exception):
+    """Base class of motet's errors."""
+
+class MachineFileError(MotetError):
+    """The machine file is invalid; the message names file:line:column."""
+
+class UnreachableError(MotetError):
+    """The target is beyond travel or cannot be reached by the kinematics."""
+
+class UnknownNameError(MotetError):
+    """No axis or tool has that name."""
+
+class ValueOutOfRangeError(MotetError):
+    """A feed, dwell or tool value is out of range."""
+
+class Machine:
+    """A machine driven call by call, on simulated nodes."""
+
+    def __init__(self, path: str) -> None:
+        """Opens the machine described by a machine file (TOML)."""
+    @property
+    def axes(self) -> List[str]:
+        """Axis names, in order."""
+    @property
+    def tools(self) -> List[str]:
+        """Tool names."""
+    def move_to(self, feed: Optional[float] = None, **axes: float) -> None:
+        """Move the named axes to absolute positions, e.g. move_to(x=10, y=20, feed=50).
+
+        feed is in units per second; without it, the machine's drawing feed."""
+    def rapid_to(self, **axes: float) -> None:
+        """Move the named axes to absolute positions as fast as the limits allow."""
+    def jog(self, feed: Optional[float] = None, **axes: float) -> None:
+        """Move the named axes by the given amounts, e.g. jog(x=-5)."""
+    def set_tool(self, tool: str, value: float) -> None:
+        """Set a tool output: pen 1 down / 0 up, laser or spindle power 0..1."""
+    def dwell(self, seconds: float) -> None:
+        """Stand still for `seconds` after the motion queued before."""
+    def wait(self) -> None:
+        """Block until everything queued has run and the machine is at rest."""
+    @property
+    def position(self) -> Dict[str, float]:
+        """Where the motors are now, by axis name."""
+    @property
+    def target(self) -> Dict[str, float]:
+        """Where the machine will be after everything queued, by axis name."""
+    @property
+    def time(self) -> float:
+        """Simulated time in seconds."""
+    def on_event(self, callback: Callable[[Dict[str, Any]], None]) -> None:
+        """Call callback(event) for every event: a dict with kind ("tool" or "idle"),
+        time (s) and, for tools, tool and value."""
+    def report(self) -> Dict[str, Any]:
+        """The run report: duration, distances, steps, peaks against limits, accuracy."""
+    def save(self, directory: str) -> None:
+        """Write path.png, path.svg and report.json of everything executed so far."""
+    def __enter__(self) -> "Machine": ...
+    def __exit__(
+        self,
+        exc_type: Optional[Type[BaseException]],
+        exc: Optional[BaseException],
+        tb: Optional[TracebackType],
+    ) -> bool: ...
