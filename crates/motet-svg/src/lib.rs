@@ -3,6 +3,35 @@
 //! [`parse`] turns an SVG document into machine-space [`Command`]s: every
 //! visible path outline becomes a pen-up travel to its start, a pen-down
 //! (tool on), feed moves along the flattened outline and finally a pen-up.
+//! [`parse_with_info`] also returns an [`SvgInfo`]: the pens with their path
+//! counts and drawn lengths, and the pen-up travel before and after ordering.
+//!
+//! # Pens, order and hatching ([`SvgOptions`])
+//!
+//! * Pens ([`SvgOptions::pens`], default [`PenSplit::ByColour`]): paths are
+//!   grouped by stroke colour (fill colour for paths without a stroke and for
+//!   hatch lines; the first gradient stop for gradients, black for
+//!   patterns), by top-level group / Inkscape layer, or all in one pen. Pens
+//!   are drawn one after the other in order of first appearance; between
+//!   two pens the pen is lifted, the machine travels to
+//!   [`SvgOptions::pen_change_position`] (if set) and a
+//!   `Pause { optional: false }` waits for the person to change the pen.
+//! * Order ([`SvgOptions::optimize`], default on): within each pen, paths
+//!   (each subpath and hatch line separately) are reordered to cut pen-up
+//!   travel. Open paths may be drawn end to start; closed ones may start at
+//!   any vertex. Greedy nearest neighbour over a kd-tree of candidate entry
+//!   points, then 2-opt over 8 nearest neighbours (bounded work), then the
+//!   best start vertex for each loop. The result never travels more than
+//!   document order (if it would, document order is kept). Off: document
+//!   order, paths drawn as written.
+//! * Hatching ([`SvgOptions::hatch`], default off): filled shapes (`fill`
+//!   not `none`; note that SVG fills shapes black by default) get parallel
+//!   lines `spacing_mm` apart at `angle_deg` (machine coordinates, from +x
+//!   towards +y), clipped to the interior of the flattened outline with the
+//!   shape's `fill-rule` (non-zero or even-odd; every subpath counts as
+//!   closed). The lines lie on a global grid (distance from the machine
+//!   origin an odd multiple of half the spacing), so neighbouring shapes'
+//!   lines line up. In document order they follow the outline.
 //!
 //! # Supported
 //!
@@ -31,8 +60,15 @@
 //!
 //! * `text` (usvg is built without fonts: convert text to paths first),
 //!   raster and nested-SVG `image`s, compressed `.svgz` files.
-//! * Fill patterns/hatching, stroke width (the pen traces the centre line),
-//!   clip paths and masks (outlines are drawn unclipped).
+//! * Stroke width (the pen traces the centre line), clip paths and masks
+//!   (outlines and hatching are drawn unclipped), opacity, dashes.
+//! * Hatching: only plain parallel lines (no cross-hatch, no outline
+//!   insets; the hatch lines end on the outline, not a pen width inside),
+//!   one spacing and angle for the whole document, at most
+//!   [`MAX_HATCH_CROSSINGS`] line/outline crossings per document.
+//! * Layers: only top-level `g` elements are pens (sublayers belong to their
+//!   top-level layer); hidden layers are skipped like any hidden group.
+//!   Layers with the same label share one pen.
 //! * Zero-length subpaths (dots) are dropped.
 //!
 //! usvg computes in `f32`: coordinates carry a relative error of about
@@ -47,6 +83,11 @@ use motet_trajectory::Point;
 use usvg::roxmltree;
 use usvg::tiny_skia_path::PathSegment;
 
+mod hatch;
+mod order;
+
+pub use hatch::MAX_HATCH_CROSSINGS;
+
 /// Millimetres per CSS pixel (usvg works in px at 96 dpi).
 pub const MM_PER_PX: f64 = 25.4 / 96.0;
 
@@ -58,12 +99,42 @@ pub const DEFAULT_TOLERANCE: f64 = 0.01;
 pub const MAX_COORD: f64 = 1e7;
 /// Prefix of the ids given to elements that have none.
 const GENERATED_ID: &str = "motet-svg-";
+/// Inkscape's XML namespace (layer labels).
+const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
+/// Pen name for paths outside top-level groups with [`PenSplit::ByLayer`].
+pub const NO_LAYER: &str = "(no layer)";
 /// Points closer than this (mm) count as the same point.
 const SAME_POINT: f64 = 1e-9;
 /// Upper bound on the number of chords for one ellipse.
 const MAX_ELLIPSE_STEPS: f64 = 1e6;
 
-/// How document space maps onto the machine.
+/// How paths are grouped into pens (each pen is drawn in one go, with a
+/// pause to change the pen in between).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PenSplit {
+    /// One pen per stroke colour (fill colour for paths without a stroke and
+    /// for hatch lines).
+    #[default]
+    ByColour,
+    /// One pen per top-level group (Inkscape layer); named by
+    /// `inkscape:label`, else `id`, else `layer N`. Everything outside
+    /// top-level groups shares the pen `(no layer)`.
+    ByLayer,
+    /// Everything with one pen, no pauses.
+    Single,
+}
+
+/// Hatch fill for filled shapes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hatch {
+    /// Distance between hatch lines, mm (must be positive).
+    pub spacing_mm: f64,
+    /// Direction of the lines in machine coordinates, degrees from +x
+    /// towards +y.
+    pub angle_deg: f64,
+}
+
+/// How document space maps onto the machine, and how it is drawn.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SvgOptions {
     /// Machine position (x, y in mm) of the document's origin corner:
@@ -75,6 +146,16 @@ pub struct SvgOptions {
     /// Pen-up travel speed in mm/s; `f64::INFINITY` (or any non-finite or
     /// non-positive value) means rapid moves.
     pub travel_feed: f64,
+    /// Grouping of paths into pens (default: by colour).
+    pub pens: PenSplit,
+    /// Machine x, y (mm) to travel to for a pen change; `None` (default):
+    /// stay where the last pen stopped.
+    pub pen_change_position: Option<[f64; 2]>,
+    /// Reorder (and reverse / rotate) the paths of each pen to cut pen-up
+    /// travel (default true); `false` keeps document order.
+    pub optimize: bool,
+    /// Hatch filled shapes (default `None`: outlines only).
+    pub hatch: Option<Hatch>,
 }
 
 impl Default for SvgOptions {
@@ -83,8 +164,47 @@ impl Default for SvgOptions {
             origin: [0.0, 0.0],
             flip_y: true,
             travel_feed: f64::INFINITY,
+            pens: PenSplit::ByColour,
+            pen_change_position: None,
+            optimize: true,
+            hatch: None,
         }
     }
+}
+
+/// One pen of a parsed document.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PenInfo {
+    /// `#rrggbb` ([`PenSplit::ByColour`]), the layer's label
+    /// ([`PenSplit::ByLayer`]) or `pen` ([`PenSplit::Single`]).
+    pub name: String,
+    /// The colour, for [`PenSplit::ByColour`].
+    pub colour: Option<[u8; 3]>,
+    /// SVG path elements (shapes) with something drawn by this pen.
+    pub paths: usize,
+    /// Polylines drawn (subpaths and hatch lines), each with one pen-down.
+    pub strokes: usize,
+    /// Of `strokes`, hatch lines.
+    pub hatch_lines: usize,
+    /// Pen-down length, mm.
+    pub drawn_mm: f64,
+    /// Pen-up travel in document order, mm (from where the pen starts: the
+    /// machine start, the pen change position or the previous pen's end).
+    pub travel_before_mm: f64,
+    /// Pen-up travel as emitted, mm.
+    pub travel_after_mm: f64,
+}
+
+/// What [`parse_with_info`] found besides the commands.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SvgInfo {
+    /// Pens in drawing order (order of first appearance in the document).
+    pub pens: Vec<PenInfo>,
+    /// Total pen-up travel in document order, mm (including trips to the
+    /// pen change position).
+    pub travel_before_mm: f64,
+    /// Total pen-up travel as emitted, mm.
+    pub travel_after_mm: f64,
 }
 
 /// Parse an SVG document into machine commands for `target`.
@@ -92,18 +212,47 @@ impl Default for SvgOptions {
 /// Returns an empty list for a document without visible paths. Errors:
 /// malformed XML/SVG (message `invalid SVG: ...`, located where the parser
 /// reports it), a machine without `x` or `y` axis, coordinates beyond
-/// [`MAX_COORD`] mm.
+/// [`MAX_COORD`] mm, invalid hatch options or hatching too dense.
 pub fn parse(
     data: &[u8],
     target: &JobTarget,
     opts: &SvgOptions,
 ) -> Result<Vec<Located<Command>>, SourceError> {
+    parse_with_info(data, target, opts).map(|(cmds, _)| cmds)
+}
+
+/// [`parse`], also returning the pens and pen-up travel statistics.
+pub fn parse_with_info(
+    data: &[u8],
+    target: &JobTarget,
+    opts: &SvgOptions,
+) -> Result<(Vec<Located<Command>>, SvgInfo), SourceError> {
     let xi = target
         .axis("x")
         .ok_or_else(|| SourceError::new(0, 0, "SVG needs an x axis; the machine has none"))?;
     let yi = target
         .axis("y")
         .ok_or_else(|| SourceError::new(0, 0, "SVG needs a y axis; the machine has none"))?;
+    if let Some(h) = opts.hatch {
+        if !(h.spacing_mm.is_finite() && h.spacing_mm > 0.0) {
+            return Err(SourceError::new(
+                0,
+                0,
+                format!(
+                    "hatch spacing must be a positive number of mm, not {}",
+                    h.spacing_mm
+                ),
+            ));
+        }
+        if !h.angle_deg.is_finite() {
+            return Err(SourceError::new(0, 0, "hatch angle must be finite"));
+        }
+    }
+    if let Some(p) = opts.pen_change_position {
+        if !(p[0].is_finite() && p[1].is_finite()) {
+            return Err(SourceError::new(0, 0, "pen change position must be finite"));
+        }
+    }
 
     let text = decode(data)?;
     let xml_opt = roxmltree::ParsingOptions {
@@ -120,7 +269,7 @@ pub fn parse(
     };
 
     let usvg_opt = usvg_options();
-    let (annotated, mut index) = annotate(&doc);
+    let (annotated, mut index, layers) = annotate(&doc);
     let tagged = match &annotated {
         Some(text) => usvg::Tree::from_str(text, &usvg_opt).ok(),
         None => None,
@@ -153,25 +302,225 @@ pub fn parse(
 
     let mut walker = Walker {
         index: &index,
+        layers: &layers,
         tolerance,
         doc_height: tree.size().height() as f64 * MM_PER_PX,
         opts,
         last_loc: None,
-        emitter: Emitter {
-            out: Vec::new(),
-            pos: target.start,
-            pen: Pen::Unknown,
-            tool,
-            travel_feed,
-            travel_kind,
-            draw_feed: target.draw_feed,
-            xi,
-            yi,
-        },
+        pens: Vec::new(),
+        pen_index: HashMap::new(),
+        paths: 0,
+        hatch_budget: hatch::MAX_HATCH_CROSSINGS,
     };
-    walker.group(tree.root(), None, None)?;
+    walker.group(tree.root(), None, None, None)?;
     let end_loc = walker.last_loc.unwrap_or_default();
-    Ok(walker.emitter.finish(end_loc))
+    let pens = walker.pens;
+
+    let mut emitter = Emitter {
+        out: Vec::new(),
+        pos: target.start,
+        pen: Pen::Unknown,
+        tool,
+        travel_feed,
+        travel_kind,
+        draw_feed: target.draw_feed,
+        xi,
+        yi,
+    };
+    let start = [target.start[xi], target.start[yi]];
+    let info = draw_pens(&pens, start, opts, &mut emitter);
+    Ok((emitter.finish(end_loc), info))
+}
+
+/// Everything drawn with one pen, in document order.
+struct PenGroup {
+    name: String,
+    colour: Option<[u8; 3]>,
+    strokes: Vec<Stroke>,
+}
+
+/// A cleaned machine-space polyline: no repeated consecutive points, at
+/// least two points; closed ones without the repeated first point.
+struct Stroke {
+    pts: Vec<[f64; 2]>,
+    closed: bool,
+    loc: SourceLoc,
+    /// Which SVG path (in walk order) it came from.
+    path: usize,
+    hatch: bool,
+}
+
+impl Stroke {
+    /// Clean `pts`; `None` if nothing is left to draw.
+    fn new(
+        pts: &[[f64; 2]],
+        closed: bool,
+        loc: SourceLoc,
+        path: usize,
+        hatch: bool,
+    ) -> Option<Self> {
+        let mut clean: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
+        for &p in pts {
+            if clean.last().is_none_or(|&q| !same(p, q)) {
+                clean.push(p);
+            }
+        }
+        if closed {
+            while clean.len() > 1 && same(clean[0], clean[clean.len() - 1]) {
+                clean.pop();
+            }
+        }
+        (clean.len() >= 2).then_some(Stroke {
+            pts: clean,
+            closed,
+            loc,
+            path,
+            hatch,
+        })
+    }
+
+    fn length(&self) -> f64 {
+        let open: f64 = self.pts.windows(2).map(|w| order::dist(w[0], w[1])).sum();
+        if self.closed {
+            open + order::dist(self.pts[0], self.pts[self.pts.len() - 1])
+        } else {
+            open
+        }
+    }
+
+    /// Points in drawing order as placed.
+    fn placed_points(&self, p: order::Placed) -> Vec<[f64; 2]> {
+        if self.closed {
+            let r = p.rotate.min(self.pts.len() - 1);
+            let mut v = Vec::with_capacity(self.pts.len() + 1);
+            v.extend_from_slice(&self.pts[r..]);
+            v.extend_from_slice(&self.pts[..=r]);
+            v
+        } else if p.reversed {
+            self.pts.iter().rev().copied().collect()
+        } else {
+            self.pts.clone()
+        }
+    }
+}
+
+/// Order each pen's strokes, emit them with pen changes in between, and
+/// report what was done.
+fn draw_pens(
+    pens: &[PenGroup],
+    start: [f64; 2],
+    opts: &SvgOptions,
+    emitter: &mut Emitter,
+) -> SvgInfo {
+    let shapes: Vec<Vec<order::Shape>> = pens
+        .iter()
+        .map(|pen| {
+            pen.strokes
+                .iter()
+                .map(|s| order::Shape {
+                    pts: &s.pts,
+                    closed: s.closed,
+                })
+                .collect()
+        })
+        .collect();
+    let doc_tours: Vec<Vec<order::Placed>> =
+        shapes.iter().map(|s| order::identity(s.len())).collect();
+    let (doc_travel, doc_total) = plan_travel(&shapes, &doc_tours, start, opts);
+    let mut tours = doc_tours.clone();
+    let (mut travel, mut total) = (doc_travel.clone(), doc_total);
+    if opts.optimize {
+        let mut opt = Vec::with_capacity(pens.len());
+        let mut pos = start;
+        for (k, s) in shapes.iter().enumerate() {
+            if k > 0 {
+                pos = opts.pen_change_position.unwrap_or(pos);
+            }
+            let tour = order::optimize(pos, s);
+            pos = order::travel(pos, s, &tour).1;
+            opt.push(tour);
+        }
+        let (t, sum) = plan_travel(&shapes, &opt, start, opts);
+        // Each pen travels no more than in document order from the same
+        // start; where pens start differs, so check the whole job.
+        if sum <= doc_total {
+            (tours, travel, total) = (opt, t, sum);
+        }
+    }
+
+    let mut info = SvgInfo {
+        pens: Vec::with_capacity(pens.len()),
+        travel_before_mm: doc_total,
+        travel_after_mm: total,
+    };
+    for (k, pen) in pens.iter().enumerate() {
+        if k > 0 {
+            let first_loc = pen.strokes.first().map(|s| s.loc).unwrap_or_default();
+            emitter.pen(false, first_loc);
+            if let Some(p) = opts.pen_change_position {
+                if !same(emitter.xy(), p) {
+                    emitter.move_to(p, emitter.travel_feed, emitter.travel_kind, first_loc);
+                }
+            }
+            emitter.push(first_loc, Command::Pause { optional: false });
+        }
+        for &p in &tours[k] {
+            let s = &pen.strokes[p.index];
+            emitter.polyline(&s.placed_points(p), s.loc);
+        }
+        let mut paths: Vec<usize> = pen.strokes.iter().map(|s| s.path).collect();
+        paths.sort_unstable();
+        paths.dedup();
+        info.pens.push(PenInfo {
+            name: pen.name.clone(),
+            colour: pen.colour,
+            paths: paths.len(),
+            strokes: pen.strokes.len(),
+            hatch_lines: pen.strokes.iter().filter(|s| s.hatch).count(),
+            drawn_mm: pen.strokes.iter().map(Stroke::length).sum(),
+            travel_before_mm: doc_travel[k],
+            travel_after_mm: travel[k],
+        });
+    }
+    info
+}
+
+/// Pen-up travel of each pen (including the trip to the pen change
+/// position before it) and in total, for the given tours.
+fn plan_travel(
+    shapes: &[Vec<order::Shape>],
+    tours: &[Vec<order::Placed>],
+    start: [f64; 2],
+    opts: &SvgOptions,
+) -> (Vec<f64>, f64) {
+    let mut pos = start;
+    let mut out = Vec::with_capacity(shapes.len());
+    for (k, (s, tour)) in shapes.iter().zip(tours).enumerate() {
+        let mut t = 0.0;
+        if k > 0 {
+            if let Some(p) = opts.pen_change_position {
+                t += order::dist(pos, p);
+                pos = p;
+            }
+        }
+        let (d, end) = order::travel(pos, s, tour);
+        out.push(t + d);
+        pos = end;
+    }
+    let total = out.iter().sum();
+    (out, total)
+}
+
+/// Colour of a paint (first stop for gradients, black for patterns).
+fn paint_colour(paint: &usvg::Paint) -> [u8; 3] {
+    let c = match paint {
+        usvg::Paint::Color(c) => Some(*c),
+        usvg::Paint::LinearGradient(g) => g.stops().first().map(|s| s.color()),
+        usvg::Paint::RadialGradient(g) => g.stops().first().map(|s| s.color()),
+        usvg::Paint::Pattern(_) => None,
+    }
+    .unwrap_or(usvg::Color::black());
+    [c.red, c.green, c.blue]
 }
 
 /// usvg options: no external files, no images.
@@ -263,13 +612,30 @@ struct ElemInfo {
     generated: bool,
     /// Path data of a `path` element that has arcs.
     d: Option<String>,
+    /// Index of the top-level group (layer) the element is in.
+    layer: Option<usize>,
 }
 
 /// Give every element without an id a generated one, so that usvg's nodes
 /// can be traced back to their source element. Returns the tagged text
-/// (`None` if nothing could be tagged) and the id index.
-fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemInfo>) {
+/// (`None` if nothing could be tagged), the id index and the names of the
+/// top-level groups (layers).
+fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemInfo>, Vec<String>) {
     let text = doc.input_text();
+    let root = doc.root_element();
+    let mut layers: Vec<String> = Vec::new();
+    let mut layer_of: HashMap<roxmltree::NodeId, usize> = HashMap::new();
+    for g in root
+        .children()
+        .filter(|n| n.is_element() && n.tag_name().name() == "g")
+    {
+        let name = g
+            .attribute((INKSCAPE_NS, "label"))
+            .or_else(|| g.attribute("id"))
+            .map_or_else(|| format!("layer {}", layers.len() + 1), str::to_string);
+        layer_of.insert(g.id(), layers.len());
+        layers.push(name);
+    }
     let mut index: HashMap<String, ElemInfo> = HashMap::new();
 
     let existing: Vec<&str> = doc
@@ -309,6 +675,10 @@ fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemI
                 .attribute("d")
                 .filter(|d| node.tag_name().name() == "path" && d.contains(['a', 'A']))
                 .map(str::to_string),
+            layer: node
+                .ancestors()
+                .find(|a| a.parent_element() == Some(root))
+                .and_then(|top| layer_of.get(&top.id()).copied()),
         };
         if let Some(id) = node.attribute("id") {
             index.entry(id.to_string()).or_insert(info);
@@ -345,7 +715,7 @@ fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemI
         inserts.push((at, id));
     }
     if inserts.is_empty() {
-        return (None, index);
+        return (None, index, layers);
     }
     let mut out = String::with_capacity(text.len() + inserts.len() * 24);
     let mut last = 0;
@@ -357,7 +727,7 @@ fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemI
         last = *at;
     }
     out.push_str(&text[last..]);
-    (Some(out), index)
+    (Some(out), index, layers)
 }
 
 /// One flattened subpath in document mm (y down).
@@ -368,12 +738,20 @@ struct Subpath {
 
 struct Walker<'a> {
     index: &'a HashMap<String, ElemInfo>,
+    /// Names of the top-level groups.
+    layers: &'a [String],
     tolerance: f64,
     doc_height: f64,
     opts: &'a SvgOptions,
     /// Location of the last path drawn, for nodes usvg made up (markers).
     last_loc: Option<SourceLoc>,
-    emitter: Emitter,
+    /// Pens in order of first appearance, and their index by name.
+    pens: Vec<PenGroup>,
+    pen_index: HashMap<String, usize>,
+    /// Paths seen so far.
+    paths: usize,
+    /// Hatch crossings still allowed.
+    hatch_budget: usize,
 }
 
 impl Walker<'_> {
@@ -384,6 +762,7 @@ impl Walker<'_> {
         g: &usvg::Group,
         use_loc: Option<SourceLoc>,
         group_loc: Option<SourceLoc>,
+        layer: Option<usize>,
     ) -> Result<(), SourceError> {
         for child in g.children() {
             match child {
@@ -394,7 +773,8 @@ impl Walker<'_> {
                             .map(|i| i.loc)
                     });
                     let group_loc = info.map(|i| i.loc).or(group_loc);
-                    self.group(sub, use_loc, group_loc)?;
+                    let layer = layer.or_else(|| info.and_then(|i| i.layer));
+                    self.group(sub, use_loc, group_loc, layer)?;
                 }
                 usvg::Node::Path(path) => {
                     if !path.is_visible() {
@@ -406,7 +786,8 @@ impl Walker<'_> {
                         .or(self.last_loc)
                         .or(group_loc)
                         .unwrap_or_default();
-                    self.path(path, info, loc)?;
+                    let layer = layer.or_else(|| info.and_then(|i| i.layer));
+                    self.path(path, info, loc, layer)?;
                     self.last_loc = Some(loc);
                 }
                 // Text needs fonts (not built in); images are not drawn.
@@ -421,6 +802,7 @@ impl Walker<'_> {
         path: &usvg::Path,
         info: Option<&ElemInfo>,
         loc: SourceLoc,
+        layer: Option<usize>,
     ) -> Result<(), SourceError> {
         let ts = path.abs_transform();
         let to_mm = Affine::scale(MM_PER_PX)
@@ -472,6 +854,15 @@ impl Walker<'_> {
             (None, None) => flatten(&usvg_bez(data), to_mm, tol),
         };
         let [ox, oy] = self.opts.origin;
+        let path_no = self.paths;
+        self.paths += 1;
+        let outline_pen = self.pen_for(
+            path.stroke()
+                .map(|s| s.paint())
+                .or(path.fill().map(|f| f.paint())),
+            layer,
+        );
+        let mut rings: Vec<Vec<[f64; 2]>> = Vec::new();
         for sp in subpaths {
             let pts: Vec<[f64; 2]> = sp
                 .points
@@ -491,9 +882,63 @@ impl Walker<'_> {
                     message: "coordinates out of range after mapping to the machine".into(),
                 });
             }
-            self.emitter.subpath(&pts, sp.closed, loc);
+            if let Some(s) = Stroke::new(&pts, sp.closed, loc, path_no, false) {
+                self.pens[outline_pen].strokes.push(s);
+            }
+            rings.push(pts);
+        }
+        if let (Some(h), Some(fill)) = (self.opts.hatch, path.fill()) {
+            let even_odd = fill.rule() == usvg::FillRule::EvenOdd;
+            let lines = hatch::hatch(
+                &rings,
+                even_odd,
+                h.spacing_mm,
+                h.angle_deg,
+                &mut self.hatch_budget,
+            )
+            .ok_or_else(|| SourceError {
+                loc,
+                message: format!(
+                    "hatch spacing {} mm is too dense for this drawing (more than {} crossings)",
+                    h.spacing_mm,
+                    hatch::MAX_HATCH_CROSSINGS
+                ),
+            })?;
+            let hatch_pen = self.pen_for(Some(fill.paint()), layer);
+            for l in lines {
+                if let Some(s) = Stroke::new(&l, false, loc, path_no, true) {
+                    self.pens[hatch_pen].strokes.push(s);
+                }
+            }
         }
         Ok(())
+    }
+
+    /// Index of the pen drawing with `paint` in `layer`, made on first use.
+    fn pen_for(&mut self, paint: Option<&usvg::Paint>, layer: Option<usize>) -> usize {
+        let (name, colour) = match self.opts.pens {
+            PenSplit::ByColour => {
+                let c = paint.map_or([0, 0, 0], paint_colour);
+                (format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]), Some(c))
+            }
+            PenSplit::ByLayer => (
+                layer
+                    .and_then(|l| self.layers.get(l))
+                    .map_or_else(|| NO_LAYER.to_string(), String::clone),
+                None,
+            ),
+            PenSplit::Single => ("pen".to_string(), None),
+        };
+        if let Some(&k) = self.pen_index.get(&name) {
+            return k;
+        }
+        self.pens.push(PenGroup {
+            name: name.clone(),
+            colour,
+            strokes: Vec::new(),
+        });
+        self.pen_index.insert(name, self.pens.len() - 1);
+        self.pens.len() - 1
     }
 }
 
@@ -892,19 +1337,8 @@ impl Emitter {
         }
     }
 
-    fn subpath(&mut self, pts: &[[f64; 2]], closed: bool, loc: SourceLoc) {
-        let mut clean: Vec<[f64; 2]> = Vec::with_capacity(pts.len() + 1);
-        for &p in pts {
-            if clean.last().is_none_or(|&q| !same(p, q)) {
-                clean.push(p);
-            }
-        }
-        if closed && clean.len() > 1 {
-            let first = clean[0];
-            if clean.last().is_some_and(|&q| !same(first, q)) {
-                clean.push(first);
-            }
-        }
+    /// Draw a cleaned polyline (travel to its start unless already there).
+    fn polyline(&mut self, clean: &[[f64; 2]], loc: SourceLoc) {
         if clean.len() < 2 {
             return;
         }

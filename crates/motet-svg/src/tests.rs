@@ -29,9 +29,11 @@ fn target() -> JobTarget {
     }])
 }
 
+/// Document order, y down: machine coordinates equal document mm.
 fn no_flip() -> SvgOptions {
     SvgOptions {
         flip_y: false,
+        optimize: false,
         ..Default::default()
     }
 }
@@ -71,6 +73,9 @@ fn polylines(cmds: &[Located<Command>]) -> Vec<Vec<[f64; 2]>> {
                 } else {
                     assert!(!down, "travel with the pen down");
                 }
+            }
+            Command::Pause { optional } => {
+                assert!(!optional && !down, "pen change with the pen down");
             }
             other => panic!("unexpected {other:?}"),
         }
@@ -292,6 +297,8 @@ fn straight_shapes() {
     for (name, svg, flip_y, want) in cases {
         let opts = SvgOptions {
             flip_y,
+            optimize: false,
+            pens: PenSplit::Single,
             ..Default::default()
         };
         let cmds = run(&svg, &opts);
@@ -603,9 +610,8 @@ fn pen_events() {
         r#"<line x1="0" y1="0" x2="2" y2="0" stroke="black"/>"#,
     );
     let slow = SvgOptions {
-        flip_y: false,
         travel_feed: 50.0,
-        ..Default::default()
+        ..no_flip()
     };
     let pen = target().tools;
     // (name, document, options, tools, expected events)
@@ -674,6 +680,7 @@ fn laser_power_and_origin() {
         origin: [100.0, 50.0],
         flip_y: true,
         travel_feed: f64::INFINITY,
+        ..Default::default()
     };
     let svg = mm_doc(
         20.0,
@@ -879,7 +886,7 @@ proptest! {
         }).collect();
         let svg = format!(
             "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"1000\" height=\"1000\">\n{body}</svg>");
-        let opts = SvgOptions { origin: [origin.0, origin.1], flip_y, ..Default::default() };
+        let opts = SvgOptions { origin: [origin.0, origin.1], flip_y, optimize: false, ..Default::default() };
         let cmds = run(&svg, &opts);
         let got = polylines(&cmds);
         // Expected: drawn polylines in order, duplicates dropped, connected
@@ -911,6 +918,734 @@ proptest! {
             for (a, b) in g.iter().zip(w) {
                 prop_assert!(close(*a, *b, 1e-6), "{:?} vs {:?}", a, b);
             }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Pens, ordering, hatch.
+
+fn run_info(svg: &str, opts: &SvgOptions) -> (Vec<Located<Command>>, SvgInfo) {
+    parse_with_info(svg.as_bytes(), &target(), opts).unwrap_or_else(|e| panic!("{e}\n{svg}"))
+}
+
+/// Pen-up travel actually commanded (sum of move lengths with the pen up).
+fn commanded_travel(cmds: &[Located<Command>]) -> f64 {
+    let start = target().start;
+    let mut pos = [start[0], start[1]];
+    let mut down = false;
+    let mut sum = 0.0;
+    for c in cmds {
+        match c.item {
+            Command::Tool { value, .. } => down = value > 0.0,
+            Command::Move(m) => {
+                let p = [m.target[0], m.target[1]];
+                if !down {
+                    sum += (p[0] - pos[0]).hypot(p[1] - pos[1]);
+                }
+                pos = p;
+            }
+            _ => {}
+        }
+    }
+    sum
+}
+
+/// Drawn polylines split at pen changes.
+fn per_pen(cmds: &[Located<Command>]) -> Vec<Vec<Vec<[f64; 2]>>> {
+    let _ = polylines(cmds);
+    let start = target().start;
+    let mut pos = [start[0], start[1]];
+    let mut down = false;
+    let mut out: Vec<Vec<Vec<[f64; 2]>>> = vec![vec![]];
+    for c in cmds {
+        match c.item {
+            Command::Pause { .. } => out.push(vec![]),
+            Command::Tool { value, .. } => {
+                down = value > 0.0;
+                if down {
+                    out.last_mut().unwrap().push(vec![pos]);
+                }
+            }
+            Command::Move(m) => {
+                pos = [m.target[0], m.target[1]];
+                if down {
+                    out.last_mut().unwrap().last_mut().unwrap().push(pos);
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Undirected segments drawn, rounded to 1 µm, sorted.
+fn segments(lines: &[Vec<[f64; 2]>]) -> Vec<[i64; 4]> {
+    let r = |v: f64| (v * 1e6).round() as i64;
+    let mut out: Vec<[i64; 4]> = lines
+        .iter()
+        .flat_map(|l| l.windows(2))
+        .map(|w| {
+            let (a, b) = ([r(w[0][0]), r(w[0][1])], [r(w[1][0]), r(w[1][1])]);
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            [a[0], a[1], b[0], b[1]]
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+#[test]
+fn pen_grouping() {
+    let colours = mm_doc(
+        100.0,
+        100.0,
+        r##"<line x1="1" y1="1" x2="2" y2="1" stroke="black"/>
+            <line x1="1" y1="2" x2="2" y2="2" stroke="#ff0000"/>
+            <line x1="1" y1="3" x2="2" y2="3" stroke="black"/>
+            <circle cx="50" cy="50" r="5" stroke="red" fill="none"/>
+            <rect x="10" y="10" width="5" height="5" fill="blue"/>
+            <rect x="20" y="10" width="5" height="5" fill="blue" stroke="red"/>"##,
+    );
+    let layers = r##"<svg xmlns="http://www.w3.org/2000/svg"
+        xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"
+        width="100mm" height="100mm" viewBox="0 0 100 100">
+      <defs><line id="d" x1="0" y1="0" x2="1" y2="0" stroke="green"/></defs>
+      <line x1="1" y1="90" x2="2" y2="90" stroke="black"/>
+      <g inkscape:groupmode="layer" id="layer1" inkscape:label="Outline">
+        <line x1="1" y1="1" x2="2" y2="1" stroke="black"/>
+        <g><line x1="1" y1="2" x2="2" y2="2" stroke="red"/></g>
+      </g>
+      <g id="details"><use href="#d" x="5" y="5"/><rect x="10" y="10" width="5" height="5"/></g>
+      <g><line x1="1" y1="3" x2="2" y2="3" stroke="black"/></g>
+      <g inkscape:groupmode="layer" inkscape:label="Outline"><line x1="1" y1="4" x2="2" y2="4" stroke="black"/></g>
+    </svg>"##;
+    // (name, document, split, expected (pen name, paths, strokes))
+    type Case<'a> = (&'a str, &'a str, PenSplit, Vec<(&'a str, usize, usize)>);
+    let cases: Vec<Case> = vec![
+        (
+            "by colour",
+            &colours,
+            PenSplit::ByColour,
+            vec![("#000000", 2, 2), ("#ff0000", 3, 3), ("#0000ff", 1, 1)],
+        ),
+        ("single", &colours, PenSplit::Single, vec![("pen", 6, 6)]),
+        (
+            "by layer",
+            layers,
+            PenSplit::ByLayer,
+            vec![
+                (NO_LAYER, 1, 1),
+                ("Outline", 3, 3),
+                ("details", 2, 2),
+                ("layer 3", 1, 1),
+            ],
+        ),
+        (
+            "layers by colour",
+            layers,
+            PenSplit::ByColour,
+            vec![("#000000", 5, 5), ("#ff0000", 1, 1), ("#008000", 1, 1)],
+        ),
+    ];
+    for (name, svg, split, want) in cases {
+        for optimize in [false, true] {
+            let opts = SvgOptions {
+                pens: split,
+                optimize,
+                ..no_flip()
+            };
+            let (cmds, info) = run_info(svg, &opts);
+            let got: Vec<(&str, usize, usize)> = info
+                .pens
+                .iter()
+                .map(|p| (p.name.as_str(), p.paths, p.strokes))
+                .collect();
+            assert_eq!(got, want, "{name} optimize={optimize}");
+            let ev = events(&cmds);
+            // Pauses only between pens, each after a pen-up.
+            assert_eq!(ev.matches('P').count(), want.len() - 1, "{name}: {ev}");
+            assert!(!ev.starts_with('P') && !ev.ends_with('P'), "{name}: {ev}");
+            assert!(!ev.contains("DP") && !ev.contains("FP"), "{name}: {ev}");
+            // Each pen's section draws exactly its strokes.
+            let sections = per_pen(&cmds);
+            assert_eq!(sections.len(), want.len(), "{name}");
+            for (sec, pen) in sections.iter().zip(&info.pens) {
+                let len: f64 = sec
+                    .iter()
+                    .flat_map(|l| l.windows(2))
+                    .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+                    .sum();
+                assert!(
+                    (len - pen.drawn_mm).abs() < 1e-6,
+                    "{name} {}: {len} vs {}",
+                    pen.name,
+                    pen.drawn_mm
+                );
+            }
+            if split == PenSplit::ByColour && name == "by colour" {
+                let red = &info.pens[1];
+                assert_eq!(red.colour, Some([255, 0, 0]));
+                // Two 1 mm lines' worth of black.
+                assert!((info.pens[0].drawn_mm - 2.0).abs() < 1e-6);
+            }
+        }
+    }
+}
+
+#[test]
+fn pen_change_position() {
+    let svg = mm_doc(
+        100.0,
+        100.0,
+        r#"<line x1="10" y1="10" x2="20" y2="10" stroke="black"/>
+           <line x1="30" y1="10" x2="40" y2="10" stroke="red"/>
+           <line x1="50" y1="10" x2="60" y2="10" stroke="blue"/>"#,
+    );
+    // (change position, events, total travel)
+    let d0 = 200f64.sqrt();
+    let to = |x: f64, y: f64, p: [f64; 2]| (x - p[0]).hypot(y - p[1]);
+    let park = [0.0, 90.0];
+    let cases: Vec<(Option<[f64; 2]>, &str, f64)> = vec![
+        (None, "URDFUPRDFUPRDFU", d0 + 10.0 + 10.0),
+        (
+            Some(park),
+            "URDFURPRDFURPRDFU",
+            d0 + to(20.0, 10.0, park)
+                + to(30.0, 10.0, park)
+                + to(40.0, 10.0, park)
+                + to(50.0, 10.0, park),
+        ),
+    ];
+    for (pos, want, travel) in cases {
+        for optimize in [false, true] {
+            let opts = SvgOptions {
+                pen_change_position: pos,
+                optimize,
+                ..no_flip()
+            };
+            let (cmds, info) = run_info(&svg, &opts);
+            assert_eq!(events(&cmds), want, "{pos:?}");
+            assert!((info.travel_after_mm - travel).abs() < 1e-4, "{info:?}");
+            assert!((commanded_travel(&cmds) - info.travel_after_mm).abs() < 1e-6);
+            if let Some(p) = pos {
+                // The move right before each pause goes to the park position.
+                for (i, c) in cmds.iter().enumerate() {
+                    if matches!(c.item, Command::Pause { .. }) {
+                        let Command::Move(m) = cmds[i - 1].item else {
+                            panic!("no move before the pause")
+                        };
+                        assert!(close([m.target[0], m.target[1]], p, 1e-9));
+                        assert_eq!(m.kind, MoveKind::Rapid);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn ordering_cases() {
+    // (name, document body, expected polylines in drawing order)
+    type Case = (&'static str, &'static str, Vec<Vec<[f64; 2]>>);
+    let cases: Vec<Case> = vec![
+        (
+            "open path drawn end to start",
+            r#"<line x1="50" y1="50" x2="10" y2="10" stroke="black"/>"#,
+            vec![vec![[10.0, 10.0], [50.0, 50.0]]],
+        ),
+        (
+            "nearest first",
+            r#"<line x1="80" y1="0" x2="90" y2="0" stroke="black"/>
+               <line x1="40" y1="0" x2="50" y2="0" stroke="black"/>
+               <line x1="10" y1="0" x2="20" y2="0" stroke="black"/>"#,
+            vec![
+                vec![[10.0, 0.0], [20.0, 0.0]],
+                vec![[40.0, 0.0], [50.0, 0.0]],
+                vec![[80.0, 0.0], [90.0, 0.0]],
+            ],
+        ),
+        (
+            "closed loop rotated to the nearest vertex",
+            r#"<polygon points="50,50 60,50 60,60 50,60" stroke="black" fill="none"/>
+               <line x1="1" y1="0" x2="70" y2="70" stroke="black"/>"#,
+            vec![
+                vec![[1.0, 0.0], [70.0, 70.0]],
+                vec![
+                    [60.0, 60.0],
+                    [50.0, 60.0],
+                    [50.0, 50.0],
+                    [60.0, 50.0],
+                    [60.0, 60.0],
+                ],
+            ],
+        ),
+        (
+            "zig-zag by reversing every other line",
+            r#"<line x1="0" y1="1" x2="30" y2="1" stroke="black"/>
+               <line x1="0" y1="2" x2="30" y2="2" stroke="black"/>
+               <line x1="0" y1="3" x2="30" y2="3" stroke="black"/>"#,
+            vec![
+                vec![[0.0, 1.0], [30.0, 1.0]],
+                vec![[30.0, 2.0], [0.0, 2.0]],
+                vec![[0.0, 3.0], [30.0, 3.0]],
+            ],
+        ),
+    ];
+    for (name, body, want) in cases {
+        let svg = mm_doc(100.0, 100.0, body);
+        let opts = SvgOptions {
+            optimize: true,
+            ..no_flip()
+        };
+        let (cmds, info) = run_info(&svg, &opts);
+        let got = polylines(&cmds);
+        assert_polylines(name, &got, &want);
+        assert!(info.travel_after_mm <= info.travel_before_mm + 1e-9);
+        assert!((commanded_travel(&cmds) - info.travel_after_mm).abs() < 1e-6);
+        // The same segments as in document order.
+        let doc = run(&svg, &no_flip());
+        assert_eq!(segments(&got), segments(&polylines(&doc)), "{name}");
+    }
+}
+
+/// Random stroke sets straight through the optimiser.
+fn random_shapes(seed: u64, n: usize) -> Vec<(Vec<[f64; 2]>, bool)> {
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407)
+        | 1;
+    let mut rnd = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            let c = [rnd() * 500.0, rnd() * 500.0];
+            let closed = rnd() < 0.5;
+            let k = 2 + (rnd() * 6.0) as usize;
+            let pts = (0..k)
+                .map(|_| [c[0] + rnd() * 5.0, c[1] + rnd() * 5.0])
+                .collect();
+            (pts, closed)
+        })
+        .collect()
+}
+
+fn check_tour(start: [f64; 2], set: &[(Vec<[f64; 2]>, bool)]) -> (f64, f64) {
+    let shapes: Vec<order::Shape> = set
+        .iter()
+        .map(|(p, c)| order::Shape { pts: p, closed: *c })
+        .collect();
+    let tour = order::optimize(start, &shapes);
+    let mut seen: Vec<usize> = tour.iter().map(|p| p.index).collect();
+    seen.sort_unstable();
+    assert_eq!(
+        seen,
+        (0..set.len()).collect::<Vec<_>>(),
+        "not a permutation"
+    );
+    for p in &tour {
+        let s = &shapes[p.index];
+        assert!(p.rotate < s.pts.len());
+        assert!(!(s.closed && p.reversed));
+        assert!(s.closed || p.rotate == 0);
+    }
+    let before = order::travel(start, &shapes, &order::identity(set.len())).0;
+    let after = order::travel(start, &shapes, &tour).0;
+    (before, after)
+}
+
+#[test]
+fn ordering_many_paths() {
+    for n in [1, 2, 3, 10, 1000, 10_000] {
+        let set = random_shapes(n as u64, n);
+        let t = std::time::Instant::now();
+        let (before, after) = check_tour([0.0, 0.0], &set);
+        println!(
+            "{n} paths: travel {before:.0} -> {after:.0} mm in {:?}",
+            t.elapsed()
+        );
+        assert!(after <= before + 1e-9);
+        if n >= 1000 {
+            assert!(after < 0.2 * before, "{before} -> {after}");
+        }
+    }
+}
+
+#[test]
+fn two_pens_example() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/jobs/two-pens.svg"
+    );
+    let data = std::fs::read(path).unwrap();
+    assert!(data.len() < 50_000);
+    for hatch in [
+        None,
+        Some(Hatch {
+            spacing_mm: 1.5,
+            angle_deg: 45.0,
+        }),
+    ] {
+        let opts = SvgOptions {
+            hatch,
+            ..Default::default()
+        };
+        let (cmds, info) = parse_with_info(&data, &target(), &opts).unwrap();
+        let names: Vec<&str> = info.pens.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["#000000", "#ff0000"], "{info:?}");
+        assert_eq!(events(&cmds).matches('P').count(), 1);
+        let doc = parse(
+            &data,
+            &target(),
+            &SvgOptions {
+                optimize: false,
+                ..opts.clone()
+            },
+        )
+        .unwrap();
+        assert_eq!(segments(&polylines(&cmds)), segments(&polylines(&doc)));
+        assert!((commanded_travel(&cmds) - info.travel_after_mm).abs() < 1e-6);
+        assert!((commanded_travel(&doc) - info.travel_before_mm).abs() < 1e-6);
+        println!(
+            "two-pens.svg hatch={hatch:?}: pen-up travel {:.0} -> {:.0} mm ({:.0}% less)",
+            info.travel_before_mm,
+            info.travel_after_mm,
+            100.0 * (1.0 - info.travel_after_mm / info.travel_before_mm)
+        );
+        for p in &info.pens {
+            println!(
+                "  {}: {} paths, {} strokes ({} hatch), {:.0} mm drawn, travel {:.0} -> {:.0} mm",
+                p.name,
+                p.paths,
+                p.strokes,
+                p.hatch_lines,
+                p.drawn_mm,
+                p.travel_before_mm,
+                p.travel_after_mm
+            );
+        }
+        assert!(info.travel_after_mm < 0.5 * info.travel_before_mm);
+        assert_eq!(hatch.is_some(), info.pens.iter().any(|p| p.hatch_lines > 0));
+    }
+}
+
+#[test]
+fn drawing_example_is_one_pen() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/jobs/drawing.svg"
+    );
+    let data = std::fs::read(path).unwrap();
+    let (cmds, info) = parse_with_info(&data, &target(), &SvgOptions::default()).unwrap();
+    assert_eq!(info.pens.len(), 1, "{info:?}");
+    assert!(!events(&cmds).contains('P'));
+    assert!(info.travel_after_mm <= info.travel_before_mm);
+    println!(
+        "drawing.svg: pen-up travel {:.0} -> {:.0} mm",
+        info.travel_before_mm, info.travel_after_mm
+    );
+}
+
+/// Winding number of `p` around the closed rings.
+fn winding(p: [f64; 2], rings: &[Vec<[f64; 2]>]) -> i32 {
+    let mut w = 0;
+    for r in rings {
+        for i in 0..r.len() {
+            let (a, b) = (r[i], r[(i + 1) % r.len()]);
+            let cross = (b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1]);
+            if a[1] <= p[1] && b[1] > p[1] && cross > 0.0 {
+                w += 1;
+            } else if a[1] > p[1] && b[1] <= p[1] && cross < 0.0 {
+                w -= 1;
+            }
+        }
+    }
+    w
+}
+
+#[test]
+fn hatch_fill() {
+    let square = |x: f64, y: f64, s: f64| vec![[x, y], [x + s, y], [x + s, y + s], [x, y + s]];
+    let rev = |mut v: Vec<[f64; 2]>| {
+        v.reverse();
+        v
+    };
+    let circle: Vec<[f64; 2]> = (0..400)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 400.0;
+            [50.0 + 30.0 * a.cos(), 50.0 + 30.0 * a.sin()]
+        })
+        .collect();
+    // (name, document body, outline rings for checking, even-odd, spacing,
+    //  angle, expected hatch lines (None: don't check), covered area)
+    type Case = (
+        &'static str,
+        &'static str,
+        Vec<Vec<[f64; 2]>>,
+        bool,
+        f64,
+        f64,
+        Option<usize>,
+        f64,
+    );
+    let cases: Vec<Case> = vec![
+        (
+            "square, horizontal",
+            r#"<rect x="10" y="10" width="20" height="20" fill="black"/>"#,
+            vec![square(10.0, 10.0, 20.0)],
+            false,
+            1.0,
+            0.0,
+            Some(20),
+            400.0,
+        ),
+        (
+            "square, vertical",
+            r#"<rect x="10" y="10" width="20" height="20" fill="black"/>"#,
+            vec![square(10.0, 10.0, 20.0)],
+            false,
+            2.0,
+            90.0,
+            Some(10),
+            400.0,
+        ),
+        (
+            "square, 30 degrees",
+            r#"<rect x="10" y="10" width="20" height="20" fill="black"/>"#,
+            vec![square(10.0, 10.0, 20.0)],
+            false,
+            0.5,
+            30.0,
+            None,
+            400.0,
+        ),
+        (
+            "ring, even-odd",
+            r#"<path fill-rule="evenodd" d="M 10 10 H 50 V 50 H 10 Z M 20 20 H 40 V 40 H 20 Z"/>"#,
+            vec![square(10.0, 10.0, 40.0), square(20.0, 20.0, 20.0)],
+            true,
+            1.0,
+            0.0,
+            Some(40 + 20),
+            1600.0 - 400.0,
+        ),
+        (
+            "ring, non-zero, same direction: hole filled",
+            r#"<path d="M 10 10 H 50 V 50 H 10 Z M 20 20 H 40 V 40 H 20 Z"/>"#,
+            vec![square(10.0, 10.0, 40.0), square(20.0, 20.0, 20.0)],
+            false,
+            1.0,
+            0.0,
+            Some(40),
+            1600.0,
+        ),
+        (
+            "ring, non-zero, opposite direction: hole kept",
+            r#"<path d="M 10 10 H 50 V 50 H 10 Z M 20 20 V 40 H 40 V 20 Z"/>"#,
+            vec![square(10.0, 10.0, 40.0), rev(square(20.0, 20.0, 20.0))],
+            false,
+            1.0,
+            0.0,
+            Some(60),
+            1200.0,
+        ),
+        (
+            "circle, 45 degrees",
+            r#"<circle cx="50" cy="50" r="30" fill="red" stroke="black"/>"#,
+            vec![circle.clone()],
+            false,
+            0.7,
+            45.0,
+            None,
+            std::f64::consts::PI * 900.0,
+        ),
+    ];
+    for (name, body, rings, even_odd, spacing, angle, count, area) in cases {
+        let svg = mm_doc(100.0, 100.0, body);
+        let opts = SvgOptions {
+            hatch: Some(Hatch {
+                spacing_mm: spacing,
+                angle_deg: angle,
+            }),
+            pens: PenSplit::Single,
+            ..no_flip()
+        };
+        let (cmds, info) = run_info(&svg, &opts);
+        let lines = polylines(&cmds);
+        // Outlines first (document order), then the hatch lines.
+        let hatch = &lines[rings.len()..];
+        assert_eq!(info.pens[0].hatch_lines, hatch.len(), "{name}");
+        if let Some(n) = count {
+            assert_eq!(hatch.len(), n, "{name}");
+        }
+        let (sin, cos) = angle.to_radians().sin_cos();
+        let mut offsets: Vec<f64> = Vec::new();
+        let mut covered = 0.0;
+        for l in hatch {
+            assert_eq!(l.len(), 2, "{name}: {l:?}");
+            let (a, b) = (l[0], l[1]);
+            let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+            covered += len * spacing;
+            // Direction.
+            let cross = ((b[0] - a[0]) * sin - (b[1] - a[1]) * cos) / len;
+            assert!(cross.abs() < 1e-6, "{name}: {l:?} not at {angle}°");
+            // Inside: sample points along the line.
+            for f in [0.5, 0.01, 0.99, 0.25, 0.75] {
+                let p = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
+                let w = winding(p, &rings);
+                let inside = if even_odd { w % 2 != 0 } else { w != 0 };
+                assert!(inside, "{name}: {p:?} of {l:?} outside (winding {w})");
+            }
+            offsets.push(-a[0] * sin + a[1] * cos);
+        }
+        // Spacing: offsets are on the grid (k + 1/2) * spacing, all present.
+        offsets.sort_by(f64::total_cmp);
+        offsets.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        for w in offsets.windows(2) {
+            assert!(
+                (w[1] - w[0] - spacing).abs() < 1e-6,
+                "{name}: gap {}",
+                w[1] - w[0]
+            );
+        }
+        for o in &offsets {
+            let k = o / spacing - 0.5;
+            assert!((k - k.round()).abs() < 1e-6, "{name}: offset {o}");
+        }
+        // Lines cover the area (each stands for a strip spacing wide).
+        assert!(
+            (covered - area).abs() < 0.03 * area,
+            "{name}: covered {covered} of {area}"
+        );
+    }
+}
+
+#[test]
+fn hatch_not_for_unfilled_and_pens_follow_fill() {
+    let svg = mm_doc(
+        100.0,
+        100.0,
+        r#"<rect x="10" y="10" width="20" height="20" fill="none" stroke="black"/>
+           <rect x="40" y="10" width="20" height="20" fill="blue" stroke="red"/>"#,
+    );
+    let opts = SvgOptions {
+        hatch: Some(Hatch {
+            spacing_mm: 2.0,
+            angle_deg: 0.0,
+        }),
+        ..no_flip()
+    };
+    let (_, info) = run_info(&svg, &opts);
+    let got: Vec<(&str, usize, usize)> = info
+        .pens
+        .iter()
+        .map(|p| (p.name.as_str(), p.strokes, p.hatch_lines))
+        .collect();
+    assert_eq!(
+        got,
+        [("#000000", 1, 0), ("#ff0000", 1, 0), ("#0000ff", 10, 10)]
+    );
+}
+
+#[test]
+fn bad_options() {
+    let svg = mm_doc(10.0, 10.0, r#"<rect width="5" height="5"/>"#);
+    let hatch = |spacing_mm, angle_deg| SvgOptions {
+        hatch: Some(Hatch {
+            spacing_mm,
+            angle_deg,
+        }),
+        ..Default::default()
+    };
+    let cases = [
+        (hatch(0.0, 0.0), "spacing"),
+        (hatch(-1.0, 0.0), "spacing"),
+        (hatch(f64::NAN, 0.0), "spacing"),
+        (hatch(1.0, f64::INFINITY), "angle"),
+        (hatch(1e-9, 0.0), "too dense"),
+        (
+            SvgOptions {
+                pen_change_position: Some([f64::NAN, 0.0]),
+                ..Default::default()
+            },
+            "pen change",
+        ),
+    ];
+    for (opts, want) in cases {
+        let e = parse(svg.as_bytes(), &target(), &opts).unwrap_err();
+        assert!(e.message.contains(want), "{want}: {e}");
+    }
+}
+
+proptest! {
+    #[test]
+    fn optimized_order_covers_everything_and_travels_less(
+        paths in proptest::collection::vec(
+            (proptest::collection::vec((0u32..400, 0u32..400), 2..6), any::<bool>(), 0usize..3),
+            1..25),
+        start in (0u32..400, 0u32..400),
+    ) {
+        let body: String = paths.iter().map(|(pts, closed, colour)| {
+            let pts: Vec<String> = pts.iter().map(|&(x, y)| format!("{},{}", x / 4, y / 4)).collect();
+            let tag = if *closed { "polygon" } else { "polyline" };
+            let colour = ["black", "red", "blue"][*colour];
+            format!("<{tag} points=\"{}\" fill=\"none\" stroke=\"{colour}\"/>\n", pts.join(" "))
+        }).collect();
+        let svg = mm_doc(100.0, 100.0, &body);
+        let mut t = target();
+        t.start[0] = start.0 as f64 / 4.0;
+        t.start[1] = start.1 as f64 / 4.0;
+        let opts = |optimize| SvgOptions { optimize, ..no_flip() };
+        let (a, ia) = parse_with_info(svg.as_bytes(), &t, &opts(true)).unwrap();
+        let (b, ib) = parse_with_info(svg.as_bytes(), &t, &opts(false)).unwrap();
+        prop_assert!(ia.travel_after_mm <= ia.travel_before_mm + 1e-9);
+        prop_assert!((ia.travel_before_mm - ib.travel_after_mm).abs() < 1e-6);
+        prop_assert_eq!(ia.pens.len(), ib.pens.len());
+        for (pa, pb) in ia.pens.iter().zip(&ib.pens) {
+            prop_assert_eq!(&pa.name, &pb.name);
+        }
+        // Same segments per pen, every closed path still closed.
+        let (sa, sb) = (per_pen(&a), per_pen(&b));
+        prop_assert_eq!(sa.len(), sb.len());
+        for (x, y) in sa.iter().zip(&sb) {
+            prop_assert_eq!(segments(x), segments(y));
+        }
+    }
+
+    #[test]
+    fn optimizer_never_worse(seed in any::<u64>(), n in 1usize..60, start in (0.0f64..500.0, 0.0f64..500.0)) {
+        let set = random_shapes(seed, n);
+        let (before, after) = check_tour([start.0, start.1], &set);
+        prop_assert!(after <= before + 1e-9, "{} -> {}", before, after);
+    }
+
+    #[test]
+    fn options_soup_never_panics(parts in proptest::collection::vec(prop_oneof![
+        Just("<svg xmlns=\"http://www.w3.org/2000/svg\""), Just(">"), Just("</svg>"),
+        Just("<g transform=\""), Just("\">"), Just("</g>"), Just("<path d=\""),
+        Just("\"/>"), Just(" width=\""), Just(" viewBox=\""), Just("M"), Just("L"),
+        Just("C"), Just("A"), Just("Z"), Just(" "), Just("-"), Just("1e9"), Just("0"),
+        Just("3.5"), Just("rotate("), Just(")"), Just("<circle r=\""), Just("<use href=\"#a\"/>"),
+        Just(" id=\"a\""), Just("<rect rx=\""), Just(" height=\""), Just("scale("),
+        Just(" fill=\"red\""), Just(" stroke=\"blue\""), Just(" fill-rule=\"evenodd\""),
+        Just("<g>"), Just("7"), Just("20"),
+    ], 0..40), spacing in 0.05f64..5.0, angle in -400.0f64..400.0, split in 0..3usize,
+       optimize in any::<bool>(), park in any::<bool>()) {
+        let doc: String = parts.concat();
+        let opts = SvgOptions {
+            hatch: Some(Hatch { spacing_mm: spacing, angle_deg: angle }),
+            pens: [PenSplit::ByColour, PenSplit::ByLayer, PenSplit::Single][split],
+            optimize,
+            pen_change_position: park.then_some([1.0, 2.0]),
+            ..Default::default()
+        };
+        if let Ok((cmds, info)) = parse_with_info(doc.as_bytes(), &target(), &opts) {
+            let _ = polylines(&cmds);
+            prop_assert!(info.travel_after_mm <= info.travel_before_mm + 1e-6);
         }
     }
 }
