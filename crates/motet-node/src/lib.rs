@@ -11,6 +11,7 @@
 
 pub mod board;
 pub mod channel;
+pub mod graph;
 pub mod node;
 pub mod tool;
 

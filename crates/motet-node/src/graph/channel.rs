@@ -1,0 +1,224 @@
+//! Graph channels (distinct from the trajectory [`crate::channel::Channel`]):
+//! one actuator's step output driven by a motion stream.
+//!
+//! Two target inputs are summed into `target_position` (steps, f64; the
+//! inputs' ratio is the channel's `(units, steps)`, set with
+//! [`super::GraphBuilder::channel_ratio`]). Each frame the target is optionally
+//! filtered, `f = (f·(N−1) + t)/N`, and when `|f − current| > 0.5` the channel
+//! takes one step toward it: at most one step per frame, and no more often than
+//! the maximum pulse rate. A step that would leave the limits (world units) is
+//! neither emitted nor counted, so `current_position` is always the position
+//! the motor was actually driven to.
+
+use super::component::{non_negative, Kind, ParamError, Phase};
+use super::io::{Ctx, StepOut};
+use super::math::round;
+use super::port::{Port, PortSpec, Unit};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GraphChannel {
+    /// Filter length N (≤ 1: no filter).
+    pub filter: f64,
+    pub invert: bool,
+    /// Steps per second; 0 = only the frame rate limits.
+    pub max_pulse_rate: f64,
+    /// World units; −∞/+∞ for none.
+    pub lower: f64,
+    pub upper: f64,
+    /// Output port and signal code the steps go to on the wire.
+    pub signal: Option<(u8, u8)>,
+    target: f64,
+    filtered: f64,
+    current: f64,
+    since_us: f64,
+}
+
+impl Default for GraphChannel {
+    fn default() -> Self {
+        GraphChannel::new()
+    }
+}
+
+impl GraphChannel {
+    pub const TARGET: u8 = 0;
+    pub const TARGET_B: u8 = 1;
+    pub const POSITION: u8 = 2;
+
+    pub const FILTER: u8 = 0;
+    pub const INVERT: u8 = 1;
+    pub const MAX_PULSE_RATE: u8 = 2;
+    pub const LOWER: u8 = 3;
+    pub const UPPER: u8 = 4;
+
+    pub fn new() -> GraphChannel {
+        GraphChannel {
+            filter: 0.0,
+            invert: false,
+            max_pulse_rate: 0.0,
+            lower: f64::NEG_INFINITY,
+            upper: f64::INFINITY,
+            signal: None,
+            target: 0.0,
+            filtered: 0.0,
+            current: 0.0,
+            since_us: f64::INFINITY,
+        }
+    }
+
+    /// Steps go to wire output `port` as signal `code`.
+    pub fn output(mut self, port: u8, code: u8) -> Self {
+        self.signal = Some((port, code));
+        self
+    }
+
+    pub fn filtering(mut self, n: f64) -> Self {
+        self.filter = n;
+        self
+    }
+
+    pub fn inverted(mut self) -> Self {
+        self.invert = true;
+        self
+    }
+
+    pub fn limits(mut self, lower: f64, upper: f64) -> Self {
+        self.lower = lower;
+        self.upper = upper;
+        self
+    }
+
+    pub fn pulse_rate(mut self, steps_per_s: f64) -> Self {
+        self.max_pulse_rate = steps_per_s;
+        self
+    }
+
+    /// Target, steps.
+    pub fn target_position(&self) -> f64 {
+        self.target
+    }
+
+    /// Steps taken (counted in the positive direction, before inversion).
+    pub fn current_position(&self) -> f64 {
+        self.current
+    }
+}
+
+impl Kind for GraphChannel {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("target", Unit::Any),
+        PortSpec::input("target_b", Unit::Any),
+        PortSpec::output("position", Unit::Any),
+    ];
+    const PHASE: Phase = Phase::Channel;
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        ports[0].last = ports[0].value;
+        ports[1].last = ports[1].value;
+        self.target = ports[0].value + ports[1].value;
+        self.filtered = if self.filter > 1.0 {
+            (self.filtered * (self.filter - 1.0) + self.target) / self.filter
+        } else {
+            self.target
+        };
+        self.since_us += ctx.dt * 1e6;
+        let diff = self.filtered - self.current;
+        let dir = if diff > 0.5 {
+            1.0
+        } else if diff < -0.5 {
+            -1.0
+        } else {
+            return;
+        };
+        if self.max_pulse_rate > 0.0 && self.since_us * self.max_pulse_rate < 1e6 {
+            return;
+        }
+        let next = self.current + dir;
+        // Limits in world units, compared in steps.
+        let world = ports[0].to_world(next);
+        if world < self.lower || world > self.upper {
+            return;
+        }
+        self.current = next;
+        ports[2].value = next;
+        self.since_us = 0.0;
+        let forward = (dir > 0.0) != self.invert;
+        let _ = ctx.out.steps.push(StepOut {
+            channel: ctx.comp,
+            forward,
+        });
+        if let Some((port, code)) = self.signal {
+            if let Some(s) = ctx.out.ports.get_mut(port as usize) {
+                s.set(code, forward);
+            }
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        if v.is_nan() {
+            return Err(ParamError::BadValue);
+        }
+        match id {
+            Self::FILTER => {
+                self.filter = non_negative(v)?;
+                self.filtered = self.target;
+            }
+            Self::INVERT => self.invert = v != 0.0,
+            Self::MAX_PULSE_RATE => self.max_pulse_rate = non_negative(v)?,
+            Self::LOWER if v <= self.upper && v != f64::INFINITY => self.lower = v,
+            Self::UPPER if v >= self.lower && v != f64::NEG_INFINITY => self.upper = v,
+            Self::LOWER | Self::UPPER => return Err(ParamError::BadValue),
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+
+    fn param(&self, _ports: &[Port], id: u8) -> Option<f64> {
+        match id {
+            Self::FILTER => Some(self.filter),
+            Self::MAX_PULSE_RATE => Some(self.max_pulse_rate),
+            Self::LOWER => Some(self.lower),
+            Self::UPPER => Some(self.upper),
+            _ => None,
+        }
+    }
+
+    /// Reset: the channel's target and position become the reset input's value
+    /// (the other input is cleared); no step.
+    fn reset_input(&mut self, ports: &mut [Port], port: usize) -> bool {
+        if port < 2 {
+            let other = 1 - port;
+            ports[other].value = 0.0;
+            ports[other].last = 0.0;
+            self.target = ports[port].value;
+            self.filtered = self.target;
+            self.current = round(self.target);
+            ports[2].value = self.current;
+            ports[2].last = self.current;
+        }
+        false
+    }
+
+    fn invertible(&self) -> bool {
+        true
+    }
+
+    fn inverse(&self, ports: &[Port], input: usize, _outs: &[f64]) -> Option<f64> {
+        match input {
+            0 => Some(self.current - ports[1].value),
+            1 => Some(self.current - ports[0].value),
+            _ => None,
+        }
+    }
+
+    fn reset_output(&mut self, ports: &mut [Port], _port: usize) {
+        // Declaring where the motor is: position and target follow.
+        self.current = round(ports[2].value);
+        self.target = self.current;
+        self.filtered = self.current;
+        ports[0].value = self.current;
+        ports[0].last = self.current;
+        ports[1].value = 0.0;
+        ports[1].last = 0.0;
+    }
+}

@@ -1,0 +1,50 @@
+//! Typed errors from building and updating a graph.
+
+use super::port::PortRef;
+
+/// Which fixed capacity ran out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Capacity {
+    Components,
+    Mappings,
+    /// More channels than a frame's step list holds ([`super::MAX_FRAME_STEPS`]).
+    Channels,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GraphError {
+    /// No component with this index.
+    UnknownComponent(u8),
+    /// The component has no port with this index.
+    UnknownPort(PortRef),
+    /// A mapping's source must be an output (taps may read inputs: use `tap`).
+    NotAnOutput(PortRef),
+    /// A mapping's target (or a tap's listener) must be an input.
+    NotAnInput(PortRef),
+    /// The two ports carry different quantities (e.g. a length into an angle).
+    UnitMismatch { from: PortRef, to: PortRef },
+    /// An INCREMENTAL mapping touches a level port (analog reading, button,
+    /// speed, flag), which only has an absolute meaning.
+    ModeMismatch { from: PortRef, to: PortRef },
+    /// An input receives an ABSOLUTE mapping and any other mapping: the result
+    /// would depend on the order of transmission.
+    AbsoluteFanIn(PortRef),
+    /// The same source is mapped onto the same target twice.
+    DuplicateMapping { from: PortRef, to: PortRef },
+    /// An ABSOLUTE mapping whose target component runs before its source in the
+    /// frame (a later component into an earlier one, or a component into
+    /// itself). Every cycle contains such a backward mapping; INCREMENTAL ones
+    /// are delayed by one frame, ABSOLUTE ones would need the same frame and are
+    /// refused.
+    BackwardAbsolute { from: PortRef, to: PortRef },
+    /// A ratio that is zero, infinite or NaN.
+    BadRatio(PortRef),
+    /// The component has no parameter with this id.
+    UnknownParam { comp: u8, param: u8 },
+    /// The value is out of range for the parameter (NaN, negative speed, ...).
+    BadValue { comp: u8, param: u8 },
+    /// A fixed-capacity table is full.
+    CapacityExceeded(Capacity),
+    /// A reset or read walked further than the graph has components (a cycle).
+    TooDeep,
+}

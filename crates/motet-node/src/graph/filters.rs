@@ -1,0 +1,206 @@
+//! Filters: scaling (1D, 2D) and thresholds.
+
+use super::component::{finite, Kind, ParamError};
+use super::io::Ctx;
+use super::port::{Mode, Port, PortSpec, Unit};
+
+/// `out = in × ratio`. In INCREMENTAL mode each frame's change of the input is
+/// scaled (a live ratio change affects only later motion); in ABSOLUTE mode the
+/// output is the scaled absolute input (a ratio change moves the output at
+/// once, e.g. Wheelbot's ellipse stretch).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScalingFilter1D {
+    pub ratio: f64,
+    pub mode: Mode,
+}
+
+impl ScalingFilter1D {
+    pub const IN: u8 = 0;
+    pub const OUT: u8 = 1;
+    pub const RATIO: u8 = 0;
+
+    pub fn new(ratio: f64, mode: Mode) -> ScalingFilter1D {
+        ScalingFilter1D { ratio, mode }
+    }
+}
+
+impl Kind for ScalingFilter1D {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("in", Unit::Any),
+        PortSpec::output("out", Unit::Any),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        let d = ports[0].take_delta();
+        match self.mode {
+            Mode::Incremental => ports[1].value += d * self.ratio,
+            Mode::Absolute => ports[1].value = ports[0].value * self.ratio,
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::RATIO => self.ratio = finite(v)?,
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+
+    fn param(&self, _ports: &[Port], id: u8) -> Option<f64> {
+        (id == Self::RATIO).then_some(self.ratio)
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
+        ports[1].value = ports[0].value * self.ratio;
+        true
+    }
+
+    fn invertible(&self) -> bool {
+        self.ratio != 0.0
+    }
+
+    fn inverse(&self, _ports: &[Port], _input: usize, outs: &[f64]) -> Option<f64> {
+        (self.ratio != 0.0).then(|| outs[1] / self.ratio)
+    }
+}
+
+/// Two inputs scaled by the same ratio (see [`ScalingFilter1D`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScalingFilter2D {
+    pub ratio: f64,
+    pub mode: Mode,
+}
+
+impl ScalingFilter2D {
+    pub const IN_X: u8 = 0;
+    pub const IN_Y: u8 = 1;
+    pub const OUT_X: u8 = 2;
+    pub const OUT_Y: u8 = 3;
+    pub const RATIO: u8 = 0;
+
+    pub fn new(ratio: f64, mode: Mode) -> ScalingFilter2D {
+        ScalingFilter2D { ratio, mode }
+    }
+}
+
+impl Kind for ScalingFilter2D {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("in_x", Unit::Any),
+        PortSpec::input("in_y", Unit::Any),
+        PortSpec::output("out_x", Unit::Any),
+        PortSpec::output("out_y", Unit::Any),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        for i in 0..2 {
+            let d = ports[i].take_delta();
+            match self.mode {
+                Mode::Incremental => ports[i + 2].value += d * self.ratio,
+                Mode::Absolute => ports[i + 2].value = ports[i].value * self.ratio,
+            }
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::RATIO => self.ratio = finite(v)?,
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+
+    fn param(&self, _ports: &[Port], id: u8) -> Option<f64> {
+        (id == Self::RATIO).then_some(self.ratio)
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], port: usize) -> bool {
+        ports[port + 2].value = ports[port].value * self.ratio;
+        true
+    }
+
+    fn invertible(&self) -> bool {
+        self.ratio != 0.0
+    }
+
+    fn inverse(&self, _ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
+        (self.ratio != 0.0).then(|| outs[input + 2] / self.ratio)
+    }
+}
+
+/// Clamps its input between `lower` and `upper` and flags where it is: the
+/// flag output is −1 below, 0 inside, +1 above. `crossings` counts flag
+/// changes (the main loop's substitute for callbacks).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThresholdGenerator {
+    pub lower: f64,
+    pub upper: f64,
+    crossings: u32,
+}
+
+impl ThresholdGenerator {
+    pub const IN: u8 = 0;
+    pub const OUT: u8 = 1;
+    pub const FLAG: u8 = 2;
+    pub const LOWER: u8 = 0;
+    pub const UPPER: u8 = 1;
+
+    pub fn new(lower: f64, upper: f64) -> ThresholdGenerator {
+        ThresholdGenerator {
+            lower,
+            upper,
+            crossings: 0,
+        }
+    }
+
+    pub fn crossings(&self) -> u32 {
+        self.crossings
+    }
+}
+
+impl Kind for ThresholdGenerator {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("in", Unit::Any),
+        PortSpec::output("out", Unit::Any),
+        PortSpec::level_out("flag", Unit::Scalar),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        let v = ports[0].value;
+        ports[0].last = v;
+        let flag = if v > self.upper {
+            1.0
+        } else if v < self.lower {
+            -1.0
+        } else {
+            0.0
+        };
+        if flag != ports[2].value {
+            self.crossings += 1;
+        }
+        ports[2].value = flag;
+        ports[1].value = v.clamp(self.lower, self.upper);
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        let v = if v.is_nan() {
+            return Err(ParamError::BadValue);
+        } else {
+            v
+        };
+        match id {
+            Self::LOWER if v <= self.upper => self.lower = v,
+            Self::UPPER if v >= self.lower => self.upper = v,
+            Self::LOWER | Self::UPPER => return Err(ParamError::BadValue),
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
+        ports[1].value = ports[0].value.clamp(self.lower, self.upper);
+        true
+    }
+}

@@ -1,0 +1,106 @@
+//! Homing: seek at a speed until a limit input, back off, then reset the chain
+//! to the home position without generating steps.
+
+use super::component::{finite, non_negative, positive, Kind, ParamError};
+use super::io::Ctx;
+use super::port::{Port, PortSpec, Unit};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HomingState {
+    Idle,
+    Seeking,
+    /// Backing off; distance still to go (block units).
+    BackingOff(f64),
+    Done,
+}
+
+/// Per-axis homing. Its output moves by `speed × dt` per frame (the sign of
+/// `speed` is the seek direction) until the limit input (a level port, e.g.
+/// from a [`super::inputs::Button`] in ABSOLUTE mode) exceeds 0.5; then it moves
+/// back by `backoff` at the same speed, and asks the graph to
+/// `reset_deep(output, home)`, so the chain reads `home` without a step.
+/// Parameter `START` (any value) starts a cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Homing {
+    pub speed: f64,
+    pub backoff: f64,
+    /// Home position, world units of the output port.
+    pub home: f64,
+    state: HomingState,
+    reset: Option<(u8, f64)>,
+}
+
+impl Homing {
+    pub const LIMIT: u8 = 0;
+    pub const OUT: u8 = 1;
+    pub const START: u8 = 0;
+    pub const SPEED: u8 = 1;
+    pub const BACKOFF: u8 = 2;
+    pub const HOME: u8 = 3;
+
+    pub fn new(speed: f64, backoff: f64, home: f64) -> Homing {
+        Homing {
+            speed,
+            backoff,
+            home,
+            state: HomingState::Idle,
+            reset: None,
+        }
+    }
+
+    pub fn state(&self) -> HomingState {
+        self.state
+    }
+}
+
+impl Kind for Homing {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::level_in("limit", Unit::Scalar),
+        PortSpec::output("out", Unit::Any),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        match self.state {
+            HomingState::Seeking => {
+                if ports[0].value > 0.5 {
+                    self.state = HomingState::BackingOff(self.backoff);
+                } else {
+                    ports[1].value += self.speed * ctx.dt;
+                }
+            }
+            HomingState::BackingOff(left) => {
+                let step = self.speed.abs() * ctx.dt;
+                let mv = step.min(left);
+                ports[1].value -= mv.copysign(self.speed);
+                let left = left - mv;
+                if left <= 0.0 {
+                    self.state = HomingState::Done;
+                    self.reset = Some((Self::OUT, self.home));
+                } else {
+                    self.state = HomingState::BackingOff(left);
+                }
+            }
+            HomingState::Idle | HomingState::Done => {}
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::START => self.state = HomingState::Seeking,
+            Self::SPEED => {
+                let v = finite(v)?;
+                positive(v.abs())?;
+                self.speed = v;
+            }
+            Self::BACKOFF => self.backoff = non_negative(v)?,
+            Self::HOME => self.home = finite(v)?,
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+
+    fn take_reset(&mut self) -> Option<(u8, f64)> {
+        self.reset.take()
+    }
+}

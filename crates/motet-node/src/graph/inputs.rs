@@ -1,0 +1,343 @@
+//! Hardware input components: analog inputs, buttons (digital inputs),
+//! quadrature encoders and motion-stream input ports.
+
+use super::component::{finite, non_negative, Kind, ParamError, Phase};
+use super::io::{Ctx, Inputs, MAX_HW};
+use super::port::{Port, PortSpec, Unit};
+use super::wire::CODES;
+
+fn hw_index(hw: u8) -> usize {
+    (hw as usize).min(MAX_HW - 1)
+}
+
+/// An analog reading mapped linearly from `(floor_raw → floor_value)` to
+/// `(ceiling_raw → ceiling_value)` and clamped between the two values, after an
+/// exponential average over `average` samples and a deadband (raw readings
+/// within `deadband_width` of `deadband_center` read as the centre).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalogInput {
+    pub hw: u8,
+    pub floor_value: f64,
+    pub floor_raw: f64,
+    pub ceiling_value: f64,
+    pub ceiling_raw: f64,
+    pub deadband_center: f64,
+    pub deadband_width: f64,
+    pub average: f64,
+    avg: Option<f64>,
+}
+
+impl AnalogInput {
+    pub const OUT: u8 = 0;
+    pub const FLOOR_VALUE: u8 = 0;
+    pub const FLOOR_RAW: u8 = 1;
+    pub const CEILING_VALUE: u8 = 2;
+    pub const CEILING_RAW: u8 = 3;
+    pub const DEADBAND_CENTER: u8 = 4;
+    pub const DEADBAND_WIDTH: u8 = 5;
+    pub const AVERAGE: u8 = 6;
+
+    /// Raw 0..1023 read as 0..1, no deadband, no averaging.
+    pub fn new(hw: u8) -> AnalogInput {
+        AnalogInput {
+            hw,
+            floor_value: 0.0,
+            floor_raw: 0.0,
+            ceiling_value: 1.0,
+            ceiling_raw: 1023.0,
+            deadband_center: 0.0,
+            deadband_width: 0.0,
+            average: 1.0,
+            avg: None,
+        }
+    }
+
+    pub fn floor(mut self, value: f64, raw: f64) -> Self {
+        self.floor_value = value;
+        self.floor_raw = raw;
+        self
+    }
+
+    pub fn ceiling(mut self, value: f64, raw: f64) -> Self {
+        self.ceiling_value = value;
+        self.ceiling_raw = raw;
+        self
+    }
+
+    pub fn deadband(mut self, center_raw: f64, width_raw: f64) -> Self {
+        self.deadband_center = center_raw;
+        self.deadband_width = width_raw;
+        self
+    }
+
+    pub fn averaging(mut self, samples: f64) -> Self {
+        self.average = samples.max(1.0);
+        self
+    }
+
+    /// The mapped value for a (filtered) raw reading.
+    pub fn map(&self, raw: f64) -> f64 {
+        let raw = if (raw - self.deadband_center).abs() <= self.deadband_width {
+            self.deadband_center
+        } else {
+            raw
+        };
+        let span = self.ceiling_raw - self.floor_raw;
+        let v = if span == 0.0 {
+            self.floor_value
+        } else {
+            self.floor_value + (raw - self.floor_raw) * (self.ceiling_value - self.floor_value) / span
+        };
+        let (lo, hi) = if self.floor_value <= self.ceiling_value {
+            (self.floor_value, self.ceiling_value)
+        } else {
+            (self.ceiling_value, self.floor_value)
+        };
+        v.clamp(lo, hi)
+    }
+}
+
+impl Kind for AnalogInput {
+    const PORTS: &'static [PortSpec] = &[PortSpec::level_out("value", Unit::Any)];
+    const PHASE: Phase = Phase::Input;
+
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        let raw = ctx.inputs.analog[hw_index(self.hw)] as f64;
+        let avg = match self.avg {
+            Some(a) => a + (raw - a) / self.average,
+            None => raw,
+        };
+        self.avg = Some(avg);
+        ports[0].value = self.map(avg);
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        let v = finite(v)?;
+        match id {
+            Self::FLOOR_VALUE => self.floor_value = v,
+            Self::FLOOR_RAW => self.floor_raw = v,
+            Self::CEILING_VALUE => self.ceiling_value = v,
+            Self::CEILING_RAW => self.ceiling_raw = v,
+            Self::DEADBAND_CENTER => self.deadband_center = v,
+            Self::DEADBAND_WIDTH => self.deadband_width = non_negative(v)?,
+            Self::AVERAGE => {
+                if v < 1.0 {
+                    return Err(ParamError::BadValue);
+                }
+                self.average = v
+            }
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ButtonMode {
+    /// Output 1 while pressed.
+    Standard,
+    /// Output flips on every press.
+    Toggle,
+}
+
+/// A debounced digital input, read in the 1 kHz slow frame. A new level is
+/// accepted after it has been stable for `debounce_ms` slow frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Button {
+    pub hw: u8,
+    pub mode: ButtonMode,
+    pub debounce_ms: u16,
+    stable: bool,
+    count: u16,
+    toggled: bool,
+    presses: u32,
+    releases: u32,
+}
+
+impl Button {
+    pub const OUT: u8 = 0;
+    pub const DEBOUNCE_MS: u8 = 0;
+
+    pub fn new(hw: u8, mode: ButtonMode) -> Button {
+        Button {
+            hw,
+            mode,
+            debounce_ms: 5,
+            stable: false,
+            count: 0,
+            toggled: false,
+            presses: 0,
+            releases: 0,
+        }
+    }
+
+    /// A plain digital input: standard mode, no debouncing.
+    pub fn digital(hw: u8) -> Button {
+        Button {
+            debounce_ms: 0,
+            ..Button::new(hw, ButtonMode::Standard)
+        }
+    }
+
+    pub fn debounce(mut self, ms: u16) -> Self {
+        self.debounce_ms = ms;
+        self
+    }
+
+    /// Debounced level.
+    pub fn pressed(&self) -> bool {
+        self.stable
+    }
+
+    /// Debounced presses and releases so far.
+    pub fn events(&self) -> (u32, u32) {
+        (self.presses, self.releases)
+    }
+}
+
+impl Kind for Button {
+    const PORTS: &'static [PortSpec] = &[PortSpec::level_out("state", Unit::Scalar)];
+    const PHASE: Phase = Phase::Slow;
+
+    fn run<const Q: usize>(&mut self, _ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {}
+
+    fn slow(&mut self, ports: &mut [Port], inputs: &Inputs, _dt: f64) {
+        let raw = inputs.digital[hw_index(self.hw)];
+        if raw == self.stable {
+            self.count = 0;
+        } else {
+            self.count += 1;
+            if self.count > self.debounce_ms {
+                self.count = 0;
+                self.stable = raw;
+                if raw {
+                    self.presses += 1;
+                    self.toggled = !self.toggled;
+                } else {
+                    self.releases += 1;
+                }
+            }
+        }
+        let on = match self.mode {
+            ButtonMode::Standard => self.stable,
+            ButtonMode::Toggle => self.toggled,
+        };
+        ports[0].value = if on { 1.0 } else { 0.0 };
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::DEBOUNCE_MS => {
+                let v = non_negative(v)?;
+                if v > u16::MAX as f64 {
+                    return Err(ParamError::BadValue);
+                }
+                self.debounce_ms = v as u16;
+                Ok(())
+            }
+            _ => Err(ParamError::Unknown),
+        }
+    }
+}
+
+/// A quadrature encoder: its output is the count (block units; set the output
+/// port's ratio for world units), optionally inverted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Encoder {
+    pub hw: u8,
+    pub invert: bool,
+    offset: f64,
+    count: i64,
+}
+
+impl Encoder {
+    pub const OUT: u8 = 0;
+    pub const INVERT: u8 = 0;
+
+    pub fn new(hw: u8) -> Encoder {
+        Encoder {
+            hw,
+            invert: false,
+            offset: 0.0,
+            count: 0,
+        }
+    }
+
+    pub fn inverted(mut self) -> Self {
+        self.invert = true;
+        self
+    }
+
+    fn raw(&self, count: i64) -> f64 {
+        if self.invert {
+            -(count as f64)
+        } else {
+            count as f64
+        }
+    }
+}
+
+impl Kind for Encoder {
+    const PORTS: &'static [PortSpec] = &[PortSpec::output("count", Unit::Any)];
+    const PHASE: Phase = Phase::Input;
+
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        self.count = ctx.inputs.encoders[hw_index(self.hw)];
+        ports[0].value = self.raw(self.count) - self.offset;
+    }
+
+    fn set_param(&mut self, ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::INVERT => {
+                let inv = finite(v)? != 0.0;
+                // The output stays where it is.
+                self.invert = inv;
+                self.offset = self.raw(self.count) - ports[0].value;
+                Ok(())
+            }
+            _ => Err(ParamError::Unknown),
+        }
+    }
+
+    fn reset_output(&mut self, ports: &mut [Port], _port: usize) {
+        self.offset = self.raw(self.count) - ports[0].value;
+    }
+}
+
+/// A motion-stream input port: each decoded signal code steps its output by
+/// one block unit (set the outputs' ratios for world units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamInput {
+    pub hw: u8,
+}
+
+impl StreamInput {
+    pub fn new(hw: u8) -> StreamInput {
+        StreamInput { hw }
+    }
+}
+
+impl Kind for StreamInput {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::output("x", Unit::Any),
+        PortSpec::output("y", Unit::Any),
+        PortSpec::output("r", Unit::Any),
+        PortSpec::output("t", Unit::Any),
+        PortSpec::output("z", Unit::Any),
+        PortSpec::output("e", Unit::Any),
+    ];
+    const PHASE: Phase = Phase::Input;
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        let s = ctx.inputs.streams[hw_index(self.hw)];
+        if s.active == 0 {
+            return;
+        }
+        for (code, port) in ports.iter_mut().enumerate().take(CODES) {
+            if let Some(fwd) = s.get(code as u8) {
+                port.value += if fwd { 1.0 } else { -1.0 };
+            }
+        }
+    }
+}

@@ -1,0 +1,247 @@
+//! Kinematics components. Outputs are computed from the inputs' absolute
+//! values every frame, so incremental transmission never drifts; each has an
+//! inverse for `read_deep` and `reset_deep`.
+
+use super::component::{positive, Kind, ParamError};
+use super::io::Ctx;
+use super::math::{acos, atan2, cos, hypot, sin, sqrt, unwrap_near};
+use super::port::{Port, PortSpec, Unit};
+
+/// CoreXY: `a = x + y`, `b = x − y`; inverse `x = (a + b)/2`, `y = (a − b)/2`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CoreXY;
+
+impl CoreXY {
+    pub const X: u8 = 0;
+    pub const Y: u8 = 1;
+    pub const A: u8 = 2;
+    pub const B: u8 = 3;
+
+    pub fn forward(x: f64, y: f64) -> (f64, f64) {
+        (x + y, x - y)
+    }
+
+    pub fn inverse(a: f64, b: f64) -> (f64, f64) {
+        ((a + b) * 0.5, (a - b) * 0.5)
+    }
+}
+
+impl Kind for CoreXY {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("x", Unit::Length),
+        PortSpec::input("y", Unit::Length),
+        PortSpec::output("a", Unit::Length),
+        PortSpec::output("b", Unit::Length),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        let (a, b) = CoreXY::forward(ports[0].value, ports[1].value);
+        ports[2].value = a;
+        ports[3].value = b;
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
+        let (a, b) = CoreXY::forward(ports[0].value, ports[1].value);
+        ports[2].value = a;
+        ports[3].value = b;
+        true
+    }
+
+    fn invertible(&self) -> bool {
+        true
+    }
+
+    fn inverse(&self, _ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
+        let (x, y) = CoreXY::inverse(outs[2], outs[3]);
+        Some(if input == 0 { x } else { y })
+    }
+}
+
+/// Polar to Cartesian: `x = r cos θ`, `y = r sin θ` (θ in radians). Also serves
+/// as Stepdance's Lever (a link of length r at angle θ).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PolarToCartesian;
+
+impl PolarToCartesian {
+    pub const R: u8 = 0;
+    pub const THETA: u8 = 1;
+    pub const X: u8 = 2;
+    pub const Y: u8 = 3;
+
+    pub fn forward(r: f64, theta: f64) -> (f64, f64) {
+        (r * cos(theta), r * sin(theta))
+    }
+
+    /// `(r, θ)` with θ the turn nearest `theta_ref`.
+    pub fn inverse(x: f64, y: f64, theta_ref: f64) -> (f64, f64) {
+        (hypot(x, y), unwrap_near(atan2(y, x), theta_ref))
+    }
+}
+
+impl Kind for PolarToCartesian {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("r", Unit::Length),
+        PortSpec::input("theta", Unit::Angle),
+        PortSpec::output("x", Unit::Length),
+        PortSpec::output("y", Unit::Length),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        let (x, y) = PolarToCartesian::forward(ports[0].value, ports[1].value);
+        ports[2].value = x;
+        ports[3].value = y;
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
+        let (x, y) = PolarToCartesian::forward(ports[0].value, ports[1].value);
+        ports[2].value = x;
+        ports[3].value = y;
+        true
+    }
+
+    fn invertible(&self) -> bool {
+        true
+    }
+
+    fn inverse(&self, ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
+        let (r, t) = PolarToCartesian::inverse(outs[2], outs[3], ports[1].value);
+        Some(if input == 0 { r } else { t })
+    }
+}
+
+/// Forward kinematics of a five-bar linkage (parallel SCARA). Base pivots at
+/// `(0, 0)` and `(s, 0)`; proximal links `l1` (left) and `l2` (right) at angles
+/// θ1, θ2 from the +x axis; distal links `l3` (left) and `l4` (right) meet at
+/// the joint above the elbows (+y side of the line from left to right elbow);
+/// the stylus sits on the left distal link extended by `ext` beyond the joint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FiveBarForward {
+    pub s: f64,
+    pub l1: f64,
+    pub l2: f64,
+    pub l3: f64,
+    pub l4: f64,
+    pub ext: f64,
+}
+
+impl FiveBarForward {
+    pub const THETA1: u8 = 0;
+    pub const THETA2: u8 = 1;
+    pub const X: u8 = 2;
+    pub const Y: u8 = 3;
+    pub const S: u8 = 0;
+    pub const L1: u8 = 1;
+    pub const L2: u8 = 2;
+    pub const L3: u8 = 3;
+    pub const L4: u8 = 4;
+    pub const EXT: u8 = 5;
+
+    pub fn new(s: f64, l1: f64, l2: f64, l3: f64, l4: f64) -> FiveBarForward {
+        FiveBarForward {
+            s,
+            l1,
+            l2,
+            l3,
+            l4,
+            ext: 0.0,
+        }
+    }
+
+    /// The stylus point; `None` when the distal links cannot meet.
+    pub fn forward(&self, t1: f64, t2: f64) -> Option<(f64, f64)> {
+        let (e1x, e1y) = (self.l1 * cos(t1), self.l1 * sin(t1));
+        let (e2x, e2y) = (self.s + self.l2 * cos(t2), self.l2 * sin(t2));
+        let (dx, dy) = (e2x - e1x, e2y - e1y);
+        let d = hypot(dx, dy);
+        if d == 0.0 || d > self.l3 + self.l4 || d < (self.l3 - self.l4).abs() {
+            return None;
+        }
+        let a = (self.l3 * self.l3 - self.l4 * self.l4 + d * d) / (2.0 * d);
+        let h = sqrt((self.l3 * self.l3 - a * a).max(0.0));
+        let (ux, uy) = (dx / d, dy / d);
+        let px = e1x + a * ux - h * uy;
+        let py = e1y + a * uy + h * ux;
+        let k = (self.l3 + self.ext) / self.l3;
+        Some((e1x + (px - e1x) * k, e1y + (py - e1y) * k))
+    }
+
+    /// Joint angles for a stylus point, elbows outward (left elbow
+    /// counter-clockwise of the left pivot→joint line, right elbow clockwise).
+    pub fn inverse(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        // Left arm: a rigid link of l3 + ext from the left elbow to the stylus.
+        let l = self.l3 + self.ext;
+        let d1 = hypot(x, y);
+        let c1 = (self.l1 * self.l1 + d1 * d1 - l * l) / (2.0 * self.l1 * d1);
+        if d1 == 0.0 || !(-1.0..=1.0).contains(&c1) {
+            return None;
+        }
+        let t1 = atan2(y, x) + acos(c1);
+        let (e1x, e1y) = (self.l1 * cos(t1), self.l1 * sin(t1));
+        // The joint, l3 along the left distal link.
+        let (px, py) = (e1x + (x - e1x) * self.l3 / l, e1y + (y - e1y) * self.l3 / l);
+        let (rx, ry) = (px - self.s, py);
+        let d2 = hypot(rx, ry);
+        let c2 = (self.l2 * self.l2 + d2 * d2 - self.l4 * self.l4) / (2.0 * self.l2 * d2);
+        if d2 == 0.0 || !(-1.0..=1.0).contains(&c2) {
+            return None;
+        }
+        let t2 = atan2(ry, rx) - acos(c2);
+        Some((t1, t2))
+    }
+
+    fn write(&self, ports: &mut [Port]) {
+        if let Some((x, y)) = self.forward(ports[0].value, ports[1].value) {
+            ports[2].value = x;
+            ports[3].value = y;
+        }
+    }
+}
+
+impl Kind for FiveBarForward {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("theta1", Unit::Angle),
+        PortSpec::input("theta2", Unit::Angle),
+        PortSpec::output("x", Unit::Length),
+        PortSpec::output("y", Unit::Length),
+    ];
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
+        // Out of reach: the stylus holds its last point.
+        self.write(ports);
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        let mut next = *self;
+        match id {
+            Self::S => next.s = v,
+            Self::L1 => next.l1 = positive(v)?,
+            Self::L2 => next.l2 = positive(v)?,
+            Self::L3 => next.l3 = positive(v)?,
+            Self::L4 => next.l4 = positive(v)?,
+            Self::EXT => next.ext = v,
+            _ => return Err(ParamError::Unknown),
+        }
+        if !next.s.is_finite() || !next.ext.is_finite() || next.l3 + next.ext <= 0.0 {
+            return Err(ParamError::BadValue);
+        }
+        *self = next;
+        Ok(())
+    }
+
+    fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
+        self.write(ports);
+        true
+    }
+
+    fn invertible(&self) -> bool {
+        true
+    }
+
+    fn inverse(&self, _ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
+        let (t1, t2) = FiveBarForward::inverse(self, outs[2], outs[3])?;
+        Some(if input == 0 { t1 } else { t2 })
+    }
+}

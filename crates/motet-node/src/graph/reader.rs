@@ -1,0 +1,70 @@
+//! TrajectoryReader: the node's planned trajectory as a motion stream.
+
+use heapless::Deque;
+use motet_trajectory::{Segment, MAX_AXES};
+
+use super::component::{Kind, ParamError};
+use super::io::Ctx;
+use super::port::{Port, PortSpec, Unit};
+
+/// Outputs the planned position of one machine axis at the frame's time, read
+/// from the segment queue passed into the frame. The output is absolute; an
+/// INCREMENTAL mapping transmits its changes (so planned motion and hand input
+/// mix on one channel), an ABSOLUTE mapping the position itself. Before the
+/// first segment the axis sits at that segment's start, after the last at its
+/// end; with an empty queue it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrajectoryReader {
+    pub axis: u8,
+}
+
+impl TrajectoryReader {
+    pub const OUT: u8 = 0;
+    pub const AXIS: u8 = 0;
+
+    pub fn new(axis: u8) -> TrajectoryReader {
+        TrajectoryReader {
+            axis: axis.min(MAX_AXES as u8 - 1),
+        }
+    }
+
+    /// Planned position of `axis` at `t_us`, if the queue holds any segment.
+    pub fn position<const Q: usize>(segments: &Deque<Segment, Q>, axis: usize, t_us: f64) -> Option<f64> {
+        let mut last = None;
+        for seg in segments.iter() {
+            if t_us < seg.t0 {
+                return Some(seg.start[axis]);
+            }
+            if t_us < seg.t1() {
+                return Some(seg.position_at(t_us)[axis]);
+            }
+            last = Some(seg.end[axis]);
+        }
+        last
+    }
+}
+
+impl Kind for TrajectoryReader {
+    const PORTS: &'static [PortSpec] = &[PortSpec::output("position", Unit::Any)];
+    const PHASE: super::component::Phase = super::component::Phase::Input;
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        if let Some(p) = Self::position(ctx.segments, self.axis as usize, ctx.now_us) {
+            ports[0].value = p;
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::AXIS => {
+                if !(0.0..MAX_AXES as f64).contains(&v) || v != super::math::floor(v) {
+                    return Err(ParamError::BadValue);
+                }
+                self.axis = v as u8;
+            }
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,159 @@
+//! FourTrackRecorder and FourTrackPlayer, on the tape passed into the frame
+//! (format in [`super::record`]). A track's block unit is one recorded step:
+//! the ports default to 0.01 world units per step (`set_ratio(0.01, 1)`).
+
+use super::component::{Kind, ParamError, Phase};
+use super::io::Ctx;
+use super::port::{Port, PortSpec, Unit};
+use super::record::{pack, unpack, Quantiser, TRACKS};
+
+/// Records four streams, one byte per frame, after the channels ran. Parameter
+/// `RECORD`: nonzero starts a new recording (clearing the tape), zero stops.
+/// Recording stops by itself when the tape is full.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FourTrackRecorder {
+    recording: bool,
+    start: bool,
+    full: bool,
+    q: [Quantiser; TRACKS],
+}
+
+impl FourTrackRecorder {
+    pub const RECORD: u8 = 0;
+
+    pub fn new() -> FourTrackRecorder {
+        FourTrackRecorder::default()
+    }
+
+    pub fn recording(&self) -> bool {
+        self.recording
+    }
+
+    /// The tape ran out during the last recording.
+    pub fn full(&self) -> bool {
+        self.full
+    }
+}
+
+impl Kind for FourTrackRecorder {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::input("track0", Unit::Any),
+        PortSpec::input("track1", Unit::Any),
+        PortSpec::input("track2", Unit::Any),
+        PortSpec::input("track3", Unit::Any),
+    ];
+    const PHASE: Phase = Phase::Post;
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        if self.start {
+            self.start = false;
+            ctx.tape.clear();
+            for (q, p) in self.q.iter_mut().zip(ports.iter()) {
+                *q = Quantiser::start(p.value);
+            }
+        }
+        if !self.recording {
+            return;
+        }
+        let mut steps = [0i8; TRACKS];
+        for i in 0..TRACKS {
+            steps[i] = self.q[i].step(ports[i].value);
+        }
+        if !ctx.tape.push(pack(steps)) {
+            self.recording = false;
+            self.full = true;
+        }
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        match id {
+            Self::RECORD => {
+                if v.is_nan() {
+                    return Err(ParamError::BadValue);
+                }
+                let on = v != 0.0;
+                self.start = on;
+                self.recording = on;
+                if on {
+                    self.full = false;
+                }
+            }
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+}
+
+/// Replays a tape into four outputs, one byte per frame, in the input phase.
+/// Parameter `PLAY`: nonzero plays from the start, zero stops; `LOOP`: nonzero
+/// loops.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FourTrackPlayer {
+    playing: bool,
+    looping: bool,
+    cursor: usize,
+}
+
+impl FourTrackPlayer {
+    pub const PLAY: u8 = 0;
+    pub const LOOP: u8 = 1;
+
+    pub fn new() -> FourTrackPlayer {
+        FourTrackPlayer::default()
+    }
+
+    pub fn playing(&self) -> bool {
+        self.playing
+    }
+
+    pub fn cursor(&self) -> usize {
+        self.cursor
+    }
+}
+
+impl Kind for FourTrackPlayer {
+    const PORTS: &'static [PortSpec] = &[
+        PortSpec::output("track0", Unit::Any),
+        PortSpec::output("track1", Unit::Any),
+        PortSpec::output("track2", Unit::Any),
+        PortSpec::output("track3", Unit::Any),
+    ];
+    const PHASE: Phase = Phase::Input;
+
+    #[inline]
+    fn run<const Q: usize>(&mut self, ports: &mut [Port], ctx: &mut Ctx<'_, '_, Q>) {
+        if !self.playing {
+            return;
+        }
+        if self.cursor >= ctx.tape.len() {
+            if self.looping && !ctx.tape.is_empty() {
+                self.cursor = 0;
+            } else {
+                self.playing = false;
+                return;
+            }
+        }
+        if let Some(b) = ctx.tape.get(self.cursor) {
+            for (p, s) in ports.iter_mut().zip(unpack(b)) {
+                p.value += s as f64;
+            }
+        }
+        self.cursor += 1;
+    }
+
+    fn set_param(&mut self, _ports: &mut [Port], id: u8, v: f64) -> Result<(), ParamError> {
+        if v.is_nan() {
+            return Err(ParamError::BadValue);
+        }
+        match id {
+            Self::PLAY => {
+                self.playing = v != 0.0;
+                self.cursor = 0;
+            }
+            Self::LOOP => self.looping = v != 0.0,
+            _ => return Err(ParamError::Unknown),
+        }
+        Ok(())
+    }
+}
