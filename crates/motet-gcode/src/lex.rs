@@ -62,6 +62,7 @@ impl<'a> Lexer<'a> {
     }
 
     /// The next word, or `None` at the end of the line.
+    #[inline(always)]
     pub(crate) fn next_word(&mut self) -> Result<Option<Word<'a>>, LexError> {
         let bytes = self.line.as_bytes();
         loop {
@@ -183,23 +184,41 @@ impl<'a> Lexer<'a> {
 
 /// Parse a G-code number: optional sign, digits, optional `.` and digits,
 /// with at least one digit (`1`, `-1.5`, `.5`, `+2`, `1.`).
+#[inline]
 pub(crate) fn number(text: &str) -> Option<f64> {
+    const POW10: [f64; 16] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+    ];
     let b = text.as_bytes();
-    let mut i = 0;
-    if matches!(b.first(), Some(b'+' | b'-')) {
-        i = 1;
-    }
-    let mut digits = 0;
-    let mut dot = false;
-    for &c in &b[i..] {
+    let (neg, rest) = match b.first() {
+        Some(b'-') => (true, &b[1..]),
+        Some(b'+') => (false, &b[1..]),
+        _ => (false, b),
+    };
+    // Fast path (Clinger): at most 15 digits, so the digits as an integer and
+    // the power of ten are both exact and one division rounds correctly.
+    let mut mant: u64 = 0;
+    let mut digits = 0usize;
+    let mut frac: Option<usize> = None;
+    for &c in rest {
         match c {
-            b'0'..=b'9' => digits += 1,
-            b'.' if !dot => dot = true,
+            b'0'..=b'9' => {
+                mant = mant.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+                digits += 1;
+                if let Some(f) = frac.as_mut() {
+                    *f += 1;
+                }
+            }
+            b'.' if frac.is_none() => frac = Some(0),
             _ => return None,
         }
     }
     if digits == 0 {
         return None;
+    }
+    if digits <= 15 {
+        let v = mant as f64 / POW10[frac.unwrap_or(0)];
+        return Some(if neg { -v } else { v });
     }
     let v: f64 = text.parse().ok()?;
     v.is_finite().then_some(v)
@@ -242,6 +261,29 @@ mod tests {
             ("1.", 1.0),
         ] {
             assert_eq!(number(t), Some(v), "{t}");
+        }
+        for t in [
+            "0",
+            "-0",
+            "0.1",
+            "123.456",
+            "-98.744",
+            "99999.99999",
+            "1.0000000000001",
+            "0.30000000000000004",
+            "123456789012345",
+            "1234567890123456",
+            "-.0001",
+            "00000000000000000001.5",
+            "1e5",
+            "1E5",
+        ] {
+            let want: Option<f64> = if t.contains(['e', 'E']) {
+                None
+            } else {
+                t.parse().ok()
+            };
+            assert_eq!(number(t).map(f64::to_bits), want.map(f64::to_bits), "{t}");
         }
         for t in ["", ".", "-", "+-1", "1.2.3", "1-2", "--1"] {
             assert_eq!(number(t), None, "{t}");

@@ -17,7 +17,7 @@ proptest! {
 
     #[test]
     fn gcode_like_text_never_panics(
-        s in "([GMTXYZEABCIJKRFSPNQgmxyz0-9. +\\-;()*%\t\r]|\n|G2|G3|G4|G28|G92|M3|M83|M117|G38\\.2|\u{e9}){0,120}",
+        s in "([GMTXYZEABCIJKRFSPLNQgmxyz0-9. +\\-;()*%\t\r]|\n|G2|G3|G4|G10 L2|G10|G11|G18|G19|G28|G28\\.1|G53|G54|G90\\.1|G92|G93|M3|M4|M2|M83|M104|M106|M117|G38\\.2|\u{e9}){0,120}",
         allow in any::<bool>(),
     ) {
         if let Ok(p) = run_with(&s, &printer(), allow) {
@@ -154,6 +154,108 @@ proptest! {
         for t in &moves[1..] {
             let d = (t[0] - cx).hypot(t[1] - cy);
             prop_assert!((d - r).abs() < 0.002, "{src}: point off the circle by {}", d - r);
+        }
+    }
+}
+
+/// One line of a random program using the wider set of codes, from a template
+/// index and four random numbers.
+fn new_code_line(kind: usize, a: i32, b: i32, c: i32, n: u8) -> String {
+    let (x, y, z) = (
+        f64::from(a) / 100.0,
+        f64::from(b) / 100.0,
+        f64::from(c) / 100.0,
+    );
+    let m = n % 7;
+    match kind {
+        0 => format!("G0 X{x} Y{y}"),
+        1 => format!(
+            "G1 X{x} Y{y} Z{z} E{} F{}",
+            f64::from(n) / 10.0,
+            60 + u32::from(n) * 10
+        ),
+        2 => format!("G2 X{x} Y{y} R{}", z.abs() + 0.5),
+        3 => format!("G3 X{x} Y{y} I{z} J{} F600", f64::from(n) - 100.0),
+        4 => ["G17", "G18", "G19"][usize::from(n % 3)].into(),
+        5 => {
+            ["G90", "G91", "G90.1", "G91.1", "G20", "G21", "M82", "M83"][usize::from(n % 8)].into()
+        }
+        6 => ["G93", "G94"][usize::from(n % 2)].into(),
+        7 => format!("G{}", 54 + n % 6),
+        8 => format!("G10 L2 P{m} X{x} Z{z}"),
+        9 => format!("G10 L20 P{m} Y{y} E0"),
+        10 => ["G10", "G11"][usize::from(n % 2)].into(),
+        11 => ["G28", "G28.1", "G92.1"][usize::from(n % 3)].into(),
+        12 => format!("G28 X{x} Y"),
+        13 => format!("G53 G0 X{x} Z{z}"),
+        14 => format!("G53 G1 Y{y} F{}", 1 + u32::from(n)),
+        15 => format!("G92 X{x} E0"),
+        16 => format!(
+            "{} S{}",
+            ["M3", "M4", "M5"][usize::from(n % 3)],
+            a.rem_euclid(1200)
+        ),
+        17 => {
+            ["M7", "M8", "M9", "M400", "M0", "M1", "M114", "M84", "M105"][usize::from(n % 9)].into()
+        }
+        18 => format!("M104 S{} T{}", b.rem_euclid(300), n % 3),
+        19 => format!("M109 S{}", b.rem_euclid(300)),
+        20 => format!(
+            "{} S{}",
+            ["M140", "M190", "M141", "M191"][usize::from(n % 4)],
+            c.rem_euclid(120)
+        ),
+        21 => format!("M106 P{} S{}", n % 3, a.rem_euclid(300)),
+        22 => "M107".into(),
+        23 => format!("T{}", n % 4),
+        24 => format!("G4 P{}", n),
+        25 => format!("G93 G1 X{x} Y{y} F{}", 1 + u32::from(n)),
+        26 => format!("G18 G2 Z{z} X{x} K{} F600", y),
+        27 => format!("G19 G3 Y{y} Z{z} R{} F600", -(x.abs() + 0.5)),
+        28 => format!("S{} F{}", a.rem_euclid(1000), 1 + u32::from(n)),
+        _ => ["M2", "M30"][usize::from(n % 2)].into(),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_programs_with_new_codes_never_panic(
+        lines in prop::collection::vec(
+            (0usize..30, -20_000i32..20_000, -20_000i32..20_000, -20_000i32..20_000, any::<u8>()),
+            1..60,
+        ),
+        allow in any::<bool>(),
+    ) {
+        let mut src = String::from("G21 G90 G94 F600\n");
+        for (kind, a, b, c, n) in lines {
+            src.push_str(&new_code_line(kind, a, b, c, n));
+            src.push('\n');
+        }
+        for target in [printer(), plotter(), no_tools()] {
+            if let Ok(p) = run_with(&src, &target, allow) {
+                for c in &p.commands {
+                    match c.item {
+                        Command::Move(m) => {
+                            prop_assert!(m.target.iter().all(|v| v.is_finite()), "{src}: {m:?}");
+                            prop_assert!(m.feed > 0.0, "{src}: {m:?}");
+                            if m.kind == MoveKind::Feed {
+                                prop_assert!(m.feed.is_finite(), "{src}: {m:?}");
+                            }
+                        }
+                        Command::ToolPerSpeed { value, feed, .. } => {
+                            prop_assert!(feed.is_finite() && feed > 0.0, "{src}: {feed}");
+                            prop_assert!((0.0..=1.0).contains(&value));
+                        }
+                        Command::Tool { value, .. } => prop_assert!((0.0..=1.0).contains(&value)),
+                        Command::Aux { value, .. } => prop_assert!(value.is_finite()),
+                        Command::Dwell { seconds } => prop_assert!(seconds >= 0.0),
+                        Command::Pause { .. } | Command::Sync => {}
+                    }
+                    prop_assert!(c.loc.line >= 1);
+                }
+            }
         }
     }
 }

@@ -1,7 +1,9 @@
 #![allow(dead_code)]
 
 use motet_gcode::{parse, GcodeOptions, Parsed};
-use motet_planner::{AxisInfo, Command, JobTarget, MoveKind, SourceError, ToolInfo, ToolKind};
+use motet_planner::{
+    AuxChannel, AxisInfo, Command, JobTarget, MoveKind, SourceError, ToolInfo, ToolKind,
+};
 
 pub const START: [f64; 6] = [1.0, 2.0, 3.0, 0.0, 0.0, 0.0];
 
@@ -62,7 +64,14 @@ pub fn run(src: &str) -> Result<Parsed, SourceError> {
 }
 
 pub fn run_with(src: &str, target: &JobTarget, allow_unknown: bool) -> Result<Parsed, SourceError> {
-    parse(src, target, &GcodeOptions { allow_unknown })
+    parse(
+        src,
+        target,
+        &GcodeOptions {
+            allow_unknown,
+            ..GcodeOptions::default()
+        },
+    )
 }
 
 /// An expected command, compact: R/F moves give x y z e and feed (mm/s).
@@ -72,6 +81,13 @@ pub enum Want {
     F([f64; 4], f64),
     D(f64),
     T(f32),
+    /// ToolPerSpeed: value, feed (units/s).
+    Ps(f32, f64),
+    /// Aux: channel, value, wait.
+    A(AuxChannel, f32, bool),
+    /// Pause: optional.
+    P(bool),
+    Sync,
 }
 
 pub fn check(src: &str, parsed: &Parsed, want: &[Want]) {
@@ -92,6 +108,19 @@ pub fn check(src: &str, parsed: &Parsed, want: &[Want]) {
             }
             (Command::Dwell { seconds }, Want::D(s)) => (seconds - s).abs() < 1e-12,
             (Command::Tool { tool, value }, Want::T(v)) => tool == 0 && (value - v).abs() < 1e-6,
+            (Command::ToolPerSpeed { tool, value, feed }, Want::Ps(v, f)) => {
+                tool == 0 && (value - v).abs() < 1e-6 && (feed - f).abs() < 1e-9
+            }
+            (
+                Command::Aux {
+                    channel,
+                    value,
+                    wait,
+                },
+                Want::A(c, v, wt),
+            ) => channel == c && (value - v).abs() < 1e-6 && wait == wt,
+            (Command::Pause { optional }, Want::P(o)) => optional == o,
+            (Command::Sync, Want::Sync) => true,
             _ => false,
         };
         assert!(ok, "{src:?}: command {k}: got {:?}, want {w:?}", g.item);
