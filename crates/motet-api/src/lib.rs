@@ -19,7 +19,9 @@
 //! node's segment queue is full; on the simulated machine that means the
 //! simulated clock runs until a place frees up.
 
+pub mod job;
 mod machine;
 
+pub use job::{job_name, load_job, Job, JobError, JobKind, JobOptions};
 pub use machine::{ApiError, Event, Machine};
 pub use motet_sim::Report;

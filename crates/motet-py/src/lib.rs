@@ -6,19 +6,48 @@ use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-create_exception!(_motet, MotetError, PyException, "Base class of motet's errors.");
-create_exception!(_motet, MachineFileError, MotetError, "The machine file is invalid; the message names file:line:column.");
-create_exception!(_motet, UnreachableError, MotetError, "The target is beyond travel or cannot be reached by the kinematics.");
-create_exception!(_motet, UnknownNameError, MotetError, "No axis or tool has that name.");
-create_exception!(_motet, ValueOutOfRangeError, MotetError, "A feed, dwell or tool value is out of range.");
+create_exception!(
+    _motet,
+    MotetError,
+    PyException,
+    "Base class of motet's errors."
+);
+create_exception!(
+    _motet,
+    MachineFileError,
+    MotetError,
+    "The machine file is invalid; the message names file:line:column."
+);
+create_exception!(
+    _motet,
+    UnreachableError,
+    MotetError,
+    "The target is beyond travel or cannot be reached by the kinematics."
+);
+create_exception!(
+    _motet,
+    UnknownNameError,
+    MotetError,
+    "No axis or tool has that name."
+);
+create_exception!(
+    _motet,
+    ValueOutOfRangeError,
+    MotetError,
+    "A feed, dwell or tool value is out of range."
+);
 
 fn to_py(e: ApiError) -> PyErr {
     let msg = e.to_string();
     match e {
         ApiError::Machine(_) => MachineFileError::new_err(msg),
         ApiError::Unreachable(_) => UnreachableError::new_err(msg),
-        ApiError::UnknownAxis { .. } | ApiError::UnknownTool { .. } => UnknownNameError::new_err(msg),
-        ApiError::BadFeed(_) | ApiError::BadDwell(_) | ApiError::BadToolValue(_) => ValueOutOfRangeError::new_err(msg),
+        ApiError::UnknownAxis { .. } | ApiError::UnknownTool { .. } => {
+            UnknownNameError::new_err(msg)
+        }
+        ApiError::BadFeed(_) | ApiError::BadDwell(_) | ApiError::BadToolValue(_) => {
+            ValueOutOfRangeError::new_err(msg)
+        }
         _ => MotetError::new_err(msg),
     }
 }
@@ -51,7 +80,9 @@ impl Machine {
     /// Opens the machine described by a machine file (TOML), on simulated nodes.
     #[new]
     fn new(path: &str) -> PyResult<Self> {
-        Ok(Machine { inner: Inner::open(path).map_err(to_py)? })
+        Ok(Machine {
+            inner: Inner::open(path).map_err(to_py)?,
+        })
     }
 
     /// Axis names, in order.
@@ -150,7 +181,8 @@ impl Machine {
                     }
                     Ok(())
                 })();
-                let result = filled.and_then(|_| callback.call1(py, PyTuple::new(py, [d])?).map(|_| ()));
+                let result =
+                    filled.and_then(|_| callback.call1(py, PyTuple::new(py, [d])?).map(|_| ()));
                 if let Err(err) = result {
                     // A callback cannot stop the machine; show its error.
                     err.print(py);
@@ -161,7 +193,8 @@ impl Machine {
 
     /// The run report as a dict (duration, distances, steps, peaks, accuracy).
     fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let text = serde_json::to_string(&self.inner.report()).map_err(|e| MotetError::new_err(e.to_string()))?;
+        let text = serde_json::to_string(&self.inner.report())
+            .map_err(|e| MotetError::new_err(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
     }
 
@@ -189,6 +222,9 @@ fn _motet(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MachineFileError", py.get_type::<MachineFileError>())?;
     m.add("UnreachableError", py.get_type::<UnreachableError>())?;
     m.add("UnknownNameError", py.get_type::<UnknownNameError>())?;
-    m.add("ValueOutOfRangeError", py.get_type::<ValueOutOfRangeError>())?;
+    m.add(
+        "ValueOutOfRangeError",
+        py.get_type::<ValueOutOfRangeError>(),
+    )?;
     Ok(())
 }

@@ -43,6 +43,9 @@ pub struct Report {
     pub duration_s: f64,
     pub commands: usize,
     pub segments: usize,
+    /// Moves that end at rest (the last one always does; others only where a
+    /// stop was needed: reversals, pen lifts, dwells).
+    pub rests: usize,
     pub tool_events: usize,
     /// Temperature, fan and coolant changes.
     pub aux_events: usize,

@@ -74,6 +74,7 @@ pub struct SimMachine {
 #[derive(Default)]
 struct Stats {
     segments: usize,
+    rests: usize,
     events: usize,
     aux_events: usize,
     pauses: usize,
@@ -230,6 +231,7 @@ impl SimMachine {
             duration_s,
             commands,
             segments: self.stats.segments,
+            rests: self.stats.rests,
             tool_events: self.stats.events,
             aux_events: self.stats.aux_events,
             pauses: self.stats.pauses,

@@ -1,18 +1,56 @@
 //! `motet bench`: parse, plan and simulate a real slicer's G-code and print the
 //! figures the project tracks.
 
-use crate::{job, run::load_machine};
+use crate::run::load_machine;
 use anyhow::Result;
+use motet_api::{job::read_bytes, job_name, load_job, JobOptions};
 use motet_planner::{Planned, Planner};
 use std::path::Path;
 use std::time::Instant;
 
+/// A script's session: 10,000 `move_to` calls around a circle, streamed as
+/// they come. Prints the longest call and how often the machine had to stop.
+fn interactive(machine_path: &Path) -> Result<()> {
+    let mut m = motet_api::Machine::open(machine_path)?;
+    m.move_to(&[("x", 100.0), ("y", 100.0)], Some(200.0))?;
+    let (mut longest, start) = (0.0f64, Instant::now());
+    let n = 10_000;
+    for k in 0..n {
+        let a = k as f64 * 0.05;
+        let t = Instant::now();
+        m.move_to(
+            &[("x", 110.0 + 40.0 * a.cos()), ("y", 110.0 + 40.0 * a.sin())],
+            Some(150.0),
+        )?;
+        longest = longest.max(t.elapsed().as_secs_f64());
+    }
+    let calls = start.elapsed().as_secs_f64();
+    m.wait()?;
+    let r = m.report();
+    println!(
+        "interactive: {n} move_to calls in {:.3} s ({:.1} µs each, longest {:.3} ms); {:.1} s of motion, {} stops at rest between moves, {} underruns",
+        calls,
+        calls / n as f64 * 1e6,
+        longest * 1e3,
+        r.duration_s,
+        r.rests.saturating_sub(1),
+        r.underruns
+    );
+    Ok(())
+}
+
 pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) -> Result<()> {
     let machine = load_machine(machine_path)?;
-    let data = job::read_bytes(job_path)?;
+    let data = read_bytes(job_path)?;
     let lines = data.iter().filter(|b| **b == b'\n').count();
     let t = Instant::now();
-    let loaded = job::load(&machine, job_path, true)?;
+    let loaded = load_job(
+        &machine,
+        job_path,
+        &JobOptions {
+            allow_unknown: true,
+        },
+    )?;
     let load_s = t.elapsed().as_secs_f64();
     let moves = loaded.commands.len();
     println!(
@@ -62,10 +100,11 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         duration,
         duration / 3600.0
     );
+    interactive(machine_path)?;
     if !no_sim {
         let r = motet_sim::simulate(
             &machine,
-            &job::name(job_path),
+            &job_name(job_path),
             &loaded.commands,
             &mut |_, _| {},
         )?;

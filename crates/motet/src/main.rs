@@ -2,7 +2,6 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
-mod job;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -25,7 +24,7 @@ enum Cmd {
     Run {
         /// Machine file (TOML).
         machine: PathBuf,
-        /// Job: .gcode/.nc/.g (optionally .gz) or .svg.
+        /// Job: G-code (.gcode/.nc/.g, optionally .gz), SVG, or a photo (.png/.jpg).
         job: PathBuf,
         /// Output folder [default: out/<job name>].
         #[arg(long)]

@@ -1,8 +1,8 @@
 //! `motet run` and `motet check`.
 
-use crate::job;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use motet_api::{job_name, load_job, JobOptions};
 use motet_host::Machine;
 use motet_render::{render_png, render_svg, RenderSpec};
 use std::io::IsTerminal;
@@ -23,7 +23,7 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
         m.nodes.len()
     );
     if let Some(j) = job_path {
-        let loaded = job::load(&m, j, allow_unknown)?;
+        let loaded = load_job(&m, j, &JobOptions { allow_unknown })?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
@@ -40,13 +40,13 @@ pub fn run(
     quiet: bool,
 ) -> Result<()> {
     let machine = load_machine(machine_path)?;
-    let loaded = job::load(&machine, job_path, allow_unknown)?;
+    let loaded = load_job(&machine, job_path, &JobOptions { allow_unknown })?;
     if !quiet {
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
     }
-    let name = job::name(job_path);
+    let name = job_name(job_path);
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&name));
 
     let bar = if quiet || !std::io::stderr().is_terminal() {

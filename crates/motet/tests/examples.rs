@@ -13,23 +13,7 @@ fn root() -> PathBuf {
 fn run(machine: &str, job: &str) -> (Machine, Vec<Located<Command>>, SimResult) {
     let m = Machine::load(&root().join("examples").join(machine)).unwrap();
     let path = root().join("examples/jobs").join(job);
-    let data = std::fs::read(&path).unwrap();
-    let target = m.job_target();
-    let cmds = if job.ends_with(".svg") {
-        motet_svg::parse(&data, &target, &Default::default()).unwrap()
-    } else {
-        let text = String::from_utf8(data).unwrap();
-        motet_gcode::parse(
-            &text,
-            &target,
-            &motet_gcode::GcodeOptions {
-                allow_unknown: false,
-            },
-        )
-        .unwrap()
-        .commands
-    };
-    motet_host::check_job(&m, &cmds).unwrap();
+    let cmds = motet_api::load_job(&m, &path, &motet_api::JobOptions::default()).unwrap().commands;
     let r = simulate(&m, job, &cmds, &mut |_, _| {}).unwrap();
     (m, cmds, r)
 }

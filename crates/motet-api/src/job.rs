@@ -1,0 +1,161 @@
+//! Job files: G-code, SVG and photographs, turned into checked commands for a
+//! machine. Used by the command line and by scripts alike.
+
+use flate2::read::GzDecoder;
+use motet_host::{check_job, Machine};
+use motet_planner::{Command, Located, SourceError};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// The kinds of job file motet reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobKind {
+    Gcode,
+    Svg,
+    Image,
+}
+
+/// A job file that could not be read or does not fit the machine; the message
+/// names `file:line:column` where it applies.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error("{file}: unknown job type `.{ext}`; expected G-code (.gcode, .nc, .g), SVG (.svg) or a photo (.png, .jpg)")]
+    UnknownKind { file: String, ext: String },
+    #[error("cannot read job {file}: {error}")]
+    Read { file: String, error: std::io::Error },
+    #[error("{file}: not a valid gzip file: {error}")]
+    Gzip { file: String, error: std::io::Error },
+    #[error("{file}:{line}: G-code is not valid UTF-8 text")]
+    NotText { file: String, line: usize },
+    #[error("{file}:{error}")]
+    Source { file: String, error: SourceError },
+}
+
+/// Options for reading jobs.
+#[derive(Clone, Debug, Default)]
+pub struct JobOptions {
+    /// Skip unsupported G-codes with a warning instead of refusing the job.
+    pub allow_unknown: bool,
+}
+
+/// A job read and checked against a machine.
+#[derive(Clone, Debug)]
+pub struct Job {
+    pub path: PathBuf,
+    pub kind: JobKind,
+    pub commands: Vec<Located<Command>>,
+    /// `file:line:column: message` for things accepted but not acted on.
+    pub warnings: Vec<String>,
+}
+
+impl JobKind {
+    /// The kind from the file name (`.gz` is looked through).
+    pub fn of(path: &Path) -> Result<JobKind, JobError> {
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        let name = name.strip_suffix(".gz").unwrap_or(&name);
+        let ext = name.rsplit_once('.').map_or("", |(_, e)| e);
+        Ok(match ext {
+            "gcode" | "gco" | "g" | "nc" | "ngc" | "tap" => JobKind::Gcode,
+            "svg" => JobKind::Svg,
+            "png" | "jpg" | "jpeg" => JobKind::Image,
+            _ => {
+                return Err(JobError::UnknownKind {
+                    file: path.display().to_string(),
+                    ext: ext.to_string(),
+                })
+            }
+        })
+    }
+}
+
+/// The job's name for output folders: the file name without its extensions.
+pub fn job_name(path: &Path) -> String {
+    let n = path.file_name().and_then(|n| n.to_str()).unwrap_or("job");
+    let n = n.strip_suffix(".gz").unwrap_or(n);
+    n.rsplit_once('.').map_or(n, |(a, _)| a).to_string()
+}
+
+/// The file's bytes, decompressed if it ends in `.gz`.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, JobError> {
+    let file = path.display().to_string();
+    let raw = std::fs::read(path).map_err(|error| JobError::Read {
+        file: file.clone(),
+        error,
+    })?;
+    if path.extension().is_some_and(|e| e == "gz") {
+        let mut out = Vec::new();
+        GzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(|error| JobError::Gzip { file, error })?;
+        return Ok(out);
+    }
+    Ok(raw)
+}
+
+/// Reads, parses and checks a job file for `machine`. Nothing moves on error.
+pub fn load_job(machine: &Machine, path: &Path, opts: &JobOptions) -> Result<Job, JobError> {
+    let kind = JobKind::of(path)?;
+    let data = read_bytes(path)?;
+    parse_job(machine, path, kind, &data, opts)
+}
+
+/// Parses and checks job bytes of a known kind; `path` names it in errors.
+pub fn parse_job(
+    machine: &Machine,
+    path: &Path,
+    kind: JobKind,
+    data: &[u8],
+    opts: &JobOptions,
+) -> Result<Job, JobError> {
+    let file = path.display().to_string();
+    let target = machine.job_target();
+    let located = |error: SourceError| JobError::Source {
+        file: file.clone(),
+        error,
+    };
+    let (commands, warnings) = match kind {
+        JobKind::Gcode => {
+            let text = std::str::from_utf8(data).map_err(|e| JobError::NotText {
+                file: file.clone(),
+                line: data[..e.valid_up_to()]
+                    .iter()
+                    .filter(|b| **b == b'\n')
+                    .count()
+                    + 1,
+            })?;
+            let gopts = motet_gcode::GcodeOptions {
+                allow_unknown: opts.allow_unknown,
+                ..Default::default()
+            };
+            let parsed = motet_gcode::parse(text, &target, &gopts).map_err(located)?;
+            (
+                parsed.commands,
+                parsed
+                    .warnings
+                    .iter()
+                    .map(|w| format!("{file}:{w}"))
+                    .collect(),
+            )
+        }
+        JobKind::Svg => (
+            motet_svg::parse(data, &target, &motet_svg::SvgOptions::default()).map_err(located)?,
+            vec![],
+        ),
+        JobKind::Image => (
+            motet_image::parse(data, &target, &motet_image::ImageOptions::default())
+                .map_err(located)?,
+            vec![],
+        ),
+    };
+    check_job(machine, &commands).map_err(located)?;
+    Ok(Job {
+        path: path.to_path_buf(),
+        kind,
+        commands,
+        warnings,
+    })
+}
