@@ -78,7 +78,8 @@ fn half_step_rule_one_step_per_frame() {
     for &(target, n, want) in cases {
         let (b, p, c) = gen_channel(GraphChannel::new());
         let mut r = Rig::new(b);
-        r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, target).unwrap();
+        r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, target)
+            .unwrap();
         r.run(n);
         assert_eq!(r.chan(c).current_position(), want, "target {target}");
         assert_eq!(r.steps[c as usize] as f64, want);
@@ -89,7 +90,8 @@ fn half_step_rule_one_step_per_frame() {
 fn inversion_and_pulse_rate() {
     let (b, p, c) = gen_channel(GraphChannel::new().inverted().pulse_rate(5000.0));
     let mut r = Rig::new(b);
-    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 100.0).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 100.0)
+        .unwrap();
     r.run(25); // 1 ms: at 5000 steps/s, 5 steps (one every 5 frames)
     assert_eq!(r.chan(c).current_position(), 5.0);
     assert_eq!(r.steps[c as usize], -5, "inverted direction output");
@@ -98,7 +100,8 @@ fn inversion_and_pulse_rate() {
 #[test]
 fn filter_smooths_target() {
     let (mut b, p, c) = gen_channel(GraphChannel::new().filtering(100.0));
-    b.set_param(p, PositionGenerator::GO_ABSOLUTE, 50.0).unwrap();
+    b.set_param(p, PositionGenerator::GO_ABSOLUTE, 50.0)
+        .unwrap();
     let mut r = Rig::new(b);
     r.run(1);
     // f = 50/100 = 0.5: not yet a step.
@@ -112,20 +115,23 @@ fn limits_neither_emit_nor_count() {
     let (mut b, p, c) = gen_channel(GraphChannel::new().limits(-2.0, 3.0));
     b.channel_ratio(1, 1.0, 10.0).unwrap();
     let mut r = Rig::new(b);
-    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 5.0).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 5.0)
+        .unwrap();
     r.run(200);
     // Stopped at 3 world units = 30 steps; the target ran on to 50.
     assert_eq!(r.chan(c).current_position(), 30.0);
     assert_eq!(r.steps[c as usize], 30);
     assert_eq!(r.chan(c).target_position(), 50.0);
     // Coming back inside, motion resumes from the real position at once.
-    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 2.5).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 2.5)
+        .unwrap();
     r.run(1);
     assert_eq!(r.chan(c).current_position(), 29.0);
     r.run(100);
     assert_eq!(r.chan(c).current_position(), 25.0);
     assert_eq!(r.steps[c as usize], 25);
-    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, -10.0).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, -10.0)
+        .unwrap();
     r.run(300);
     assert_eq!(r.chan(c).current_position(), -20.0);
     assert_eq!(r.steps[c as usize], -20);
@@ -149,9 +155,12 @@ fn fan_in_sums_and_absolute_overwrites() {
     let mut r = Rig::new(b);
     let cases = [(1.0, 2.0, 3.0), (-4.0, 0.5, 7.0), (0.0, 0.0, -1.0)];
     for (a, bb, cc) in cases {
-        r.g.set_param(p1, PositionGenerator::GO_ABSOLUTE, a).unwrap();
-        r.g.set_param(p2, PositionGenerator::GO_ABSOLUTE, bb).unwrap();
-        r.g.set_param(p3, PositionGenerator::GO_ABSOLUTE, cc).unwrap();
+        r.g.set_param(p1, PositionGenerator::GO_ABSOLUTE, a)
+            .unwrap();
+        r.g.set_param(p2, PositionGenerator::GO_ABSOLUTE, bb)
+            .unwrap();
+        r.g.set_param(p3, PositionGenerator::GO_ABSOLUTE, cc)
+            .unwrap();
         r.run(20);
         let sum = a + 2.0 * bb;
         assert!((r.g.value(port(f, 1)).unwrap() - sum).abs() < 1e-12);
@@ -171,10 +180,18 @@ fn polar_rig() -> (Rig, u8, u8, u8, u8) {
     let cy = b.add(GraphChannel::new()).unwrap();
     b.set_ratio(port(er, 0), 1.0, 100.0).unwrap();
     b.set_ratio(port(et, 0), 1.0, 1000.0).unwrap();
-    b.map(port(er, 0), port(k, PolarToCartesian::R), Mode::Incremental).unwrap();
-    b.map(port(et, 0), port(k, PolarToCartesian::THETA), Mode::Incremental).unwrap();
-    b.map(port(k, PolarToCartesian::X), port(cx, 0), Mode::Incremental).unwrap();
-    b.map(port(k, PolarToCartesian::Y), port(cy, 0), Mode::Incremental).unwrap();
+    b.map(port(er, 0), port(k, PolarToCartesian::R), Mode::Incremental)
+        .unwrap();
+    b.map(
+        port(et, 0),
+        port(k, PolarToCartesian::THETA),
+        Mode::Incremental,
+    )
+    .unwrap();
+    b.map(port(k, PolarToCartesian::X), port(cx, 0), Mode::Incremental)
+        .unwrap();
+    b.map(port(k, PolarToCartesian::Y), port(cy, 0), Mode::Incremental)
+        .unwrap();
     b.channel_ratio(cx, 1.0, 80.0).unwrap();
     b.channel_ratio(cy, 1.0, 80.0).unwrap();
     (Rig::new(b), er, et, cx, cy)
@@ -232,10 +249,30 @@ fn validation_errors() {
         Err(GraphError::CapacityExceeded(Capacity::Components))
     );
     let cases: Vec<(PortRef, PortRef, Mode, GraphError)> = vec![
-        (port(9, 0), port(k, 0), Mode::Incremental, GraphError::UnknownComponent(9)),
-        (port(e, 5), port(k, 0), Mode::Incremental, GraphError::UnknownPort(port(e, 5))),
-        (port(k, 0), port(c, 0), Mode::Incremental, GraphError::NotAnOutput(port(k, 0))),
-        (port(e, 0), port(k, 2), Mode::Incremental, GraphError::NotAnInput(port(k, 2))),
+        (
+            port(9, 0),
+            port(k, 0),
+            Mode::Incremental,
+            GraphError::UnknownComponent(9),
+        ),
+        (
+            port(e, 5),
+            port(k, 0),
+            Mode::Incremental,
+            GraphError::UnknownPort(port(e, 5)),
+        ),
+        (
+            port(k, 0),
+            port(c, 0),
+            Mode::Incremental,
+            GraphError::NotAnOutput(port(k, 0)),
+        ),
+        (
+            port(e, 0),
+            port(k, 2),
+            Mode::Incremental,
+            GraphError::NotAnInput(port(k, 2)),
+        ),
         (
             port(k, 2),
             port(k, 1),
@@ -292,7 +329,10 @@ fn validation_errors() {
     b.unmap(port(c, 2));
     // Absolute fan-in.
     b.map(port(v, 1), port(k, 0), Mode::Absolute).unwrap();
-    assert_eq!(b.build().unwrap_err(), GraphError::AbsoluteFanIn(port(k, 0)));
+    assert_eq!(
+        b.build().unwrap_err(),
+        GraphError::AbsoluteFanIn(port(k, 0))
+    );
     b.unmap(port(v, 1));
     // Capacity of mappings.
     b.map(port(k, 2), port(c, 0), Mode::Incremental).unwrap();
@@ -305,7 +345,10 @@ fn validation_errors() {
     let mut b2: GraphBuilder<4, 4> = GraphBuilder::new();
     let f = b2.add(ScalingFilter1D::new(0.5, Mode::Absolute)).unwrap();
     b2.map(port(f, 1), port(f, 0), Mode::Absolute).unwrap();
-    assert!(matches!(b2.build(), Err(GraphError::BackwardAbsolute { .. })));
+    assert!(matches!(
+        b2.build(),
+        Err(GraphError::BackwardAbsolute { .. })
+    ));
 }
 
 #[test]
@@ -319,7 +362,10 @@ fn failed_updates_leave_the_graph_untouched() {
     // Bad parameters.
     assert_eq!(
         r.g.set_param(cx, 77, 1.0),
-        Err(GraphError::UnknownParam { comp: cx, param: 77 })
+        Err(GraphError::UnknownParam {
+            comp: cx,
+            param: 77
+        })
     );
     assert_eq!(
         r.g.set_param(cx, GraphChannel::FILTER, -3.0),
@@ -328,7 +374,10 @@ fn failed_updates_leave_the_graph_untouched() {
             param: GraphChannel::FILTER
         })
     );
-    assert_eq!(r.g.set_param(40, 0, 1.0), Err(GraphError::UnknownComponent(40)));
+    assert_eq!(
+        r.g.set_param(40, 0, 1.0),
+        Err(GraphError::UnknownComponent(40))
+    );
     // A bad replacement: an absolute mapping into the radius, which the
     // encoder already feeds (absolute fan-in).
     let mut b = r.g.to_builder();
@@ -403,10 +452,18 @@ fn mixed_rig() -> (Rig, u8, u8) {
     let e = b.add(Encoder::new(0)).unwrap();
     let c = b.add(GraphChannel::new()).unwrap();
     b.set_ratio(port(e, 0), 1.0, 400.0).unwrap(); // 400 counts per mm
-    b.map(port(rd, 0), port(c, GraphChannel::TARGET), Mode::Incremental)
-        .unwrap();
-    b.map(port(e, 0), port(c, GraphChannel::TARGET_B), Mode::Incremental)
-        .unwrap();
+    b.map(
+        port(rd, 0),
+        port(c, GraphChannel::TARGET),
+        Mode::Incremental,
+    )
+    .unwrap();
+    b.map(
+        port(e, 0),
+        port(c, GraphChannel::TARGET_B),
+        Mode::Incremental,
+    )
+    .unwrap();
     b.channel_ratio(c, 1.0, 80.0).unwrap();
     (Rig::new(b), c, e)
 }
@@ -416,7 +473,9 @@ fn mixed_rig() -> (Rig, u8, u8) {
 /// frame that the channel is within half a step of the exact sum.
 fn mixed_run(seed: u64, frames: usize) {
     let (mut r, c, _e) = mixed_rig();
-    let mut rng = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut rng = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let mut next = move || {
         rng ^= rng << 13;
         rng ^= rng >> 7;

@@ -39,7 +39,7 @@ impl Rig {
         self.len = tape.len();
         self.t += self.g.frame_us();
         self.frames += 1;
-        if self.frames % 25 == 0 {
+        if self.frames.rem_euclid(25) == 0 {
             self.g.slow_frame(&self.inputs);
         }
     }
@@ -57,7 +57,13 @@ const FPS: usize = 25_000;
 
 #[test]
 fn corexy_round_trip() {
-    for &(x, y) in &[(0.0, 0.0), (1.0, 2.0), (-3.5, 7.25), (1e3, -1e3), (0.1, 0.2)] {
+    for &(x, y) in &[
+        (0.0, 0.0),
+        (1.0, 2.0),
+        (-3.5, 7.25),
+        (1e3, -1e3),
+        (0.1, 0.2),
+    ] {
         let (a, b) = CoreXY::forward(x, y);
         assert_eq!((a, b), (x + y, x - y));
         let (x2, y2) = CoreXY::inverse(a, b);
@@ -67,7 +73,13 @@ fn corexy_round_trip() {
 
 #[test]
 fn polar_round_trip() {
-    for &(r, t) in &[(1.0, 0.0), (5.0, 1.0), (2.0, -2.5), (10.0, 7.0), (3.0, -20.0)] {
+    for &(r, t) in &[
+        (1.0, 0.0),
+        (5.0, 1.0),
+        (2.0, -2.5),
+        (10.0, 7.0),
+        (3.0, -20.0),
+    ] {
         let (x, y) = PolarToCartesian::forward(r, t);
         assert!((x - r * t.cos()).abs() < 1e-12 && (y - r * t.sin()).abs() < 1e-12);
         // The inverse unwraps θ to the turn nearest a reference.
@@ -88,11 +100,19 @@ fn fivebar_round_trip() {
         },
     ];
     for fb in cases {
-        for &(t1, t2) in &[(100.0f64, 80.0f64), (120.0, 70.0), (95.0, 40.0), (140.0, 100.0)] {
+        for &(t1, t2) in &[
+            (100.0f64, 80.0f64),
+            (120.0, 70.0),
+            (95.0, 40.0),
+            (140.0, 100.0),
+        ] {
             let (t1, t2) = (t1.to_radians(), t2.to_radians());
             let (x, y) = fb.forward(t1, t2).expect("reachable");
             let (u1, u2) = fb.inverse(x, y).expect("invertible");
-            assert!((u1 - t1).abs() < 1e-9 && (u2 - t2).abs() < 1e-9, "{fb:?} {t1} {t2} -> {u1} {u2}");
+            assert!(
+                (u1 - t1).abs() < 1e-9 && (u2 - t2).abs() < 1e-9,
+                "{fb:?} {t1} {t2} -> {u1} {u2}"
+            );
         }
     }
     // Symmetric linkage, symmetric angles: the stylus is on the centre line.
@@ -111,10 +131,14 @@ fn kinematics_in_a_graph_follow_their_inputs() {
     let cb = b.add(GraphChannel::new()).unwrap();
     b.set_ratio(port(e1, 0), 24.0, 2400.0).unwrap();
     b.set_ratio(port(e2, 0), 24.0, 2400.0).unwrap();
-    b.map(port(e1, 0), port(k, CoreXY::X), Mode::Incremental).unwrap();
-    b.map(port(e2, 0), port(k, CoreXY::Y), Mode::Incremental).unwrap();
-    b.map(port(k, CoreXY::A), port(ca, 0), Mode::Incremental).unwrap();
-    b.map(port(k, CoreXY::B), port(cb, 0), Mode::Incremental).unwrap();
+    b.map(port(e1, 0), port(k, CoreXY::X), Mode::Incremental)
+        .unwrap();
+    b.map(port(e2, 0), port(k, CoreXY::Y), Mode::Incremental)
+        .unwrap();
+    b.map(port(k, CoreXY::A), port(ca, 0), Mode::Incremental)
+        .unwrap();
+    b.map(port(k, CoreXY::B), port(cb, 0), Mode::Incremental)
+        .unwrap();
     b.channel_ratio(ca, 25.4, 2874.0).unwrap();
     b.channel_ratio(cb, 25.4, 2874.0).unwrap();
     let mut r = Rig::new(b);
@@ -140,7 +164,8 @@ fn velocity_generator_integrates() {
     for &(speed, secs) in &[(2.5, 1.0), (-4.0, 0.5), (0.0, 0.2), (100.0, 0.04)] {
         let mut b = GraphBuilder::new();
         let v = b.add(VelocityGenerator).unwrap();
-        b.set_param(v, VelocityGenerator::SPEED_PARAM, speed).unwrap();
+        b.set_param(v, VelocityGenerator::SPEED_PARAM, speed)
+            .unwrap();
         let mut r = Rig::new(b);
         let n = (secs * FPS as f64).round() as usize;
         r.run(n);
@@ -153,13 +178,15 @@ fn position_generator_goes_at_constant_speed() {
     let mut b = GraphBuilder::new();
     let p = b.add(PositionGenerator::new(5.0)).unwrap();
     let mut r = Rig::new(b);
-    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 10.0).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, 10.0)
+        .unwrap();
     r.run(FPS);
     assert!((r.v(p, 0) - 5.0).abs() < 1e-9);
     r.run(FPS + 10);
     assert_eq!(r.v(p, 0), 10.0);
     assert!(matches!(r.g.component(p), Some(Component::PositionGenerator(g)) if !g.moving()));
-    r.g.set_param(p, PositionGenerator::GO_RELATIVE, -3.0).unwrap();
+    r.g.set_param(p, PositionGenerator::GO_RELATIVE, -3.0)
+        .unwrap();
     r.run(FPS / 5);
     assert!((r.v(p, 0) - 9.0).abs() < 1e-9);
     r.run(FPS);
@@ -191,10 +218,16 @@ fn wave_1d_driven_by_an_input_stream() {
     // Three waves per revolution of an angle driven at 1 rev/s.
     let mut b = GraphBuilder::new();
     let v = b.add(VelocityGenerator).unwrap();
-    let w = b.add(WaveGenerator1D::new(1.5, 0.0, 0.0).driven(3.0 / TAU)).unwrap();
-    b.set_param(v, VelocityGenerator::SPEED_PARAM, TAU).unwrap();
-    b.map(port(v, 1), port(w, WaveGenerator1D::DRIVE), Mode::Incremental)
+    let w = b
+        .add(WaveGenerator1D::new(1.5, 0.0, 0.0).driven(3.0 / TAU))
         .unwrap();
+    b.set_param(v, VelocityGenerator::SPEED_PARAM, TAU).unwrap();
+    b.map(
+        port(v, 1),
+        port(w, WaveGenerator1D::DRIVE),
+        Mode::Incremental,
+    )
+    .unwrap();
     let mut r = Rig::new(b);
     for n in 1..=FPS {
         r.frame();
@@ -229,11 +262,15 @@ fn path_length_2d_and_3d() {
     let gz = b.add(PositionGenerator::new(12.0)).unwrap();
     let p3 = b.add(PathLength3D::new(0.5)).unwrap();
     for (i, g) in [gx, gy, gz].into_iter().enumerate() {
-        b.map(port(g, 0), port(p3, i as u8), Mode::Incremental).unwrap();
+        b.map(port(g, 0), port(p3, i as u8), Mode::Incremental)
+            .unwrap();
     }
-    b.set_param(gx, PositionGenerator::GO_ABSOLUTE, 3.0).unwrap();
-    b.set_param(gy, PositionGenerator::GO_ABSOLUTE, 4.0).unwrap();
-    b.set_param(gz, PositionGenerator::GO_ABSOLUTE, 12.0).unwrap();
+    b.set_param(gx, PositionGenerator::GO_ABSOLUTE, 3.0)
+        .unwrap();
+    b.set_param(gy, PositionGenerator::GO_ABSOLUTE, 4.0)
+        .unwrap();
+    b.set_param(gz, PositionGenerator::GO_ABSOLUTE, 12.0)
+        .unwrap();
     let mut r = Rig::new(b);
     r.run(FPS);
     let want = 2.0 * TAU * 3.0;
@@ -277,7 +314,8 @@ fn threshold_clamps_and_flags() {
     b.map(port(p, 0), port(t, 0), Mode::Incremental).unwrap();
     let mut r = Rig::new(b);
     for &(target, out, flag) in &[(5.0, 2.0, 1.0), (1.5, 1.5, 0.0), (-4.0, -1.0, -1.0)] {
-        r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, target).unwrap();
+        r.g.set_param(p, PositionGenerator::GO_ABSOLUTE, target)
+            .unwrap();
         r.run(FPS);
         assert_eq!(r.v(t, ThresholdGenerator::OUT), out);
         assert_eq!(r.v(t, ThresholdGenerator::FLAG), flag);
@@ -288,7 +326,13 @@ fn threshold_clamps_and_flags() {
 #[test]
 fn analog_input_mapping() {
     let a = AnalogInput::new(0).floor(0.0, 25.0).ceiling(2.75, 1020.0);
-    for &(raw, want) in &[(25.0, 0.0), (0.0, 0.0), (1020.0, 2.75), (1023.0, 2.75), (522.5, 1.375)] {
+    for &(raw, want) in &[
+        (25.0, 0.0),
+        (0.0, 0.0),
+        (1020.0, 2.75),
+        (1023.0, 2.75),
+        (522.5, 1.375),
+    ] {
         assert!((a.map(raw) - want).abs() < 1e-12, "{raw}");
     }
     let d = AnalogInput::new(0)
@@ -303,8 +347,12 @@ fn analog_input_mapping() {
         .add(AnalogInput::new(2).ceiling(1.0, 1000.0).averaging(4.0))
         .unwrap();
     let v = b.add(VelocityGenerator).unwrap();
-    b.map(port(ai, 0), port(v, VelocityGenerator::SPEED), Mode::Absolute)
-        .unwrap();
+    b.map(
+        port(ai, 0),
+        port(v, VelocityGenerator::SPEED),
+        Mode::Absolute,
+    )
+    .unwrap();
     let mut r = Rig::new(b);
     r.frame();
     r.inputs.analog[2] = 1000.0;
@@ -396,8 +444,10 @@ fn homing_seeks_backs_off_and_resets_without_steps() {
     let lim = b.add(Button::digital(0)).unwrap();
     let h = b.add(Homing::new(-20.0, 1.0, 0.0)).unwrap();
     let ch = b.add(GraphChannel::new()).unwrap();
-    b.map(port(lim, 0), port(h, Homing::LIMIT), Mode::Absolute).unwrap();
-    b.map(port(h, Homing::OUT), port(ch, 0), Mode::Incremental).unwrap();
+    b.map(port(lim, 0), port(h, Homing::LIMIT), Mode::Absolute)
+        .unwrap();
+    b.map(port(h, Homing::OUT), port(ch, 0), Mode::Incremental)
+        .unwrap();
     b.channel_ratio(ch, 1.0, 100.0).unwrap();
     let mut r = Rig::new(b);
     r.g.set_param(h, Homing::START, 1.0).unwrap();

@@ -27,7 +27,10 @@ fn byte_format() {
 #[test]
 fn quantiser_at_most_one_step_per_frame() {
     let mut q = Quantiser::start(0.3);
-    let steps: Vec<i8> = [0.7, 0.81, 3.0, 3.0, 3.0, 3.0, -1.0].iter().map(|&v| q.step(v)).collect();
+    let steps: Vec<i8> = [0.7, 0.81, 3.0, 3.0, 3.0, 3.0, -1.0]
+        .iter()
+        .map(|&v| q.step(v))
+        .collect();
     assert_eq!(steps, vec![0, 1, 1, 1, 0, 0, -1]);
     assert_eq!(q.count(), 2);
 }
@@ -59,15 +62,20 @@ fn recorder_player_round_trip() {
     let py = b.add(GraphChannel::new()).unwrap();
     let pz = b.add(GraphChannel::new()).unwrap();
     let rec = b.add(FourTrackRecorder::new()).unwrap();
-    b.set_param(z, VelocityGenerator::SPEED_PARAM, -1.5).unwrap();
-    b.map(port(circle, 0), port(cx, 0), Mode::Incremental).unwrap();
-    b.map(port(circle, 1), port(cy, 0), Mode::Incremental).unwrap();
+    b.set_param(z, VelocityGenerator::SPEED_PARAM, -1.5)
+        .unwrap();
+    b.map(port(circle, 0), port(cx, 0), Mode::Incremental)
+        .unwrap();
+    b.map(port(circle, 1), port(cy, 0), Mode::Incremental)
+        .unwrap();
     b.map(port(z, 1), port(cz, 0), Mode::Incremental).unwrap();
     for (i, c) in [cx, cy, cz].into_iter().enumerate() {
-        b.tap(port(rec, i as u8), port(c, 0), Mode::Incremental).unwrap();
+        b.tap(port(rec, i as u8), port(c, 0), Mode::Incremental)
+            .unwrap();
     }
     for (i, c) in [px, py, pz].into_iter().enumerate() {
-        b.map(port(player, i as u8), port(c, 0), Mode::Incremental).unwrap();
+        b.map(port(player, i as u8), port(c, 0), Mode::Incremental)
+            .unwrap();
     }
     // Channels at 0.01 mm per step, like the tracks.
     for c in [cx, cy, cz, px, py, pz] {
@@ -120,7 +128,11 @@ fn recorder_player_round_trip() {
     // The replayed path follows the circle within a step of resolution.
     for (i, p) in played_path.iter().enumerate() {
         let a = std::f64::consts::TAU * 0.5 * (i + 1) as f64 * 40e-6;
-        let want = [400.0 * (a.cos() - 1.0), 400.0 * a.sin(), -1.5 * (i + 1) as f64 * 40e-6 * 100.0];
+        let want = [
+            400.0 * (a.cos() - 1.0),
+            400.0 * a.sin(),
+            -1.5 * (i + 1) as f64 * 40e-6 * 100.0,
+        ];
         for k in 0..3 {
             let err = (p[k] as f64 - want[k]).abs();
             worst[k] = worst[k].max(err.ceil() as i64);

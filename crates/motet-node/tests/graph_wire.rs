@@ -99,7 +99,8 @@ fn round_trip_all_subsets_and_directions() {
             // From edges, with up to ±0.3 µs jitter on every edge.
             let mut jittered: Vec<Edge> = edges(&e.lines).to_vec();
             for (i, ed) in jittered.iter_mut().enumerate() {
-                ed.t_us += [0.3, -0.3, 0.1, -0.2, 0.0][i % 5] * if ed.line == Line::Step { 0.5 } else { 1.0 };
+                ed.t_us += [0.3, -0.3, 0.1, -0.2, 0.0][i % 5]
+                    * if ed.line == Line::Step { 0.5 } else { 1.0 };
             }
             jittered.sort_by(|a, b| a.t_us.partial_cmp(&b.t_us).unwrap());
             assert_eq!(decode_edges(&jittered), s.masked(fit));

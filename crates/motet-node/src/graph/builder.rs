@@ -191,7 +191,12 @@ impl<const C: usize, const M: usize> GraphBuilder<C, M> {
     /// The input `listener` taps `source` (an output or another input): it
     /// pulls the source's changes (or absolute value) when its own component
     /// runs. This is fan-out by pull.
-    pub fn tap(&mut self, listener: PortRef, source: PortRef, mode: Mode) -> Result<(), GraphError> {
+    pub fn tap(
+        &mut self,
+        listener: PortRef,
+        source: PortRef,
+        mode: Mode,
+    ) -> Result<(), GraphError> {
         self.check_pair(source, listener, mode)?;
         let _ = self.maps.push(Mapping {
             from: source,

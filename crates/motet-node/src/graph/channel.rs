@@ -183,14 +183,10 @@ impl Kind for GraphChannel {
         }
     }
 
-    /// Reset: the channel's target and position become the reset input's value
-    /// (the other input is cleared); no step.
+    /// Reset: the new target (sum of both inputs) becomes the position; no step.
     fn reset_input(&mut self, ports: &mut [Port], port: usize) -> bool {
         if port < 2 {
-            let other = 1 - port;
-            ports[other].value = 0.0;
-            ports[other].last = 0.0;
-            self.target = ports[port].value;
+            self.target = ports[0].value + ports[1].value;
             self.filtered = self.target;
             self.current = round(self.target);
             ports[2].value = self.current;
@@ -216,9 +212,7 @@ impl Kind for GraphChannel {
         self.current = round(ports[2].value);
         self.target = self.current;
         self.filtered = self.current;
-        ports[0].value = self.current;
-        ports[0].last = self.current;
-        ports[1].value = 0.0;
-        ports[1].last = 0.0;
+        ports[0].value = self.current - ports[1].value;
+        ports[0].last = ports[0].value;
     }
 }

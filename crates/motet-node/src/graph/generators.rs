@@ -267,7 +267,10 @@ impl Kind for WaveGenerator2D {
         if dist > 0.0 {
             self.normal = (-dy / dist, dx / dist);
         }
-        self.cycles = advance(self.cycles, self.frequency * ctx.dt + dist * self.per_distance);
+        self.cycles = advance(
+            self.cycles,
+            self.frequency * ctx.dt + dist * self.per_distance,
+        );
         let off = self.amplitude * sin(TAU * self.cycles + self.phase);
         ports[2].value = ports[0].value + off * self.normal.0;
         ports[3].value = ports[1].value + off * self.normal.1;

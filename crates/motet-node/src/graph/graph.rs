@@ -27,7 +27,7 @@ use super::builder::GraphBuilder;
 use super::component::{Component, ParamError, Phase};
 use super::error::GraphError;
 use super::io::{Ctx, FrameOut, Inputs};
-use super::port::{Dir, MapKind, Mapping, Port, PortRef};
+use super::port::{Dir, MapKind, Mapping, Mode, Port, PortRef};
 use super::record::Tape;
 
 /// Most ports one component has.
@@ -222,14 +222,15 @@ impl<const C: usize, const M: usize> Graph<C, M> {
         }
     }
 
-    /// Pushes the absolute position `value` (world units of `port`) through the
-    /// chain from `port` down to the channels, through kinematics (outputs are
-    /// recomputed from the inputs' absolute values), without producing steps:
-    /// every mapping on the way absorbs the change. At an input fed by several
-    /// mappings the reset value replaces their sum; at a channel it becomes
-    /// target and position (rounded to a whole step) and the other target input
-    /// is cleared. Components without a function from inputs to outputs
-    /// (generators) stop the walk.
+    /// Sets `port` to the absolute position `value` (world units of `port`)
+    /// and carries it down the chain to the channels without producing steps:
+    /// kinematics recompute their outputs from their inputs' absolute values,
+    /// an INCREMENTAL mapping shifts its target by the source's change (so other
+    /// contributions to a fan-in input are kept), an ABSOLUTE mapping sets its
+    /// target, and every mapping on the way absorbs the change. A channel takes
+    /// the new target as its position (rounded to a whole step). Components
+    /// whose outputs are not a function of their inputs (generators) end the
+    /// walk.
     pub fn reset_deep(&mut self, port: PortRef, value: f64) -> Result<(), GraphError> {
         self.check(port)?;
         if !value.is_finite() {
@@ -255,12 +256,13 @@ impl<const C: usize, const M: usize> Graph<C, M> {
             return Err(GraphError::TooDeep);
         }
         let (ci, pi) = (p.comp as usize, p.port as usize);
-        let dir = {
+        let (dir, old_w) = {
             let port = &mut self.blocks[ci].ports[pi];
+            let old_w = port.world_value();
             let vb = port.from_world(v);
             port.value = vb;
             port.last = vb;
-            port.dir
+            (port.dir, old_w)
         };
         match dir {
             Dir::Out => {
@@ -268,10 +270,19 @@ impl<const C: usize, const M: usize> Graph<C, M> {
                 b.comp.reset_output(&mut b.ports, pi);
                 self.absorb(p);
                 let w = self.blocks[ci].ports[pi].world_value();
+                let dw = w - old_w;
                 for k in 0..self.maps.len() {
                     let m = self.maps[k];
                     if m.from == p && m.kind == MapKind::Push {
-                        self.reset_port(m.to, w, depth + 1)?;
+                        let target = match m.mode {
+                            Mode::Incremental => {
+                                self.blocks[m.to.comp as usize].ports[m.to.port as usize]
+                                    .world_value()
+                                    + dw
+                            }
+                            Mode::Absolute => w,
+                        };
+                        self.reset_port(m.to, target, depth + 1)?;
                     }
                 }
                 // The component may have moved its other ports (a channel).
@@ -293,6 +304,8 @@ impl<const C: usize, const M: usize> Graph<C, M> {
                     }
                     let op = PortRef::new(p.comp, o as u8);
                     if propagate {
+                        // reset_port measures the change from the old value.
+                        self.blocks[ci].ports[o].value = before[o];
                         self.reset_port(op, q.world_value(), depth + 1)?;
                     } else {
                         self.absorb(op);

@@ -86,7 +86,8 @@ impl AnalogInput {
         let v = if span == 0.0 {
             self.floor_value
         } else {
-            self.floor_value + (raw - self.floor_raw) * (self.ceiling_value - self.floor_value) / span
+            self.floor_value
+                + (raw - self.floor_raw) * (self.ceiling_value - self.floor_value) / span
         };
         let (lo, hi) = if self.floor_value <= self.ceiling_value {
             (self.floor_value, self.ceiling_value)

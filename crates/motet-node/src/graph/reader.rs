@@ -29,7 +29,11 @@ impl TrajectoryReader {
     }
 
     /// Planned position of `axis` at `t_us`, if the queue holds any segment.
-    pub fn position<const Q: usize>(segments: &Deque<Segment, Q>, axis: usize, t_us: f64) -> Option<f64> {
+    pub fn position<const Q: usize>(
+        segments: &Deque<Segment, Q>,
+        axis: usize,
+        t_us: f64,
+    ) -> Option<f64> {
         let mut last = None;
         for seg in segments.iter() {
             if t_us < seg.t0 {
