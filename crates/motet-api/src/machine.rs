@@ -33,6 +33,8 @@ pub enum ApiError {
     Io { path: String, error: std::io::Error },
     #[error("render failed: {0}")]
     Render(String),
+    #[error(transparent)]
+    Job(#[from] crate::job::JobError),
 }
 
 /// Something the machine did, with the simulated time in seconds.
@@ -160,6 +162,39 @@ impl Machine {
             return Err(ApiError::BadDwell(seconds));
         }
         self.push(Command::Dwell { seconds })
+    }
+
+    /// Reads a job file (G-code, SVG, photo), checks it against the machine and
+    /// queues all of it; returns the number of commands. On error nothing of
+    /// the job is queued.
+    pub fn run_job(
+        &mut self,
+        path: impl AsRef<Path>,
+        allow_unknown: bool,
+    ) -> Result<usize, ApiError> {
+        let path = path.as_ref();
+        let job = crate::job::load_job(
+            self.description(),
+            path,
+            &crate::job::JobOptions { allow_unknown },
+        )?;
+        // The job was checked from the machine's start; it must also fit from here.
+        if let Some(Command::Move(first)) = job
+            .commands
+            .iter()
+            .map(|c| c.item)
+            .find(|c| matches!(c, Command::Move(_)))
+        {
+            check_move(self.description(), &self.target, &first.target)
+                .map_err(ApiError::Unreachable)?;
+        }
+        for c in &job.commands {
+            self.push(c.item)?;
+            if let Command::Move(m) = c.item {
+                self.target = m.target;
+            }
+        }
+        Ok(job.commands.len())
     }
 
     /// Blocks until everything queued has been executed and the machine rests.

@@ -76,7 +76,8 @@ fn refused_calls_leave_queued_motion_untouched() {
     m.move_to(&[("x", 50.0), ("y", 50.0)], Some(100.0)).unwrap();
     let before = m.target();
     // (call, expected error)
-    let bad: Vec<(Box<dyn Fn(&mut Machine) -> Result<(), ApiError>>, &str)> = vec![
+    type Call = Box<dyn Fn(&mut Machine) -> Result<(), ApiError>>;
+    let bad: Vec<(Call, &str)> = vec![
         (
             Box::new(|m| m.move_to(&[("x", 500.0)], None)),
             "beyond the axis's travel",

@@ -446,7 +446,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         })?;
         // Each element is sane, yet extreme values can overflow or underflow.
         let spu = chain.steps_per_unit.abs();
-        if !(spu.is_finite() && spu >= 1e-6 && spu <= motet_node_limits::MAX_STEPS_PER_UNIT) {
+        if !(1e-6..=motet_node_limits::MAX_STEPS_PER_UNIT).contains(&spu) {
             return Err(src.err(
                 a.chain.span(),
                 format!(

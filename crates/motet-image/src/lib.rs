@@ -169,6 +169,29 @@ pub fn parse(
     parse_with_info(data, target, opts).map(|(commands, _)| commands)
 }
 
+/// Edge polylines in the working image's pixels (x right, y down).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EdgeDrawing {
+    pub width_px: u32,
+    pub height_px: u32,
+    pub polylines: Vec<Vec<[f64; 2]>>,
+}
+
+/// The first half of the pipeline for callers that place and order strokes
+/// themselves (the Python example does): decode, grayscale, resize, blur,
+/// Canny, thin, trace, drop short chains, simplify. Returns the working image
+/// size and the polylines in its pixel coordinates.
+pub fn edge_polylines(data: &[u8], opts: &ImageOptions) -> Result<EdgeDrawing, SourceError> {
+    check_options(opts)?;
+    let work = resize(decode(data)?, opts.max_px);
+    let (w, h) = work.dimensions();
+    Ok(EdgeDrawing {
+        width_px: w,
+        height_px: h,
+        polylines: polylines(&work, opts),
+    })
+}
+
 /// [`parse`], also returning statistics about the drawing.
 pub fn parse_with_info(
     data: &[u8],

@@ -2,6 +2,7 @@
 import math
 import os
 import pathlib
+import sys
 import time
 
 import pytest
@@ -87,3 +88,33 @@ def test_interactive_session_streams(tmp_path):
     m.save(str(tmp_path))
     assert (tmp_path / "path.png").exists()
     print(f"longest call {longest * 1e3:.2f} ms")
+
+
+def test_trace_edges_and_run_job(tmp_path):
+    w, h, lines = motet.trace_edges(str(ROOT / "examples" / "photos" / "portrait.jpg"), max_px=200)
+    assert (w, h) == (200, 200)
+    assert len(lines) > 20
+    assert all(0 <= x <= w and 0 <= y <= h for line in lines for x, y in line)
+    with pytest.raises(motet.MotetError):
+        motet.trace_edges(str(ROOT / "examples" / "plotter.toml"))
+    m = motet.Machine(PLOTTER)
+    n = motet.run_job(m, str(ROOT / "examples" / "jobs" / "drawing.svg"))
+    assert n > 100
+    m.wait()
+    assert m.report()["tool_on_distance_mm"] > 1000
+
+
+@pytest.mark.parametrize("script, args", [
+    ("dragon_curve.py", ["8"]),
+    ("photo_to_drawing.py", ["examples/photos/portrait.jpg"]),
+])
+def test_examples_run(tmp_path, script, args):
+    import subprocess
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "python" / script), *args, str(out)],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    assert (out / "path.png").exists()
+    assert "wrote" in result.stdout

@@ -13,7 +13,9 @@ fn root() -> PathBuf {
 fn run(machine: &str, job: &str) -> (Machine, Vec<Located<Command>>, SimResult) {
     let m = Machine::load(&root().join("examples").join(machine)).unwrap();
     let path = root().join("examples/jobs").join(job);
-    let cmds = motet_api::load_job(&m, &path, &motet_api::JobOptions::default()).unwrap().commands;
+    let cmds = motet_api::load_job(&m, &path, &motet_api::JobOptions::default())
+        .unwrap()
+        .commands;
     let r = simulate(&m, job, &cmds, &mut |_, _| {}).unwrap();
     (m, cmds, r)
 }

@@ -22,6 +22,8 @@ from ._motet import (
     UnknownNameError,
     UnreachableError,
     ValueOutOfRangeError,
+    run_job,
+    trace_edges,
 )
 
 __all__ = [
@@ -31,4 +33,6 @@ __all__ = [
     "UnreachableError",
     "UnknownNameError",
     "ValueOutOfRangeError",
+    "run_job",
+    "trace_edges",
 ]

@@ -1,5 +1,5 @@
 from types import TracebackType
-from typing import Any, Callable, Dict, List, Optional, Type
+from typing import Any, Callable, Dict, List, Optional, Tuple, Type
 
 class MotetError(Exception):
     """Base class of motet's errors."""
@@ -64,3 +64,22 @@ class Machine:
         exc: Optional[BaseException],
         tb: Optional[TracebackType],
     ) -> bool: ...
+
+def trace_edges(
+    path: str,
+    max_px: int = 400,
+    blur_sigma: float = 1.5,
+    min_length_px: int = 8,
+    simplify_px: float = 0.8,
+) -> Tuple[int, int, List[List[Tuple[float, float]]]]:
+    """Edges of a photograph (PNG or JPEG) as polylines.
+
+    Decodes, converts to grayscale, resizes so the longest side is max_px, blurs,
+    finds Canny edges, thins them, traces edge pixels into polylines, drops
+    chains shorter than min_length_px and simplifies within simplify_px.
+    Returns (width_px, height_px, polylines); points are (x, y) in pixels with
+    y pointing down."""
+
+def run_job(machine: Machine, path: str, allow_unknown: bool = False) -> int:
+    """Read a job file (G-code, SVG or photo), check it against the machine and
+    queue all of it, as `motet run` does. Returns the number of commands."""
