@@ -17,4 +17,7 @@ pub mod tool;
 
 pub use board::Board;
 pub use channel::Channel;
-pub use node::{Node, NodeStatus, DEFAULT_QUEUE, MAX_CHANNELS, MAX_STEPS_PER_UNIT, MAX_TOOLS};
+pub use node::{
+    Node, NodeGraph, NodeStatus, DEFAULT_QUEUE, GRAPH_COMPONENTS, GRAPH_MAPPINGS, MAX_CHANNELS,
+    MAX_STEPS_PER_UNIT, MAX_TOOLS,
+};

@@ -2,12 +2,45 @@
 
 use crate::board::Board;
 use crate::channel::Channel;
+use crate::graph::{
+    self, Component, FrameOut, Graph, GraphBuilder, Inputs, Mode, PortRef, Tape, MAX_HW,
+    SLOW_FRAME_US,
+};
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
 use motet_trajectory::{JointMap, Point, Profile, Segment, MAX_AXES};
+use motet_wire::message::{GraphInputKind, GraphMode};
 use motet_wire::{
     decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig,
 };
+
+/// Most components of a graph a node hosts.
+pub const GRAPH_COMPONENTS: usize = 32;
+/// Most mappings of a graph a node hosts.
+pub const GRAPH_MAPPINGS: usize = 64;
+/// The graph a node hosts.
+pub type NodeGraph = Graph<GRAPH_COMPONENTS, GRAPH_MAPPINGS>;
+type NodeGraphBuilder = GraphBuilder<GRAPH_COMPONENTS, GRAPH_MAPPINGS>;
+
+/// A dataflow graph hosted by a node, run frame by frame over the poll
+/// interval.
+struct Hosted {
+    graph: NodeGraph,
+    /// Graph channel ordinal of each component (`u8::MAX`: not a channel).
+    channel_of: [u8; GRAPH_COMPONENTS],
+    /// Time of the next core frame, µs (set at the first poll).
+    next: Option<f64>,
+    /// Time of the next slow frame, µs.
+    next_slow: f64,
+    frames: u64,
+}
+
+/// A graph being described, between `GraphBegin` and `GraphCommit`.
+struct Building {
+    builder: NodeGraphBuilder,
+    /// A step was refused: the commit will be.
+    failed: bool,
+}
 
 /// Segment queue capacity (MAXL's maximum buffer).
 pub const DEFAULT_QUEUE: usize = 64;
@@ -34,8 +67,10 @@ pub struct NodeStatus {
     pub underruns: u32,
 }
 
-/// A node with a segment queue of `Q` places.
-pub struct Node<const Q: usize = DEFAULT_QUEUE> {
+/// A node with a segment queue of `Q` places and a recording tape of `T`
+/// bytes for a hosted graph's four-track recorder and player (one byte per
+/// core frame).
+pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     channels: Vec<Channel, MAX_CHANNELS>,
     tools: Vec<ToolOutput, MAX_TOOLS>,
     segments: Deque<Segment, Q>,
@@ -47,15 +82,21 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE> {
     tail: Point,
     underruns: u32,
     starved: bool,
+    hosted: Option<Hosted>,
+    building: Option<Building>,
+    inputs: Inputs,
+    frame_out: FrameOut,
+    tape: [u8; T],
+    tape_len: usize,
 }
 
-impl<const Q: usize> Default for Node<Q> {
+impl<const Q: usize, const T: usize> Default for Node<Q, T> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const Q: usize> Node<Q> {
+impl<const Q: usize, const T: usize> Node<Q, T> {
     pub const fn new() -> Self {
         Node {
             channels: Vec::new(),
@@ -67,6 +108,20 @@ impl<const Q: usize> Node<Q> {
             tail: [0.0; MAX_AXES],
             underruns: 0,
             starved: false,
+            hosted: None,
+            building: None,
+            inputs: Inputs {
+                encoders: [0; MAX_HW],
+                analog: [0.0; MAX_HW],
+                digital: [false; MAX_HW],
+                streams: [graph::wire::Signals::NONE; MAX_HW],
+            },
+            frame_out: FrameOut {
+                steps: Vec::new(),
+                ports: [graph::wire::Signals::NONE; MAX_HW],
+            },
+            tape: [0; T],
+            tape_len: 0,
         }
     }
 
@@ -105,8 +160,174 @@ impl<const Q: usize> Node<Q> {
                 self.push_event(track, time, value, feed)
             }
             HostMessage::Status => return Some(self.status_message()),
+            HostMessage::GraphBegin { frame_us } => {
+                if !(frame_us.is_finite() && frame_us >= 1.0) {
+                    Err(Refusal::BadGraph)
+                } else {
+                    let mut builder = NodeGraphBuilder::new();
+                    builder.frame_us(frame_us);
+                    self.building = Some(Building {
+                        builder,
+                        failed: false,
+                    });
+                    Ok(())
+                }
+            }
+            HostMessage::GraphAdd { kind, params } => {
+                self.build_step(|b| graph::spec::add(b, kind, &params).map(|_| ()).ok_or(()))
+            }
+            HostMessage::GraphRatio { port, world, block } => self.build_step(|b| {
+                b.set_ratio(PortRef::new(port.comp, port.port), world, block)
+                    .map_err(|_| ())
+            }),
+            HostMessage::GraphMap {
+                from,
+                to,
+                mode,
+                tap,
+            } => self.build_step(|b| {
+                let (from, to) = (
+                    PortRef::new(from.comp, from.port),
+                    PortRef::new(to.comp, to.port),
+                );
+                let mode = match mode {
+                    GraphMode::Incremental => Mode::Incremental,
+                    GraphMode::Absolute => Mode::Absolute,
+                };
+                if tap {
+                    b.tap(to, from, mode)
+                } else {
+                    b.map(from, to, mode)
+                }
+                .map_err(|_| ())
+            }),
+            HostMessage::GraphCommit => self.commit_graph(),
+            HostMessage::GraphParam {
+                component,
+                param,
+                value,
+            } => match self.hosted.as_mut() {
+                Some(h) => h
+                    .graph
+                    .set_param(component, param, value)
+                    .map_err(|_| Refusal::BadGraph),
+                None => Err(Refusal::BadGraph),
+            },
+            HostMessage::GraphInput { kind, index, value } => self.set_input(kind, index, value),
+            HostMessage::GraphClear => {
+                self.hosted = None;
+                self.building = None;
+                Ok(())
+            }
         };
         result.err().map(|reason| NodeMessage::Refused { reason })
+    }
+
+    /// One step of describing a graph; a failure is refused and fails the
+    /// commit.
+    fn build_step(
+        &mut self,
+        f: impl FnOnce(&mut NodeGraphBuilder) -> Result<(), ()>,
+    ) -> Result<(), Refusal> {
+        let b = self.building.as_mut().ok_or(Refusal::BadGraph)?;
+        if b.failed {
+            return Err(Refusal::BadGraph);
+        }
+        f(&mut b.builder).map_err(|_| {
+            b.failed = true;
+            Refusal::BadGraph
+        })
+    }
+
+    fn commit_graph(&mut self) -> Result<(), Refusal> {
+        let b = self.building.take().ok_or(Refusal::BadGraph)?;
+        if b.failed {
+            return Err(Refusal::BadGraph);
+        }
+        let graph = b.builder.build().map_err(|_| Refusal::BadGraph)?;
+        let mut channel_of = [u8::MAX; GRAPH_COMPONENTS];
+        let mut n = 0u8;
+        for (i, slot) in channel_of.iter_mut().enumerate().take(graph.len()) {
+            if matches!(graph.component(i as u8), Some(Component::Channel(_))) {
+                *slot = n;
+                n += 1;
+            }
+        }
+        self.hosted = Some(Hosted {
+            graph,
+            channel_of,
+            next: None,
+            next_slow: 0.0,
+            frames: 0,
+        });
+        self.tape_len = 0;
+        Ok(())
+    }
+
+    fn set_input(&mut self, kind: GraphInputKind, index: u8, value: f64) -> Result<(), Refusal> {
+        let i = index as usize;
+        if i >= MAX_HW || !value.is_finite() {
+            return Err(Refusal::BadGraph);
+        }
+        match kind {
+            GraphInputKind::Encoder => {
+                if value.abs() > 9.0e18 {
+                    return Err(Refusal::BadGraph);
+                }
+                self.inputs.encoders[i] = libm::round(value) as i64;
+            }
+            GraphInputKind::Analog => self.inputs.analog[i] = value as f32,
+            GraphInputKind::Digital => self.inputs.digital[i] = value != 0.0,
+            GraphInputKind::Stream => {
+                let bits = value as u32;
+                self.inputs.streams[i] = graph::wire::Signals {
+                    active: (bits & 0xff) as u8,
+                    forward: ((bits >> 8) & 0xff) as u8,
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// The hosted graph, if one runs.
+    pub fn graph(&self) -> Option<&NodeGraph> {
+        self.hosted.as_ref().map(|h| &h.graph)
+    }
+
+    /// The hosted graph, mutable (for a simulator or firmware that sets
+    /// parameters or resets positions locally).
+    pub fn graph_mut(&mut self) -> Option<&mut NodeGraph> {
+        self.hosted.as_mut().map(|h| &mut h.graph)
+    }
+
+    /// Core frames the hosted graph has run.
+    pub fn graph_frames(&self) -> u64 {
+        self.hosted.as_ref().map_or(0, |h| h.frames)
+    }
+
+    /// The recording tape of the hosted graph's recorder.
+    pub fn tape(&self) -> &[u8] {
+        &self.tape[..self.tape_len]
+    }
+
+    /// The board channel id of the first graph channel: graph channel `k` (in
+    /// creation order) steps as `graph_channel_base() + k`, after the
+    /// trajectory channels' ids.
+    pub fn graph_channel_base(&self) -> u8 {
+        self.channels
+            .iter()
+            .map(|c| c.config().channel.saturating_add(1))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The time of the hosted graph's next frame, if a graph runs.
+    fn graph_next(&self) -> Option<f64> {
+        let h = self.hosted.as_ref()?;
+        Some(match h.next {
+            Some(t) => t,
+            None => first_frame(self.now, h.graph.frame_us()),
+        })
     }
 
     fn configure_channel(&mut self, c: ChannelConfig) -> Result<(), Refusal> {
@@ -280,12 +501,61 @@ impl<const Q: usize> Node<Q> {
                 best = Some(best.map_or(st.time, |b: f64| b.min(st.time)));
             }
         }
+        if let Some(t) = self.graph_next() {
+            best = Some(best.map_or(t, |b: f64| b.min(t)));
+        }
         best
     }
 
     /// Runs the frame ending at `until` (µs): every step and tool change due
-    /// before then goes to `board`, in time order.
+    /// before then goes to `board`, in time order. A hosted graph runs its
+    /// frames at its frame period over `[now, until)`, interleaved in time
+    /// with the trajectory: its channels' steps go to `board` at their
+    /// frame's time, as channel ids from [`Node::graph_channel_base`] on.
     pub fn poll<B: Board>(&mut self, until: f64, board: &mut B) {
+        while let Some(t) = self.graph_next().filter(|&t| t < until) {
+            self.poll_trajectory(t, board);
+            self.graph_frame(t, board);
+        }
+        self.poll_trajectory(until, board);
+    }
+
+    fn graph_frame<B: Board>(&mut self, t: f64, board: &mut B) {
+        let base = self.graph_channel_base();
+        let Some(h) = self.hosted.as_mut() else {
+            return;
+        };
+        let period = h.graph.frame_us();
+        if h.next.is_none() {
+            h.next_slow = t;
+        }
+        if t >= h.next_slow {
+            h.graph.slow_frame(&self.inputs);
+            h.next_slow += SLOW_FRAME_US;
+            if h.next_slow <= t {
+                h.next_slow = t + SLOW_FRAME_US;
+            }
+        }
+        let mut tape = Tape::with_len(&mut self.tape, self.tape_len);
+        h.graph.frame(
+            t,
+            &self.inputs,
+            &self.segments,
+            &mut self.frame_out,
+            &mut tape,
+        );
+        self.tape_len = tape.len();
+        for s in self.frame_out.steps.iter() {
+            let k = h.channel_of[s.channel as usize];
+            board.step(base.saturating_add(k), s.forward, t);
+        }
+        // Stream inputs carry one frame's signals.
+        self.inputs.streams = [graph::wire::Signals::NONE; MAX_HW];
+        h.frames += 1;
+        h.next = Some(t + period);
+    }
+
+    fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {
         loop {
             let mut best: Option<(usize, f64)> = None;
             for (i, ch) in self.channels.iter_mut().enumerate() {
@@ -387,5 +657,15 @@ fn map_is_valid(map: &JointMap) -> bool {
         JointMap::PolarRadius { x, y } | JointMap::PolarAngle { x, y } => {
             (x as usize) < MAX_AXES && (y as usize) < MAX_AXES
         }
+    }
+}
+
+/// The first frame of a graph committed when the node had run up to `now`:
+/// the first multiple of the period at or after it (0 before any poll).
+fn first_frame(now: f64, period: f64) -> f64 {
+    if now.is_finite() {
+        libm::ceil(now / period) * period
+    } else {
+        0.0
     }
 }

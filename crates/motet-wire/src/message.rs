@@ -72,6 +72,134 @@ pub enum HostMessage {
     },
     /// Ask for a [`NodeMessage::Status`].
     Status,
+    /// Start describing a dataflow graph (frame period in µs). The node builds
+    /// it aside; the running graph (if any) keeps running until
+    /// [`HostMessage::GraphCommit`].
+    GraphBegin {
+        frame_us: f64,
+    },
+    /// Add a component (its index is the count of components added before it).
+    /// `params` are the kind's construction values in the order listed on
+    /// [`GraphKind`].
+    GraphAdd {
+        kind: GraphKind,
+        params: Vec<f64, MAX_GRAPH_PARAMS>,
+    },
+    /// `world` world units are `block` units of the port.
+    GraphRatio {
+        port: GraphPort,
+        world: f64,
+        block: f64,
+    },
+    /// Map the output `from` onto the input `to`; with `tap`, the input `to`
+    /// pulls from the port `from` (fan-out by pull).
+    GraphMap {
+        from: GraphPort,
+        to: GraphPort,
+        mode: GraphMode,
+        tap: bool,
+    },
+    /// Validate the graph described since [`HostMessage::GraphBegin`] and swap it
+    /// in; refused (the running graph untouched) if any step or the whole failed.
+    GraphCommit,
+    /// Change a parameter of a component of the running graph.
+    GraphParam {
+        component: u8,
+        param: u8,
+        value: f64,
+    },
+    /// A reading from outside: encoder count, analog value or button level.
+    GraphInput {
+        kind: GraphInputKind,
+        index: u8,
+        value: f64,
+    },
+    /// Remove the running graph (and any graph being built).
+    GraphClear,
+}
+
+/// Most construction values a [`HostMessage::GraphAdd`] carries.
+pub const MAX_GRAPH_PARAMS: usize = 8;
+
+/// A port of a graph component: component index, port index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GraphPort {
+    pub comp: u8,
+    pub port: u8,
+}
+
+/// Mapping mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GraphMode {
+    Incremental,
+    Absolute,
+}
+
+/// Which hardware input a [`HostMessage::GraphInput`] sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GraphInputKind {
+    /// Quadrature count (rounded to an integer).
+    Encoder,
+    /// Raw analog reading.
+    Analog,
+    /// Digital level: nonzero is pressed.
+    Digital,
+    /// Motion-stream input: the value's bits are the signals (active in bits
+    /// 0..7, forward in bits 8..15) for the next frame.
+    Stream,
+}
+
+/// Component kinds, with the construction values of [`HostMessage::GraphAdd`]
+/// in order (missing trailing values take the defaults in brackets; a flag is
+/// nonzero for true; `hw` is the hardware input index):
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GraphKind {
+    /// hw, floor_value [0], floor_raw [0], ceiling_value [1], ceiling_raw
+    /// [1023], deadband_center [0], deadband_width [0], average [1].
+    AnalogInput,
+    /// hw, toggle [0], debounce_ms [5].
+    Button,
+    /// hw, invert [0].
+    Encoder,
+    /// hw.
+    StreamInput,
+    /// ratio [1], absolute [0].
+    ScalingFilter1D,
+    /// ratio [1], absolute [0].
+    ScalingFilter2D,
+    /// lower, upper.
+    ThresholdGenerator,
+    /// (none).
+    CoreXY,
+    /// (none).
+    PolarToCartesian,
+    /// s, l1, l2, l3, l4, ext [0].
+    FiveBarForward,
+    /// speed [0].
+    VelocityGenerator,
+    /// speed [0].
+    PositionGenerator,
+    /// amplitude, frequency [0], phase [0], per_input [0].
+    WaveGenerator1D,
+    /// amplitude, frequency [0], phase [0], per_distance [0].
+    WaveGenerator2D,
+    /// radius, rev_per_s.
+    CircleGenerator,
+    /// ratio [1].
+    PathLength2D,
+    /// ratio [1].
+    PathLength3D,
+    /// (none).
+    FourTrackRecorder,
+    /// loop [0].
+    FourTrackPlayer,
+    /// speed, backoff [0], home [0].
+    Homing,
+    /// axis [0].
+    TrajectoryReader,
+    /// filter [0], invert [0], max_pulse_rate [0], lower [-inf], upper [+inf],
+    /// wire output port [-1: none], signal code [0].
+    Channel,
 }
 
 /// Node → host.
@@ -95,9 +223,16 @@ pub enum NodeMessage {
 pub enum Refusal {
     Malformed,
     QueueFull,
-    OutOfOrder { expected: u32, got: u32 },
+    OutOfOrder {
+        expected: u32,
+        got: u32,
+    },
     BadConfig,
     NotAtRest,
+    /// A graph message was refused: a bad component, port, ratio, mapping or
+    /// parameter, a graph that does not validate at commit, or a graph message
+    /// out of place (building without `GraphBegin`, a parameter with no graph).
+    BadGraph,
 }
 
 #[cfg(test)]
@@ -147,6 +282,34 @@ mod tests {
                 value: 0.25,
             },
             HostMessage::Status,
+            HostMessage::GraphBegin { frame_us: 40.0 },
+            HostMessage::GraphAdd {
+                kind: GraphKind::AnalogInput,
+                params: Vec::from_slice(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]).unwrap(),
+            },
+            HostMessage::GraphRatio {
+                port: GraphPort { comp: 1, port: 2 },
+                world: 25.4,
+                block: 2874.0,
+            },
+            HostMessage::GraphMap {
+                from: GraphPort { comp: 0, port: 0 },
+                to: GraphPort { comp: 3, port: 1 },
+                mode: GraphMode::Absolute,
+                tap: true,
+            },
+            HostMessage::GraphCommit,
+            HostMessage::GraphParam {
+                component: 4,
+                param: 2,
+                value: -0.5,
+            },
+            HostMessage::GraphInput {
+                kind: GraphInputKind::Encoder,
+                index: 1,
+                value: -1234.0,
+            },
+            HostMessage::GraphClear,
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {

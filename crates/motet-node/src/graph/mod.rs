@@ -28,6 +28,7 @@ pub mod port;
 pub mod reader;
 pub mod record;
 pub mod recorder;
+pub mod spec;
 pub mod wire;
 
 pub use builder::GraphBuilder;
