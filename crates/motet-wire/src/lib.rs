@@ -8,7 +8,10 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod frame;
+pub mod link;
 pub mod message;
+pub mod sync;
 
 pub use message::{
     AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,
