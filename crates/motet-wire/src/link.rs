@@ -467,9 +467,8 @@ impl Link {
         }
         // Answer with our SYN (carrying the ack) until ours is acknowledged,
         // else with a plain ack.
-        if self.syn_acked {
-            self.ack_pending = true;
-        } else {
+        self.ack_pending = true;
+        if !self.syn_acked {
             self.synack_pending = true;
         }
         true
