@@ -57,17 +57,22 @@ pub struct SyncConfig {
     pub rtt_gate_us: f64,
     /// Added to a point's excess half-width before weighting, µs.
     pub weight_floor_us: f64,
+    /// Two points in a row this many standard deviations off the fit mean
+    /// the drift changed: the fit then keeps only [`SyncConfig::forget`]²⁰ of its
+    /// past weight (0 disables).
+    pub change_sigma: f64,
 }
 
 impl Default for SyncConfig {
-    /// 32 exchanges per point, forget 0.9 (about 10 points of memory),
-    /// gate 10 ms, weight floor 2 µs.
+    /// 32 exchanges per point, forget 0.95 (about 20 points of memory), gate
+    /// 10 ms, weight floor 10 µs, change detection at 4σ.
     fn default() -> Self {
         SyncConfig {
             bin: 32,
-            forget: 0.9,
+            forget: 0.95,
             rtt_gate_us: 10_000.0,
-            weight_floor_us: 2.0,
+            weight_floor_us: 10.0,
+            change_sigma: 4.0,
         }
     }
 }
@@ -93,6 +98,10 @@ fn sqrt(x: f64) -> f64 {
         y = 0.5 * (y + x / y);
     }
     y
+}
+
+fn powi(x: f64, n: u32) -> f64 {
+    (0..n).fold(1.0, |p, _| p * x)
 }
 
 /// Clock offset and skew estimator (see the module documentation).
@@ -122,6 +131,9 @@ pub struct ClockSync {
     // normalised innovation variance
     nres: f64,
     nres_n: f64,
+    ures: f64,
+    outliers: u8,
+    changes: u32,
     exchanges: u64,
     rejected: u64,
 }
@@ -155,6 +167,9 @@ impl ClockSync {
             min_half: f64::INFINITY,
             nres: 0.0,
             nres_n: 0.0,
+            ures: 0.0,
+            outliers: 0,
+            changes: 0,
             exchanges: 0,
             rejected: 0,
         }
@@ -163,6 +178,11 @@ impl ClockSync {
     /// Filtered points fitted so far.
     pub fn points(&self) -> u32 {
         self.points
+    }
+
+    /// Drift changes detected.
+    pub fn changes(&self) -> u32 {
+        self.changes
     }
 
     /// Exchanges taken and exchanges dropped by the RTT gate.
@@ -236,13 +256,35 @@ impl ClockSync {
         let excess = (half - self.min_half).max(0.0) + self.cfg.weight_floor_us;
         let w = 1.0 / (excess * excess);
         // Innovation against the fit so far.
+        let mut k = self.cfg.forget;
         if self.points >= 2 {
             let innov = y - self.theta(x);
-            self.nres = self.cfg.forget * self.nres + innov * innov * w;
+            let z2 = innov * innov * w;
+            // Change detection on plain innovations: the weights make a lucky
+            // point's normalised innovation large without any change.
+            let u2 = innov * innov;
+            let usigma2 = if self.nres_n > 0.0 {
+                self.ures / self.nres_n
+            } else {
+                f64::INFINITY
+            };
+            self.ures = self.cfg.forget * self.ures + u2;
+            let c = self.cfg.change_sigma;
+            if c > 0.0 && self.points >= 6 && u2 > c * c * usigma2 {
+                self.outliers += 1;
+                if self.outliers >= 2 {
+                    // Drift changed: keep little of the past.
+                    self.outliers = 0;
+                    self.changes += 1;
+                    k = powi(k, 20);
+                }
+            } else {
+                self.outliers = 0;
+            }
+            self.nres = self.cfg.forget * self.nres + z2;
             self.nres_n = self.cfg.forget * self.nres_n + 1.0;
         }
         // Decay and move the reference to the new point.
-        let k = self.cfg.forget;
         let d = x - self.x_ref;
         let (sw, swx, swy, swxx, swxy) = (
             k * self.sw,

@@ -1,0 +1,219 @@
+//! Clock synchronisation in a simulated world: a node crystal off by up to
+//! ±200 ppm, up to 1 ms of random one-way jitter, a loopback-like fixed delay.
+//! The true error is measured against the simulated node clock.
+
+use motet_wire::sync::{ClockSync, Exchange, SyncConfig};
+
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Rng {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.0 = x;
+        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The node's crystal: a piecewise-constant skew from a start offset.
+struct NodeClock {
+    offset: f64,
+    /// (from host time µs, skew)
+    skews: Vec<(f64, f64)>,
+}
+
+impl NodeClock {
+    fn local(&self, h: f64) -> f64 {
+        let mut t = 0.0;
+        let mut l = self.offset;
+        let mut skew = self.skews[0].1;
+        for &(from, s) in &self.skews[1..] {
+            if h <= from {
+                break;
+            }
+            l += (from - t) * (1.0 + skew);
+            t = from;
+            skew = s;
+        }
+        l + (h - t) * (1.0 + skew)
+    }
+}
+
+/// The delays of one world.
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    /// Fixed one-way delay each way, µs.
+    base: f64,
+    /// One-way jitter, uniform over [0, jitter] µs, independent each way.
+    jitter: f64,
+    /// Exchange period, µs.
+    period: f64,
+}
+
+/// Runs exchanges until `end` µs; returns the true errors (host time, µs) at
+/// every exchange from `measure_from` on, and the estimator.
+fn run(
+    clock: &NodeClock,
+    path: Path,
+    cfg: SyncConfig,
+    seed: u64,
+    end: f64,
+    measure_from: f64,
+) -> (Vec<(f64, f64, f64)>, ClockSync) {
+    let mut rng = Rng::new(seed);
+    let mut sync = ClockSync::new(cfg);
+    let mut errors = Vec::new();
+    let mut h = 1_000.0;
+    while h < end {
+        let t1 = h.floor();
+        let d1 = path.base + path.jitter * rng.unit();
+        let turn = 20.0 + 10.0 * rng.unit();
+        let d2 = path.base + path.jitter * rng.unit();
+        let e = Exchange {
+            t1: t1 as u64,
+            t2: clock.local(t1 + d1).floor() as u64,
+            t3: clock.local(t1 + d1 + turn).floor() as u64,
+            t4: (t1 + d1 + turn + d2).floor() as u64,
+        };
+        sync.add(e);
+        if h >= measure_from && sync.synced() {
+            let err = sync.host_to_local(h) - clock.local(h);
+            errors.push((h, err, sync.error_estimate(h)));
+        }
+        h += path.period;
+    }
+    (errors, sync)
+}
+
+fn max_abs(errors: &[(f64, f64, f64)]) -> f64 {
+    errors.iter().map(|e| e.1.abs()).fold(0.0, f64::max)
+}
+
+fn rms(errors: &[(f64, f64, f64)]) -> f64 {
+    (errors.iter().map(|e| e.1 * e.1).sum::<f64>() / errors.len() as f64).sqrt()
+}
+
+const S: f64 = 1e6;
+
+const PATH: Path = Path {
+    base: 50.0,
+    jitter: 1_000.0,
+    period: 10_000.0,
+};
+
+#[test]
+fn converges_to_ten_microseconds() {
+    // (seed, skew, start offset µs)
+    let cases = [
+        (1, 200e-6, 123_456_789.0),
+        (2, -200e-6, 5_000_000.0),
+        (3, 37e-6, 0.0),
+        (4, -150e-6, 1e9),
+        (5, 0.0, 42.0),
+        (6, 199e-6, 1e10),
+    ];
+    for (seed, skew, offset) in cases {
+        let clock = NodeClock {
+            offset,
+            skews: vec![(0.0, skew)],
+        };
+        let (errs, sync) = run(
+            &clock,
+            PATH,
+            SyncConfig::default(),
+            seed,
+            120.0 * S,
+            30.0 * S,
+        );
+        let (max, r) = (max_abs(&errs), rms(&errs));
+        let est = errs.iter().map(|e| e.2).sum::<f64>() / errs.len() as f64;
+        eprintln!(
+            "skew {:+.0} ppm: error max {max:.1} µs, rms {r:.1} µs, estimated σ {est:.1} µs, skew error {:.3} ppm, {:?} exchanges/dropped",
+            skew * 1e6,
+            (sync.model().skew - skew) * 1e6,
+            sync.counts()
+        );
+        assert!(max <= 10.0, "seed {seed}: max error {max:.1} µs");
+        assert!((sync.model().skew - skew).abs() < 1e-6);
+        // The error estimate is the right size.
+        assert!(
+            est > r / 3.0 && est < r * 5.0,
+            "estimate {est:.1} vs rms {r:.1}"
+        );
+        // Local-to-host inverts host-to-local.
+        let h = 100.0 * S;
+        assert!((sync.local_to_host(sync.host_to_local(h)) - h).abs() < 1e-3);
+    }
+}
+
+#[test]
+fn tracks_a_drift_change() {
+    // The crystal warms up: 200 ppm fast, then 150 ppm fast from 60 s on.
+    let clock = NodeClock {
+        offset: 5.0,
+        skews: vec![(0.0, 200e-6), (60.0 * S, 150e-6)],
+    };
+    let (errs, sync) = run(&clock, PATH, SyncConfig::default(), 9, 150.0 * S, 30.0 * S);
+    let window = |a: f64, b: f64| -> Vec<_> {
+        errs.iter()
+            .copied()
+            .filter(|e| e.0 >= a * S && e.0 < b * S)
+            .collect()
+    };
+    let before = max_abs(&window(30.0, 60.0));
+    let during = max_abs(&window(60.0, 100.0));
+    let after = max_abs(&window(100.0, 150.0));
+    let settle = errs
+        .iter()
+        .rev()
+        .find(|e| e.1.abs() > 10.0)
+        .map_or(0.0, |e| e.0 / S - 60.0);
+    eprintln!(
+        "drift 200 → 150 ppm at 60 s: max error before {before:.1} µs, in the 40 s after {during:.1} µs, from 100 s on {after:.1} µs; last error over 10 µs {settle:.1} s after the change; skew now {:.2} ppm",
+        sync.model().skew * 1e6
+    );
+    assert!(before <= 10.0);
+    assert!(during <= 300.0);
+    assert!(after <= 10.0);
+    assert!((sync.model().skew - 150e-6).abs() < 1e-6);
+}
+
+#[test]
+fn stalls_are_gated_out() {
+    // Every 50th exchange is held up by 30 ms (a retransmission, a busy host).
+    let clock = NodeClock {
+        offset: 0.0,
+        skews: vec![(0.0, 100e-6)],
+    };
+    let mut sync = ClockSync::default();
+    let mut rng = Rng::new(3);
+    let mut worst = 0.0f64;
+    for i in 0..12_000u64 {
+        let t1 = 1_000.0 + i as f64 * 10_000.0;
+        let stall = if i % 50 == 0 { 30_000.0 } else { 0.0 };
+        let d1 = 50.0 + 1_000.0 * rng.unit() + stall;
+        let d2 = 50.0 + 1_000.0 * rng.unit();
+        let e = Exchange {
+            t1: t1 as u64,
+            t2: clock.local(t1 + d1).floor() as u64,
+            t3: clock.local(t1 + d1 + 20.0).floor() as u64,
+            t4: (t1 + d1 + 20.0 + d2).floor() as u64,
+        };
+        sync.add(e);
+        if t1 > 30.0 * S {
+            worst = worst.max((sync.host_to_local(t1) - clock.local(t1)).abs());
+        }
+    }
+    // All stalls but the very first (nothing to compare it with yet).
+    assert_eq!(sync.counts().1, 239);
+    assert!(worst <= 10.0, "{worst}");
+}
