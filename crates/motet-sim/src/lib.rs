@@ -2,6 +2,7 @@
 //! firmware, against a simulated plant; reports how the machine moved and draws
 //! what it did.
 
+pub mod dance;
 pub mod path;
 pub mod plant;
 pub mod report;
