@@ -2,6 +2,7 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
+mod dance;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -43,6 +44,28 @@ enum Cmd {
         #[arg(long)]
         allow_unknown: bool,
     },
+    /// Run a dataflow graph (graph file) on a simulated node, driven by a CSV
+    /// input trace or two pendulums, and render its channels through a machine.
+    Dance {
+        /// Machine file (TOML): kinematics and steps per unit of the render.
+        machine: PathBuf,
+        /// Graph file (TOML).
+        graph: PathBuf,
+        /// Input trace: time_s, then one column per input named in the graph.
+        #[arg(long, conflicts_with = "pendulums")]
+        inputs: Option<PathBuf>,
+        /// Drive the encoders with the graph's [[pendulum]]s (harmonograph).
+        #[arg(long)]
+        pendulums: bool,
+        /// Seconds to run [default: the trace's length, or 30 with --pendulums].
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Output folder [default: out/<graph name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Measure parsing, planning and simulation speed on a real slicer's G-code.
     Bench {
         #[arg(long, default_value = "examples/printer.toml")]
@@ -82,6 +105,23 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             job,
             allow_unknown,
         } => run::check(&machine, job.as_deref(), allow_unknown),
+        Cmd::Dance {
+            machine,
+            graph,
+            inputs,
+            pendulums,
+            seconds,
+            out,
+            quiet,
+        } => dance::dance(dance::DanceArgs {
+            machine: &machine,
+            graph: &graph,
+            inputs: inputs.as_deref(),
+            pendulums,
+            seconds,
+            out,
+            quiet,
+        }),
         Cmd::Bench {
             machine,
             job,
