@@ -62,8 +62,10 @@ mod trace;
 
 use image::imageops::FilterType;
 use image::{DynamicImage, GrayImage, ImageFormat};
-use motet_planner::{Command, JobTarget, Located, Move, MoveKind, SourceError, SourceLoc};
-use motet_trajectory::{Point, MAX_AXES};
+use motet_planner::{
+    Command, JobTarget, Located, SourceError, SourceLoc, StrokeEmitter, StrokeSettings,
+};
+use motet_trajectory::MAX_AXES;
 
 use trace::EdgeMap;
 
@@ -92,8 +94,8 @@ pub const AUTO_LOW_RATIO: f32 = 0.4;
 const MIN_LOW_THRESHOLD: f32 = 1.0;
 /// Blur Canny applies itself before taking gradients.
 const CANNY_SIGMA: f32 = 1.4;
-/// Points closer than this (mm) count as the same point.
-const SAME_POINT: f64 = 1e-9;
+/// Where the commands come from: an image has no lines.
+const LOC: SourceLoc = SourceLoc { line: 0, column: 0 };
 
 /// How the photograph is turned into strokes and placed on the machine.
 #[derive(Clone, Debug, PartialEq)]
@@ -263,33 +265,24 @@ pub fn parse_with_info(
             start[i] = if start[i] >= a { start[i].min(b) } else { a };
         }
     }
-    let mut em = Emitter {
-        out: Vec::new(),
-        pos: start,
-        pen: Pen::Unknown,
-        tool: target
-            .primary_tool()
-            .map(|t| (t, target.tools[t as usize].on_value)),
-        draw_feed: target.draw_feed,
-        xi,
-        yi,
-        drawn: 0.0,
-        travel: 0.0,
-    };
+    let mut em = StrokeEmitter::new(StrokeSettings {
+        start,
+        ..StrokeSettings::for_target(target, xi, yi)
+    });
     let mut info = ImageInfo {
         width_px: w,
         height_px: h,
         ..ImageInfo::default()
     };
     for line in &mm {
-        if em.polyline(line) {
+        if em.polyline(line, LOC) {
             info.polylines += 1;
             info.points += line.len();
         }
     }
-    info.drawn_mm = em.drawn;
-    info.travel_mm = em.travel;
-    Ok((em.finish(), info))
+    info.drawn_mm = em.drawn();
+    info.travel_mm = em.travel();
+    Ok((em.finish(LOC), info))
 }
 
 fn error(message: impl Into<String>) -> SourceError {
@@ -574,95 +567,4 @@ fn placement(
         }
     };
     Ok((scale, origin))
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Pen {
-    Unknown,
-    Up,
-    Down,
-}
-
-/// Turns machine-space polylines into commands, tracking pen and position.
-struct Emitter {
-    out: Vec<Located<Command>>,
-    pos: Point,
-    pen: Pen,
-    tool: Option<(u8, f32)>,
-    draw_feed: f64,
-    xi: usize,
-    yi: usize,
-    drawn: f64,
-    travel: f64,
-}
-
-fn same(a: [f64; 2], b: [f64; 2]) -> bool {
-    (a[0] - b[0]).hypot(a[1] - b[1]) <= SAME_POINT
-}
-
-impl Emitter {
-    const LOC: SourceLoc = SourceLoc { line: 0, column: 0 };
-
-    fn xy(&self) -> [f64; 2] {
-        [self.pos[self.xi], self.pos[self.yi]]
-    }
-
-    fn push(&mut self, item: Command) {
-        self.out.push(Located {
-            loc: Self::LOC,
-            item,
-        });
-    }
-
-    fn move_to(&mut self, p: [f64; 2], feed: f64, kind: MoveKind) -> f64 {
-        let len = (p[0] - self.pos[self.xi]).hypot(p[1] - self.pos[self.yi]);
-        let mut target = self.pos;
-        target[self.xi] = p[0];
-        target[self.yi] = p[1];
-        self.pos = target;
-        self.push(Command::Move(Move { target, feed, kind }));
-        len
-    }
-
-    fn pen(&mut self, down: bool) {
-        let want = if down { Pen::Down } else { Pen::Up };
-        if self.pen == want {
-            return;
-        }
-        self.pen = want;
-        if let Some((tool, on)) = self.tool {
-            let value = if down { on } else { 0.0 };
-            self.push(Command::Tool { tool, value });
-        }
-    }
-
-    /// Draws `pts`; false if nothing was drawn (fewer than two distinct points).
-    fn polyline(&mut self, pts: &[[f64; 2]]) -> bool {
-        let mut clean: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
-        for &p in pts {
-            if clean.last().is_none_or(|&q| !same(p, q)) {
-                clean.push(p);
-            }
-        }
-        if clean.len() < 2 {
-            return false;
-        }
-        let start = clean[0];
-        if !same(self.xy(), start) {
-            self.pen(false);
-            self.travel += self.move_to(start, f64::INFINITY, MoveKind::Rapid);
-        }
-        self.pen(true);
-        for &p in &clean[1..] {
-            self.drawn += self.move_to(p, self.draw_feed, MoveKind::Feed);
-        }
-        true
-    }
-
-    fn finish(mut self) -> Vec<Located<Command>> {
-        if !self.out.is_empty() {
-            self.pen(false);
-        }
-        self.out
-    }
 }

@@ -12,6 +12,8 @@ pub use command::{AuxChannel, Command, Located, Move, MoveKind, SourceError, Sou
 pub use target::{AxisInfo, JobTarget, ToolInfo, ToolKind};
 pub mod limits;
 pub mod planner;
+pub mod strokes;
 
 pub use limits::{AxisLimits, JointLimits, Limits, ToolTiming};
 pub use planner::{AuxEvent, PlanError, Planned, Planner, ToolEvent};
+pub use strokes::{StrokeEmitter, StrokeSettings};

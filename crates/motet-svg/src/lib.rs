@@ -78,8 +78,13 @@
 use std::collections::HashMap;
 
 use kurbo::{Affine, BezPath, PathEl, Point as KPoint};
-use motet_planner::{Command, JobTarget, Located, Move, MoveKind, SourceError, SourceLoc};
-use motet_trajectory::Point;
+use motet_planner::strokes::{dedup_points, same_point};
+use motet_planner::{
+    Command, JobTarget, Located, SourceError, SourceLoc, StrokeEmitter, StrokeSettings,
+};
+// The unit tests (`use super::*`) match on move kinds.
+#[cfg(test)]
+use motet_planner::MoveKind;
 use usvg::roxmltree;
 use usvg::tiny_skia_path::PathSegment;
 
@@ -103,8 +108,6 @@ const GENERATED_ID: &str = "motet-svg-";
 const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
 /// Pen name for paths outside top-level groups with [`PenSplit::ByLayer`].
 pub const NO_LAYER: &str = "(no layer)";
-/// Points closer than this (mm) count as the same point.
-const SAME_POINT: f64 = 1e-9;
 /// Upper bound on the number of chords for one ellipse.
 const MAX_ELLIPSE_STEPS: f64 = 1e6;
 
@@ -291,14 +294,6 @@ pub fn parse_with_info(
     } else {
         DEFAULT_TOLERANCE
     };
-    let (travel_feed, travel_kind) = if opts.travel_feed.is_finite() && opts.travel_feed > 0.0 {
-        (opts.travel_feed, MoveKind::Feed)
-    } else {
-        (f64::INFINITY, MoveKind::Rapid)
-    };
-    let tool = target
-        .primary_tool()
-        .map(|t| (t, target.tools[t as usize].on_value));
 
     let mut walker = Walker {
         index: &index,
@@ -316,17 +311,9 @@ pub fn parse_with_info(
     let end_loc = walker.last_loc.unwrap_or_default();
     let pens = walker.pens;
 
-    let mut emitter = Emitter {
-        out: Vec::new(),
-        pos: target.start,
-        pen: Pen::Unknown,
-        tool,
-        travel_feed,
-        travel_kind,
-        draw_feed: target.draw_feed,
-        xi,
-        yi,
-    };
+    let mut emitter = StrokeEmitter::new(
+        StrokeSettings::for_target(target, xi, yi).with_travel_feed(opts.travel_feed),
+    );
     let start = [target.start[xi], target.start[yi]];
     let info = draw_pens(&pens, start, opts, &mut emitter);
     Ok((emitter.finish(end_loc), info))
@@ -359,14 +346,9 @@ impl Stroke {
         path: usize,
         hatch: bool,
     ) -> Option<Self> {
-        let mut clean: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
-        for &p in pts {
-            if clean.last().is_none_or(|&q| !same(p, q)) {
-                clean.push(p);
-            }
-        }
+        let mut clean = dedup_points(pts);
         if closed {
-            while clean.len() > 1 && same(clean[0], clean[clean.len() - 1]) {
+            while clean.len() > 1 && same_point(clean[0], clean[clean.len() - 1]) {
                 clean.pop();
             }
         }
@@ -410,7 +392,7 @@ fn draw_pens(
     pens: &[PenGroup],
     start: [f64; 2],
     opts: &SvgOptions,
-    emitter: &mut Emitter,
+    emitter: &mut StrokeEmitter,
 ) -> SvgInfo {
     let shapes: Vec<Vec<order::Shape>> = pens
         .iter()
@@ -456,11 +438,9 @@ fn draw_pens(
     for (k, pen) in pens.iter().enumerate() {
         if k > 0 {
             let first_loc = pen.strokes.first().map(|s| s.loc).unwrap_or_default();
-            emitter.pen(false, first_loc);
+            emitter.lift(first_loc);
             if let Some(p) = opts.pen_change_position {
-                if !same(emitter.xy(), p) {
-                    emitter.move_to(p, emitter.travel_feed, emitter.travel_kind, first_loc);
-                }
+                emitter.travel_to(p, first_loc);
             }
             emitter.push(first_loc, Command::Pause { optional: false });
         }
@@ -1282,83 +1262,6 @@ fn rounded_rect_of(data: &usvg::tiny_skia_path::Path, tol: f64) -> Option<BezPat
     }
     bez.close_path();
     Some(bez)
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Pen {
-    Unknown,
-    Up,
-    Down,
-}
-
-/// Turns machine-space polylines into commands, tracking pen and position.
-struct Emitter {
-    out: Vec<Located<Command>>,
-    pos: Point,
-    pen: Pen,
-    tool: Option<(u8, f32)>,
-    travel_feed: f64,
-    travel_kind: MoveKind,
-    draw_feed: f64,
-    xi: usize,
-    yi: usize,
-}
-
-fn same(a: [f64; 2], b: [f64; 2]) -> bool {
-    (a[0] - b[0]).hypot(a[1] - b[1]) <= SAME_POINT
-}
-
-impl Emitter {
-    fn xy(&self) -> [f64; 2] {
-        [self.pos[self.xi], self.pos[self.yi]]
-    }
-
-    fn push(&mut self, loc: SourceLoc, item: Command) {
-        self.out.push(Located { loc, item });
-    }
-
-    fn move_to(&mut self, p: [f64; 2], feed: f64, kind: MoveKind, loc: SourceLoc) {
-        let mut target = self.pos;
-        target[self.xi] = p[0];
-        target[self.yi] = p[1];
-        self.pos = target;
-        self.push(loc, Command::Move(Move { target, feed, kind }));
-    }
-
-    fn pen(&mut self, down: bool, loc: SourceLoc) {
-        let want = if down { Pen::Down } else { Pen::Up };
-        if self.pen == want {
-            return;
-        }
-        self.pen = want;
-        if let Some((tool, on)) = self.tool {
-            let value = if down { on } else { 0.0 };
-            self.push(loc, Command::Tool { tool, value });
-        }
-    }
-
-    /// Draw a cleaned polyline (travel to its start unless already there).
-    fn polyline(&mut self, clean: &[[f64; 2]], loc: SourceLoc) {
-        if clean.len() < 2 {
-            return;
-        }
-        let start = clean[0];
-        if !same(self.xy(), start) {
-            self.pen(false, loc);
-            self.move_to(start, self.travel_feed, self.travel_kind, loc);
-        }
-        self.pen(true, loc);
-        for &p in &clean[1..] {
-            self.move_to(p, self.draw_feed, MoveKind::Feed, loc);
-        }
-    }
-
-    fn finish(mut self, loc: SourceLoc) -> Vec<Located<Command>> {
-        if !self.out.is_empty() {
-            self.pen(false, loc);
-        }
-        self.out
-    }
 }
 
 #[cfg(test)]
