@@ -178,3 +178,20 @@ fn the_machine_can_go_on_after_wait() {
     m.save(&dir).unwrap();
     assert!(dir.join("path.png").exists() && dir.join("report.json").exists());
 }
+
+#[test]
+fn a_reversal_needs_a_rest_and_a_smooth_stream_does_not() {
+    // (moves as (x, y), rests expected: the end, plus one per full reversal)
+    let cases: &[(&[(f64, f64)], usize)] = &[
+        (&[(10.0, 10.0), (20.0, 10.0), (30.0, 12.0), (40.0, 16.0)], 1),
+        (&[(10.0, 10.0), (40.0, 10.0), (20.0, 10.0)], 2),
+    ];
+    for (moves, want) in cases {
+        let mut m = machine("plotter.toml");
+        for (x, y) in moves.iter() {
+            m.move_to(&[("x", *x), ("y", *y)], Some(50.0)).unwrap();
+        }
+        m.wait().unwrap();
+        assert_eq!(m.report().rests, *want, "{moves:?}");
+    }
+}

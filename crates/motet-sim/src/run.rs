@@ -360,6 +360,9 @@ impl SimMachine {
             let path = JointPath::new(&map, s, 0.0);
             r.peak_velocity = r.peak_velocity.max(path.max_rate(0.0, p.length()) * vc);
         }
+        if p.length() > 0.0 && p.v1() == 0.0 {
+            self.stats.rests += 1;
+        }
         let extruding = self
             .stats
             .extruding_axis

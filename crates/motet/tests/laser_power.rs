@@ -16,12 +16,19 @@ fn root() -> PathBuf {
 /// the tool values the plant saw, with their times (µs).
 fn run(gcode: &str) -> (Vec<Segment>, Vec<(f64, f32)>) {
     let m = Machine::load(&root().join("examples/laser.toml")).unwrap();
-    let job = parse_job(&m, Path::new("m4.gcode"), JobKind::Gcode, gcode.as_bytes(), &JobOptions::default()).unwrap();
+    let job = parse_job(
+        &m,
+        Path::new("m4.gcode"),
+        JobKind::Gcode,
+        gcode.as_bytes(),
+        &JobOptions::default(),
+    )
+    .unwrap();
     let mut sim = SimMachine::new(&m).unwrap();
     sim.watch_tools(true);
     let mut planner = Planner::new(m.limits(), m.start, 0.0);
     let mut segs = vec![];
-    let mut feed = |planner: &mut Planner, sim: &mut SimMachine, segs: &mut Vec<Segment>| {
+    let feed = |planner: &mut Planner, sim: &mut SimMachine, segs: &mut Vec<Segment>| {
         while let Some(p) = planner.pop() {
             if let Planned::Segment(s) = p {
                 segs.push(s);
@@ -37,21 +44,42 @@ fn run(gcode: &str) -> (Vec<Segment>, Vec<(f64, f32)>) {
     feed(&mut planner, &mut sim, &mut segs);
     sim.run_until(planner.clock());
     sim.run_to_rest();
-    let changes = sim.take_tool_changes().into_iter().map(|(t, _, v)| (t, v)).collect();
+    let changes = sim
+        .take_tool_changes()
+        .into_iter()
+        .map(|(t, _, v)| (t, v))
+        .collect();
     (segs, changes)
 }
 
 fn speed_at(segs: &[Segment], t: f64) -> f64 {
-    segs.iter().find(|s| s.t0 <= t && t < s.t1()).map_or(0.0, |s| s.profile.state((t - s.t0) * 1e-6).1)
+    segs.iter()
+        .find(|s| s.t0 <= t && t < s.t1())
+        .map_or(0.0, |s| s.profile.state((t - s.t0) * 1e-6).1)
 }
 
 #[test]
 fn m4_power_follows_speed_and_m3_does_not() {
     // (program, power scale S/1000, feed mm/s, follows speed)
     let cases = [
-        ("G21 G90\nG0 X10 Y10\nM4 S1000\nG1 X200 Y10 F6000\nG1 X200 Y150\nM5\n", 1.0f32, 100.0, true),
-        ("G21 G90\nG0 X10 Y10\nM4 S500\nG1 X200 Y10 F3000\nM5\n", 0.5, 50.0, true),
-        ("G21 G90\nG0 X10 Y10\nM3 S800\nG1 X200 Y10 F6000\nM5\n", 0.8, 100.0, false),
+        (
+            "G21 G90\nG0 X10 Y10\nM4 S1000\nG1 X200 Y10 F6000\nG1 X200 Y150\nM5\n",
+            1.0f32,
+            100.0,
+            true,
+        ),
+        (
+            "G21 G90\nG0 X10 Y10\nM4 S500\nG1 X200 Y10 F3000\nM5\n",
+            0.5,
+            50.0,
+            true,
+        ),
+        (
+            "G21 G90\nG0 X10 Y10\nM3 S800\nG1 X200 Y10 F6000\nM5\n",
+            0.8,
+            100.0,
+            false,
+        ),
     ];
     for (program, scale, feed, follows) in cases {
         let (segs, changes) = run(program);
@@ -62,10 +90,16 @@ fn m4_power_follows_speed_and_m3_does_not() {
             assert!(on.len() > 20, "{program}: only {} power changes", on.len());
             for (t, v) in &on {
                 let want = scale * (speed_at(&segs, *t) / feed).min(1.0) as f32;
-                assert!((v - want).abs() <= 2.0 / 1024.0, "{program}: at {t} µs power {v}, want {want}");
+                assert!(
+                    (v - want).abs() <= 2.0 / 1024.0,
+                    "{program}: at {t} µs power {v}, want {want}"
+                );
             }
             let top = on.iter().map(|(_, v)| *v).fold(0.0, f32::max);
-            assert!((top - scale).abs() <= 2.0 / 1024.0, "{program}: cruise power {top}");
+            assert!(
+                (top - scale).abs() <= 2.0 / 1024.0,
+                "{program}: cruise power {top}"
+            );
         } else {
             assert_eq!(on.len(), 1, "{program}: M3 power is fixed");
             assert_eq!(on[0].1, scale);
