@@ -45,7 +45,9 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
     let data = read_bytes(job_path)?;
     let lines = data.iter().filter(|b| **b == b'\n').count();
     let kind = JobKind::of(job_path)?;
-    let opts = JobOptions { allow_unknown: true };
+    let opts = JobOptions {
+        allow_unknown: true,
+    };
     // Parsing (G-code text to checked commands), best of `repeat`.
     let mut parse_best = f64::INFINITY;
     let mut loaded = None;
@@ -105,7 +107,11 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         parse_best + best,
         moves as f64 / (parse_best + best) / 1e6
     );
-    println!("job duration: {:.0} s ({:.2} h)", duration, duration / 3600.0);
+    println!(
+        "job duration: {:.0} s ({:.2} h)",
+        duration,
+        duration / 3600.0
+    );
     interactive(machine_path)?;
     if !no_sim {
         let r = motet_sim::simulate(
