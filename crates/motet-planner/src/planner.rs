@@ -437,9 +437,6 @@ impl Planner {
             0.0
         };
         self.emit_front(exit);
-        if let Some(next) = self.queue.front_mut() {
-            next.end_limited = false;
-        }
         self.emit_final();
     }
 
