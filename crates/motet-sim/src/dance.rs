@@ -257,6 +257,18 @@ impl InputSource for Pendulums {
     }
 }
 
+/// The step counters of every channel (in report order) when a stage was
+/// entered: the steps a stage made are the difference to the next mark (or
+/// to the channels' final counts).
+#[derive(Clone, Debug, Serialize)]
+pub struct StageMark {
+    pub t_s: f64,
+    /// `name#pass`, or `end`.
+    pub stage: String,
+    pub steps_forward: Vec<u64>,
+    pub steps_reverse: Vec<u64>,
+}
+
 /// One graph channel after the run.
 #[derive(Clone, Debug, Serialize)]
 pub struct DanceChannel {
@@ -286,6 +298,8 @@ pub struct DanceReport {
     pub final_xy: [f64; 2],
     /// Stages entered (time s, `name#pass`).
     pub stages: Vec<(f64, String)>,
+    /// Each channel's step counters as each stage was entered.
+    pub stage_marks: Vec<StageMark>,
     /// Parameter changes sent while running.
     pub param_changes: usize,
     /// Final world value of every port, `component.port`.
@@ -479,6 +493,7 @@ pub fn run_dance(
     let mut sent = vec![f64::NAN; graph.inputs.len()];
     let mut stages = StageMachine::new(graph);
     let mut param_changes = 0;
+    let mut stage_marks: Vec<StageMark> = Vec::new();
     let mut first = true;
     let every = (n_frames / 200).max(1);
     for f in 0..n_frames {
@@ -515,6 +530,14 @@ pub fn run_dance(
                 stages.update(t_us * 1e-6, &view)
             }
         };
+        for (t_s, stage) in &stages.log()[stage_marks.len()..] {
+            stage_marks.push(StageMark {
+                t_s: *t_s,
+                stage: stage.clone(),
+                steps_forward: board.fwd.clone(),
+                steps_reverse: board.rev.clone(),
+            });
+        }
         for m in &msgs {
             send(&mut node, m)?;
             param_changes += 1;
@@ -573,6 +596,7 @@ pub fn run_dance(
         channels,
         final_xy: xy(&joints),
         stages: stages.log().to_vec(),
+        stage_marks,
         param_changes,
         ports,
     };
