@@ -3,6 +3,7 @@
 //! what it did.
 
 pub mod dance;
+pub mod live;
 pub mod path;
 pub mod plant;
 pub mod report;
