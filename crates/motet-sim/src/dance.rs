@@ -1,13 +1,16 @@
 //! Dance: a node hosting a dataflow graph (built from a graph file through
 //! the wire messages), driven by external inputs (a CSV trace or two damped
 //! pendulums), with the steps of its channels rendered through a machine
-//! file's kinematics.
+//! file's kinematics. A planned job may run alongside: its segments reach
+//! the node through the machine's distributor, interleaved in time with the
+//! graph frames, so `trajectory_reader` components follow it.
 
 use crate::path::PathRecorder;
 use motet_graph::{GraphFile, StageMachine, StageView};
-use motet_host::Machine;
+use motet_host::{Distributor, Machine};
 use motet_node::graph::{Component, PortRef};
 use motet_node::{Board, Node};
+use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
 use motet_render::Stroke;
 use motet_trajectory::{Point, MAX_AXES};
 use motet_wire::message::GraphInputKind;
@@ -36,6 +39,87 @@ pub enum DanceError {
     },
     #[error("{0}")]
     Setup(String),
+    #[error("{loc}: {error}")]
+    Plan { loc: SourceLoc, error: PlanError },
+}
+
+/// A job planned for the machine, to run alongside the graph.
+#[derive(Clone, Debug)]
+pub struct PlannedJob {
+    /// Everything the planner emitted, in order.
+    pub items: Vec<Planned>,
+    /// When the last item ends, µs.
+    pub end_us: f64,
+}
+
+impl PlannedJob {
+    /// Plans `commands` on `machine` from its start point at time 0.
+    pub fn plan(
+        machine: &Machine,
+        commands: &[Located<Command>],
+    ) -> Result<PlannedJob, DanceError> {
+        let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
+        let mut items = Vec::new();
+        for c in commands {
+            planner
+                .push(&c.item)
+                .map_err(|error| DanceError::Plan { loc: c.loc, error })?;
+            while let Some(item) = planner.pop() {
+                items.push(item);
+            }
+        }
+        planner.finish();
+        while let Some(item) = planner.pop() {
+            items.push(item);
+        }
+        Ok(PlannedJob {
+            items,
+            end_us: planner.clock(),
+        })
+    }
+
+    /// The planned segments.
+    pub fn segments(&self) -> impl Iterator<Item = &motet_trajectory::Segment> {
+        self.items.iter().filter_map(|i| match i {
+            Planned::Segment(s) => Some(s),
+            _ => None,
+        })
+    }
+
+    /// The planned position at `t_us`: the segment covering it (before the
+    /// first, the first's start; after the last, the last's end).
+    pub fn position_at(&self, t_us: f64) -> Option<Point> {
+        let mut last = None;
+        for s in self.segments() {
+            if t_us < s.t0 {
+                return Some(last.unwrap_or(s.start));
+            }
+            if t_us < s.t1() {
+                return Some(s.position_at(t_us));
+            }
+            last = Some(s.end);
+        }
+        last
+    }
+
+    /// Whether tool 0 (the pen) is on at `t_us`, by its planned events.
+    fn tool_on(&self, t_us: f64) -> bool {
+        let mut on = false;
+        for i in &self.items {
+            if let Planned::Event(e) = i {
+                if e.tool == 0 && e.time <= t_us {
+                    on = e.value > 0.0;
+                }
+            }
+        }
+        on
+    }
+
+    fn has_tool_events(&self) -> bool {
+        self.items
+            .iter()
+            .any(|i| matches!(i, Planned::Event(e) if e.tool == 0))
+    }
 }
 
 /// External input values over time, one per input of the graph's `[inputs]`
@@ -304,6 +388,10 @@ pub struct DanceReport {
     pub param_changes: usize,
     /// Final world value of every port, `component.port`.
     pub ports: BTreeMap<String, f64>,
+    /// Planned segments sent to the node (a job running alongside).
+    pub job_segments: usize,
+    /// When the job's plan ends, s (0 without a job).
+    pub job_end_s: f64,
 }
 
 impl DanceReport {
@@ -403,6 +491,23 @@ pub fn run_dance(
     seconds: f64,
     progress: &mut dyn FnMut(f64),
 ) -> Result<DanceResult, DanceError> {
+    run_dance_with_job(machine, graph, inputs, None, seconds, progress)
+}
+
+/// [`run_dance`] with a planned job alongside: its segments go to the node
+/// through the machine's [`Distributor`] (the first node's subscription,
+/// widened to every machine axis so a `trajectory_reader` can follow any),
+/// as the node's queue makes room, interleaved with the graph frames. The
+/// render draws pen-up moves as travel by the job's tool 0 events when the
+/// graph names no pen channel.
+pub fn run_dance_with_job(
+    machine: &Machine,
+    graph: &GraphFile,
+    inputs: &mut dyn InputSource,
+    job: Option<&PlannedJob>,
+    seconds: f64,
+    progress: &mut dyn FnMut(f64),
+) -> Result<DanceResult, DanceError> {
     // Graph channel → machine actuator.
     let chans: Vec<_> = graph.channels().collect();
     let mut actuator_of = Vec::new();
@@ -452,6 +557,27 @@ pub fn run_dance(
     for m in graph.messages() {
         send(&mut node, &m)?;
     }
+    let mut dist = Distributor::new(machine);
+    if job.is_some() {
+        let Some(sub) = dist.subscriptions.first_mut() else {
+            return Err(DanceError::Setup(format!(
+                "{} has no node to send the job to",
+                machine.name
+            )));
+        };
+        sub.axes = ((1u16 << machine.axes.len().min(MAX_AXES)) - 1) as u8;
+    }
+    let job_segments: Vec<Planned> = job
+        .map(|j| {
+            j.items
+                .iter()
+                .filter(|i| matches!(i, Planned::Segment(_)))
+                .cloned()
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut next_segment = 0;
+    let job_pen = job.filter(|j| j.has_tool_events());
     let mut board = StepCount {
         base: node.graph_channel_base(),
         counts: vec![0; chans.len()],
@@ -542,13 +668,22 @@ pub fn run_dance(
             send(&mut node, m)?;
             param_changes += 1;
         }
+        while next_segment < job_segments.len() && node.status().segment_space > 0 {
+            if let Some(m) = dist.route(0, &job_segments[next_segment]) {
+                send(&mut node, &m)?;
+            }
+            next_segment += 1;
+        }
         node.poll(t_us + frame, &mut board);
         if board.moved {
             board.moved = false;
             joint_values(&board.counts, &mut joints);
             let p = xy(&joints);
-            let tool_on =
-                pen.is_none_or(|k| (board.counts[k] as f64) < graph.render.pen_down_below);
+            let tool_on = match (pen, job_pen) {
+                (Some(k), _) => (board.counts[k] as f64) < graph.render.pen_down_below,
+                (None, Some(j)) => j.tool_on(t_us),
+                (None, None) => true,
+            };
             let mut pt: Point = [0.0; MAX_AXES];
             pt[0] = p[0];
             pt[1] = p[1];
@@ -599,6 +734,8 @@ pub fn run_dance(
         stage_marks,
         param_changes,
         ports,
+        job_segments: next_segment,
+        job_end_s: job.map_or(0.0, |j| j.end_us * 1e-6),
     };
     Ok(DanceResult {
         report,

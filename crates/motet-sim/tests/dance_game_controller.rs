@@ -13,7 +13,11 @@ fn dir() -> PathBuf {
 /// The joystick's mapping (graph.toml): raw 12..1012 → −40..40 mm/s, a
 /// deadband of ±6 around 512.
 fn speed(raw: f64) -> f64 {
-    let raw = if (raw - 512.0).abs() <= 6.0 { 512.0 } else { raw };
+    let raw = if (raw - 512.0).abs() <= 6.0 {
+        512.0
+    } else {
+        raw
+    };
     (-40.0 + (raw - 12.0) * 80.0 / 1000.0).clamp(-40.0, 40.0)
 }
 

@@ -1,11 +1,13 @@
 //! `motet dance`: a graph file run on a simulated node, driven by a CSV trace
-//! or two pendulums, rendered through a machine file.
+//! or two pendulums, rendered through a machine file; optionally with a job
+//! (G-code or SVG) planned alongside for the graph's trajectory readers.
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use motet_api::{load_job, JobOptions};
 use motet_graph::GraphFile;
 use motet_render::{render_png, render_svg, RenderSpec};
-use motet_sim::dance::{run_dance, CsvTrace, InputSource, Pendulums};
+use motet_sim::dance::{run_dance_with_job, CsvTrace, InputSource, Pendulums, PlannedJob};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -14,6 +16,8 @@ pub struct DanceArgs<'a> {
     pub graph: &'a Path,
     pub inputs: Option<&'a Path>,
     pub pendulums: bool,
+    /// A job planned on the machine and sent to the node alongside.
+    pub job: Option<&'a Path>,
     pub seconds: Option<f64>,
     pub out: Option<PathBuf>,
     pub quiet: bool,
@@ -37,6 +41,26 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         }
         (None, false) => anyhow::bail!("give the inputs: --inputs TRACE.csv or --pendulums"),
     };
+    let job = match a.job {
+        Some(p) => {
+            let loaded = load_job(
+                &machine,
+                p,
+                &JobOptions {
+                    allow_unknown: false,
+                },
+            )?;
+            Some(
+                PlannedJob::plan(&machine, &loaded.commands)
+                    .with_context(|| format!("planning {}", p.display()))?,
+            )
+        }
+        None => None,
+    };
+    // With a job: at least until it ends, and a little after.
+    let default_s = job
+        .as_ref()
+        .map_or(default_s, |j| default_s.max(j.end_us * 1e-6 + 0.5));
     let seconds = a.seconds.unwrap_or(default_s);
     if !(seconds.is_finite() && seconds > 0.0) {
         anyhow::bail!("--seconds must be positive");
@@ -58,7 +82,14 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         b
     };
     let mut progress = |f: f64| bar.set_position((f * 1000.0) as u64);
-    let result = run_dance(&machine, &graph, source, seconds, &mut progress)?;
+    let result = run_dance_with_job(
+        &machine,
+        &graph,
+        source,
+        job.as_ref(),
+        seconds,
+        &mut progress,
+    )?;
     bar.finish_and_clear();
 
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -95,4 +126,76 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use motet_api::{load_job, JobOptions};
+    use motet_graph::GraphFile;
+    use motet_sim::dance::{run_dance_with_job, CsvTrace, InputSource, PlannedJob};
+    use std::path::{Path, PathBuf};
+
+    fn dir() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/dance/pantograph")
+    }
+
+    /// The stylus of graph.toml's five-bar (pivots 50 mm apart, 60 mm
+    /// proximal and 100 mm distal links), elbows meeting above.
+    fn stylus(t1: f64, t2: f64) -> (f64, f64) {
+        let (e1x, e1y) = (60.0 * t1.cos(), 60.0 * t1.sin());
+        let (e2x, e2y) = (50.0 + 60.0 * t2.cos(), 60.0 * t2.sin());
+        let (dx, dy) = (e2x - e1x, e2y - e1y);
+        let d = dx.hypot(dy);
+        let a = d / 2.0;
+        let h = (100.0f64 * 100.0 - a * a).sqrt();
+        let (ux, uy) = (dx / d, dy / d);
+        (e1x + a * ux - h * uy, e1y + a * uy + h * ux)
+    }
+
+    /// The pantograph example as `motet dance … --job boat.svg` runs it: the
+    /// belts sit at the planned point plus half the stylus's motion, within
+    /// half a step, while the stylus rests, while it waves and at the end.
+    #[test]
+    fn pantograph_boat_is_the_plan_plus_the_hand() {
+        let m = crate::run::load_machine(&dir().join("machine.toml")).unwrap();
+        let g = GraphFile::load(&dir().join("graph.toml")).unwrap();
+        let trace = CsvTrace::load(&dir().join("inputs.csv"), &g).unwrap();
+        let loaded = load_job(
+            &m,
+            &dir().join("boat.svg"),
+            &JobOptions {
+                allow_unknown: false,
+            },
+        )
+        .unwrap();
+        let job = PlannedJob::plan(&m, &loaded.commands).unwrap();
+        assert!(job.end_us * 1e-6 < trace.end());
+        let rad = 0.001533980787885641;
+        let per_mm = 3200.0 / (std::f64::consts::PI * 9.0);
+        for s in [0.4, 2.2, 4.9, 20.0, trace.end()] {
+            let mut t = trace.clone();
+            let r = run_dance_with_job(&m, &g, &mut t, Some(&job), s, &mut |_| {})
+                .unwrap()
+                .report;
+            let last = ((s * 1e6 / g.frame_us).round() - 1.0) * g.frame_us;
+            let p = job.position_at(last).unwrap();
+            let mut v = [0.0; 2];
+            let mut at = |ts: f64| {
+                t.values(ts, &mut v);
+                stylus(v[0].round() * rad, v[1].round() * rad)
+            };
+            let (rest, now) = (at(0.0), at(last * 1e-6));
+            let x = p[0] + 0.5 * (now.0 - rest.0);
+            let y = p[1] + 0.5 * (now.1 - rest.1);
+            for (name, want) in [("ch_a", x + y), ("ch_b", x - y)] {
+                let c = r.channels.iter().find(|c| c.name == name).unwrap();
+                assert!(
+                    (c.position_steps - want * per_mm).abs() <= 0.5,
+                    "{s} s: {name} at {}, want {}",
+                    c.position_steps,
+                    want * per_mm
+                );
+            }
+        }
+    }
 }

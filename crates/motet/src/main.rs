@@ -57,6 +57,10 @@ enum Cmd {
         /// Drive the encoders with the graph's [[pendulum]]s (harmonograph).
         #[arg(long)]
         pendulums: bool,
+        /// A job (G-code or SVG) planned on the machine and sent to the node
+        /// alongside, for the graph's trajectory readers.
+        #[arg(long)]
+        job: Option<PathBuf>,
         /// Seconds to run [default: the trace's length, or 30 with --pendulums].
         #[arg(long)]
         seconds: Option<f64>,
@@ -110,6 +114,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             graph,
             inputs,
             pendulums,
+            job,
             seconds,
             out,
             quiet,
@@ -118,6 +123,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             graph: &graph,
             inputs: inputs.as_deref(),
             pendulums,
+            job: job.as_deref(),
             seconds,
             out,
             quiet,
