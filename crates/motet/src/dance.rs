@@ -8,6 +8,7 @@ use motet_api::{load_job, JobOptions};
 use motet_graph::GraphFile;
 use motet_render::{render_png, render_svg, RenderSpec};
 use motet_sim::dance::{run_dance_with_job, CsvTrace, InputSource, Pendulums, PlannedJob};
+use motet_sim::live::{input_names, Clock, LiveSource};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -16,6 +17,11 @@ pub struct DanceArgs<'a> {
     pub graph: &'a Path,
     pub inputs: Option<&'a Path>,
     pub pendulums: bool,
+    /// Live inputs: `-` for stdin, or an address to listen on.
+    pub live: Option<&'a str>,
+    /// With `live`: replay `t=` stamps as fast as possible instead of pacing
+    /// to real time.
+    pub stamped: bool,
     /// A job planned on the machine and sent to the node alongside.
     pub job: Option<&'a Path>,
     pub seconds: Option<f64>,
@@ -28,7 +34,23 @@ pub fn dance(a: DanceArgs) -> Result<()> {
     let graph = GraphFile::load(a.graph)?;
     let mut trace;
     let mut pend;
+    let mut live;
     let (source, default_s): (&mut dyn InputSource, f64) = match (a.inputs, a.pendulums) {
+        _ if a.live.is_some() => {
+            let src = a.live.unwrap_or("-");
+            let names = input_names(&graph);
+            let s = if src == "-" {
+                LiveSource::stdin(names)
+            } else {
+                LiveSource::listen(src, names)?
+            };
+            live = s.clock(if a.stamped {
+                Clock::Stamped
+            } else {
+                Clock::RealTime
+            });
+            (&mut live, 60.0)
+        }
         (Some(_), true) => anyhow::bail!("give --inputs or --pendulums, not both"),
         (Some(p), false) => {
             trace = CsvTrace::load(p, &graph)?;
@@ -39,7 +61,9 @@ pub fn dance(a: DanceArgs) -> Result<()> {
             pend = Pendulums::from_graph(&graph)?;
             (&mut pend, 30.0)
         }
-        (None, false) => anyhow::bail!("give the inputs: --inputs TRACE.csv or --pendulums"),
+        (None, false) => {
+            anyhow::bail!("give the inputs: --inputs TRACE.csv, --pendulums or --live")
+        }
     };
     let job = match a.job {
         Some(p) => {

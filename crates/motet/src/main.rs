@@ -57,6 +57,14 @@ enum Cmd {
         /// Drive the encoders with the graph's [[pendulum]]s (harmonograph).
         #[arg(long)]
         pendulums: bool,
+        /// Live inputs: `-` for stdin or ADDR:PORT to listen on (lines
+        /// `name=value`, optionally `t=SECONDS`); the run keeps real time.
+        #[arg(long, conflicts_with_all = ["inputs", "pendulums"])]
+        live: Option<String>,
+        /// With --live: replay `t=` stamps as fast as possible instead of
+        /// pacing to real time.
+        #[arg(long, requires = "live")]
+        stamped: bool,
         /// A job (G-code or SVG) planned on the machine and sent to the node
         /// alongside, for the graph's trajectory readers.
         #[arg(long)]
@@ -114,6 +122,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             graph,
             inputs,
             pendulums,
+            live,
+            stamped,
             job,
             seconds,
             out,
@@ -123,6 +133,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             graph: &graph,
             inputs: inputs.as_deref(),
             pendulums,
+            live: live.as_deref(),
+            stamped,
             job: job.as_deref(),
             seconds,
             out,

@@ -147,3 +147,46 @@ fn bad_machine_file_gets_a_located_error() {
         "{stderr}"
     );
 }
+
+#[test]
+fn dance_takes_live_inputs_from_stdin() {
+    use std::io::Write;
+    let out = scratch("live");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "dance",
+            "examples/dance/step-a-sketch/machine.toml",
+            "examples/dance/step-a-sketch/graph.toml",
+            "--live",
+            "-",
+            "--stamped",
+            "--seconds",
+            "2",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .current_dir(root())
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"t=0 knob_x=0 knob_y=0\nt=0.5 knob_x=200\nnot a line\nt=1.0 knob_y=300\n")
+        .unwrap();
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(stderr.contains(":3:"), "the malformed line 3 is reported: {stderr}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    // The knobs turned (x to 200, then y to 300 counts): both belts moved and
+    // ended within half a step of the exact sum of their inputs.
+    for ch in report["channels"].as_array().unwrap().iter().filter(|c| c["name"] != "ch_pen") {
+        assert!(ch["steps_forward"].as_u64().unwrap() > 0, "{ch}");
+        assert!(ch["error_steps"].as_f64().unwrap().abs() <= 0.5, "{ch}");
+    }
+}
