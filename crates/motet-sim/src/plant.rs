@@ -53,7 +53,6 @@ pub struct Plant {
     pub recorder: PathRecorder,
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
-    pub last_time: f64,
     /// Tool outputs executed: (time, tool, value), kept only for observers.
     pub tool_changes: Vec<(f64, usize, f32)>,
     pub watch_tools: bool,
@@ -107,7 +106,6 @@ impl Plant {
             window: VecDeque::new(),
             recorder,
             max_path_deviation: 0.0,
-            last_time: f64::NEG_INFINITY,
             tool_changes: Vec::new(),
             watch_tools: false,
         }
@@ -125,7 +123,6 @@ impl Plant {
             outputs.sort_by(|a, b| a.time.total_cmp(&b.time));
         }
         for o in outputs.iter() {
-            self.last_time = self.last_time.max(o.time);
             match o.output {
                 Output::Step { actuator, forward } => self.step(o.time, actuator, forward),
                 Output::Tool { tool, value } => {
