@@ -305,9 +305,32 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.hosted.as_ref().map_or(0, |h| h.frames)
     }
 
-    /// The recording tape of the hosted graph's recorder.
+    /// The recording tape of the hosted graph's recorder: the recorded
+    /// samples (one byte per frame; the slice's length is the sample count).
     pub fn tape(&self) -> &[u8] {
         &self.tape[..self.tape_len]
+    }
+
+    /// The tape's size, bytes (the most samples it holds).
+    pub fn tape_capacity(&self) -> usize {
+        T
+    }
+
+    /// Loads a recording into the tape for a hosted graph's player: the
+    /// first `len` bytes of `bytes`. Refused (`Malformed`) when `bytes`
+    /// holds fewer than `len`, (`BadConfig`) when the tape is smaller than
+    /// `len`; the tape is unchanged then. A graph committed afterwards starts
+    /// with an empty tape: load after `GraphCommit`.
+    pub fn load_tape(&mut self, bytes: &[u8], len: usize) -> Result<(), Refusal> {
+        if len > bytes.len() {
+            return Err(Refusal::Malformed);
+        }
+        if len > T {
+            return Err(Refusal::BadConfig);
+        }
+        self.tape[..len].copy_from_slice(&bytes[..len]);
+        self.tape_len = len;
+        Ok(())
     }
 
     /// The board channel id of the first graph channel: graph channel `k` (in
