@@ -75,7 +75,9 @@ impl Recording {
 
     /// Each sample's steps, tracks 0..3 (−1, 0, +1).
     pub fn steps(&self) -> impl Iterator<Item = [i8; 4]> + '_ {
-        self.bytes.iter().map(|&b| motet_node::graph::record::unpack(b))
+        self.bytes
+            .iter()
+            .map(|&b| motet_node::graph::record::unpack(b))
     }
 
     /// Forward and reverse steps of each track.
@@ -116,10 +118,7 @@ impl Recording {
         let text = std::fs::read_to_string(&lp).map_err(|e| {
             err(
                 &lp,
-                format!(
-                    "cannot read the sample count of {}: {e}",
-                    path.display()
-                ),
+                format!("cannot read the sample count of {}: {e}", path.display()),
             )
         })?;
         let t = text.trim();
@@ -133,8 +132,7 @@ impl Recording {
                     format!("expected the sample count as a decimal number, found `{t}`"),
                 )
             })?;
-        let mut bytes =
-            std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+        let mut bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
         if len > bytes.len() {
             return Err(err(
                 &lp,

@@ -7,7 +7,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use motet_api::{load_job, JobOptions};
 use motet_graph::GraphFile;
 use motet_render::{render_png, render_svg, RenderSpec};
-use motet_sim::dance::{run_dance_with_job, CsvTrace, InputSource, Pendulums, PlannedJob};
+use motet_sim::dance::{
+    run_dance_with, CsvTrace, DanceOptions, InputSource, Pendulums, PlannedJob, Recording,
+};
 use motet_sim::live::{input_names, Clock, LiveSource};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -25,12 +27,18 @@ pub struct DanceArgs<'a> {
     /// A job planned on the machine and sent to the node alongside.
     pub job: Option<&'a Path>,
     pub seconds: Option<f64>,
+    /// A recording (`PATH` and `PATH.len`) loaded into the node's tape
+    /// before the run, for a `player`.
+    pub load_recording: Option<&'a Path>,
+    /// Where to write the node's tape after the run (`PATH` and `PATH.len`).
+    pub save_recording: Option<&'a Path>,
     pub out: Option<PathBuf>,
     pub quiet: bool,
 }
 
 pub fn dance(a: DanceArgs) -> Result<()> {
     let machine = crate::run::load_machine(a.machine)?;
+    let recording = a.load_recording.map(Recording::load).transpose()?;
     let graph = GraphFile::load(a.graph)?;
     let mut trace;
     let mut pend;
@@ -106,15 +114,19 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         b
     };
     let mut progress = |f: f64| bar.set_position((f * 1000.0) as u64);
-    let result = run_dance_with_job(
-        &machine,
-        &graph,
-        source,
-        job.as_ref(),
-        seconds,
-        &mut progress,
-    )?;
+    let options = DanceOptions {
+        job: job.as_ref(),
+        recording: recording.as_ref(),
+    };
+    let result = run_dance_with(&machine, &graph, source, options, seconds, &mut progress)
+        .with_context(|| match a.load_recording {
+            Some(p) => format!("running {} with {}", a.graph.display(), p.display()),
+            None => format!("running {}", a.graph.display()),
+        })?;
     bar.finish_and_clear();
+    if let Some(p) = a.save_recording {
+        result.recording.save(p)?;
+    }
 
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     // Bounds: the drawing's own, with a margin.
@@ -148,6 +160,14 @@ pub fn dance(a: DanceArgs) -> Result<()> {
             "  wrote {}/{{path.png, path.svg, report.json}}",
             out.display()
         );
+        if let Some(p) = a.save_recording {
+            println!(
+                "  wrote the recording ({} samples) to {} and {}",
+                result.recording.len(),
+                p.display(),
+                Recording::len_path(p).display()
+            );
+        }
     }
     Ok(())
 }

@@ -72,6 +72,14 @@ enum Cmd {
         /// Seconds to run [default: the trace's length, or 30 with --pendulums].
         #[arg(long)]
         seconds: Option<f64>,
+        /// Load a four-track recording (PATH: one byte per frame; PATH.len:
+        /// the sample count) into the node's tape before the run, for a player.
+        #[arg(long, value_name = "PATH")]
+        load_recording: Option<PathBuf>,
+        /// Write the node's tape after the run as PATH (one byte per frame)
+        /// and PATH.len (the sample count).
+        #[arg(long, value_name = "PATH")]
+        save_recording: Option<PathBuf>,
         /// Output folder [default: out/<graph name>].
         #[arg(long)]
         out: Option<PathBuf>,
@@ -126,6 +134,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             stamped,
             job,
             seconds,
+            load_recording,
+            save_recording,
             out,
             quiet,
         } => dance::dance(dance::DanceArgs {
@@ -137,6 +147,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             stamped,
             job: job.as_deref(),
             seconds,
+            load_recording: load_recording.as_deref(),
+            save_recording: save_recording.as_deref(),
             out,
             quiet,
         }),
