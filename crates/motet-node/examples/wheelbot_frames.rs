@@ -21,7 +21,7 @@
 use heapless::Deque;
 use motet_node::graph::*;
 use motet_trajectory::Segment;
-use std::f64::consts::{PI, TAU};
+
 use std::time::Instant;
 
 #[path = "../tests/graph_latency.rs"]
@@ -38,102 +38,10 @@ const M7_HZ: f64 = 600e6;
 /// Fraction of the M7 the graph may use.
 const BUDGET: f64 = 0.5;
 
-type G = Graph<24, 32>;
-
-struct Wheelbot {
-    g: G,
-    enc_r: u8,
-    x_stretch: u8,
-    ch: [u8; 4],
-}
-
-const LAYER: f64 = 2.0;
-const NOZZLE: f64 = 4.0;
-
-/// Copied from `tests/graph_wheelbot.rs`.
-fn wheelbot() -> Wheelbot {
-    let mut b = GraphBuilder::new();
-    let pedal = b
-        .add(AnalogInput::new(0).floor(0.0, 25.0).ceiling(2.75, 1020.0))
-        .unwrap();
-    let enc_r = b.add(Encoder::new(0)).unwrap();
-    let enc_z = b.add(Encoder::new(1)).unwrap();
-    let vel = b.add(VelocityGenerator).unwrap();
-    // Three waves per revolution, 1.5 mm.
-    let wave = b
-        .add(WaveGenerator1D::new(1.5, 0.0, 0.0).driven(3.0 / TAU))
-        .unwrap();
-    let polar = b.add(PolarToCartesian).unwrap();
-    let z_gen = b
-        .add(ScalingFilter1D::new(LAYER / TAU, Mode::Incremental))
-        .unwrap();
-    let x_stretch = b.add(ScalingFilter1D::new(0.0, Mode::Absolute)).unwrap();
-    let rate = (4.0 * LAYER * 1.0 * NOZZLE) / (PI * NOZZLE * NOZZLE);
-    let e_gen = b.add(PathLength2D::new(rate)).unwrap();
-    let ca = b
-        .add(GraphChannel::new().filtering(200.0).output(0, 5))
-        .unwrap();
-    let cb = b
-        .add(GraphChannel::new().filtering(200.0).output(1, 5))
-        .unwrap();
-    let cz = b.add(GraphChannel::new().inverted().output(2, 5)).unwrap();
-    let ce = b
-        .add(
-            GraphChannel::new()
-                .inverted()
-                .filtering(1000.0)
-                .output(3, 5),
-        )
-        .unwrap();
-    b.channel_ratio(ca, 1.0, 40.0).unwrap();
-    b.channel_ratio(cb, 1.0, 40.0).unwrap();
-    b.channel_ratio(cz, 1.0, 1201.0).unwrap();
-    b.channel_ratio(ce, 1.0, 70.0).unwrap();
-    b.set_ratio(port(enc_r, 0), 1.0, 2400.0).unwrap();
-    b.set_ratio(port(enc_z, 0), 1.0, 2400.0).unwrap();
-
-    let inc = Mode::Incremental;
-    b.map(
-        port(pedal, 0),
-        port(vel, VelocityGenerator::SPEED),
-        Mode::Absolute,
-    )
-    .unwrap();
-    b.map(port(vel, 1), port(polar, PolarToCartesian::THETA), inc)
-        .unwrap();
-    b.map(port(enc_r, 0), port(polar, PolarToCartesian::R), inc)
-        .unwrap();
-    b.tap(
-        port(wave, WaveGenerator1D::DRIVE),
-        port(polar, PolarToCartesian::THETA),
-        inc,
-    )
-    .unwrap();
-    b.map(port(wave, 1), port(polar, PolarToCartesian::R), inc)
-        .unwrap();
-    b.tap(port(z_gen, 0), port(polar, PolarToCartesian::THETA), inc)
-        .unwrap();
-    b.map(port(z_gen, 1), port(cz, 0), inc).unwrap();
-    b.map(port(enc_z, 0), port(cz, 0), inc).unwrap();
-    b.map(port(polar, PolarToCartesian::X), port(ca, 0), inc)
-        .unwrap();
-    b.map(port(polar, PolarToCartesian::X), port(x_stretch, 0), inc)
-        .unwrap();
-    b.map(port(polar, PolarToCartesian::Y), port(cb, 0), inc)
-        .unwrap();
-    b.map(port(x_stretch, 1), port(ca, 0), inc).unwrap();
-    b.tap(port(e_gen, 0), port(ca, 0), inc).unwrap();
-    b.tap(port(e_gen, 1), port(cb, 0), inc).unwrap();
-    b.map(port(e_gen, 2), port(ce, 0), inc).unwrap();
-    let g = b.build().unwrap();
-    assert!(g.mappings().iter().all(|m| !m.delayed), "all same-frame");
-    Wheelbot {
-        g,
-        enc_r,
-        x_stretch,
-        ch: [ca, cb, cz, ce],
-    }
-}
+#[path = "../tests/graph_wheelbot.rs"]
+#[allow(dead_code)]
+mod wheelbot_graph;
+use wheelbot_graph::wheelbot;
 
 fn usage() -> ! {
     eprintln!("usage: wheelbot_frames [FRAMES] [--ipf INSTRUCTIONS] [--minutes M]");

@@ -12,21 +12,22 @@ use motet_node::graph::*;
 use motet_trajectory::Segment;
 use std::f64::consts::{PI, TAU};
 
-type G = Graph<24, 32>;
+pub type G = Graph<24, 32>;
 
-struct Wheelbot {
-    g: G,
-    enc_r: u8,
-    polar: u8,
-    x_stretch: u8,
-    e_gen: u8,
-    ch: [u8; 4],
+// Public so that `examples/wheelbot_frames.rs` measures this very graph.
+pub struct Wheelbot {
+    pub g: G,
+    pub enc_r: u8,
+    pub polar: u8,
+    pub x_stretch: u8,
+    pub e_gen: u8,
+    pub ch: [u8; 4],
 }
 
 const LAYER: f64 = 2.0;
 const NOZZLE: f64 = 4.0;
 
-fn wheelbot() -> Wheelbot {
+pub fn wheelbot() -> Wheelbot {
     let mut b = GraphBuilder::new();
     let pedal = b
         .add(AnalogInput::new(0).floor(0.0, 25.0).ceiling(2.75, 1020.0))

@@ -181,11 +181,20 @@ fn dance_takes_live_inputs_from_stdin() {
     let result = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(result.status.success(), "{stderr}");
-    assert!(stderr.contains(":3:"), "the malformed line 3 is reported: {stderr}");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert!(
+        stderr.contains(":3:"),
+        "the malformed line 3 is reported: {stderr}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     // The knobs turned (x to 200, then y to 300 counts): both belts moved and
     // ended within half a step of the exact sum of their inputs.
-    for ch in report["channels"].as_array().unwrap().iter().filter(|c| c["name"] != "ch_pen") {
+    for ch in report["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["name"] != "ch_pen")
+    {
         assert!(ch["steps_forward"].as_u64().unwrap() > 0, "{ch}");
         assert!(ch["error_steps"].as_f64().unwrap().abs() <= 0.5, "{ch}");
     }
