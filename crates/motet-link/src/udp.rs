@@ -1,0 +1,156 @@
+//! UDP transport: one datagram per frame.
+
+use crate::{LinkStats, Transport};
+use std::io;
+use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
+use std::time::Duration;
+
+/// Largest datagram accepted; anything longer is cut (and then fails to
+/// decode).
+const MAX_DATAGRAM: usize = 2048;
+
+/// A UDP socket sending every frame to one peer. Datagrams from other
+/// addresses are ignored.
+#[derive(Debug)]
+pub struct UdpTransport {
+    name: String,
+    sock: UdpSocket,
+    peer: SocketAddr,
+    stats: LinkStats,
+    /// Datagrams from other addresses, dropped.
+    pub foreign: u64,
+}
+
+impl UdpTransport {
+    /// Binds `local` and sends to `peer`.
+    pub fn bind(local: impl ToSocketAddrs, peer: SocketAddr) -> io::Result<UdpTransport> {
+        let sock = UdpSocket::bind(local)?;
+        Self::from_socket(sock, peer)
+    }
+
+    /// Uses an already bound socket.
+    pub fn from_socket(sock: UdpSocket, peer: SocketAddr) -> io::Result<UdpTransport> {
+        let name = format!("udp:{}->{}", sock.local_addr()?, peer);
+        Ok(UdpTransport {
+            name,
+            sock,
+            peer,
+            stats: LinkStats::default(),
+            foreign: 0,
+        })
+    }
+
+    /// Two sockets on 127.0.0.1 (ephemeral ports) aimed at each other.
+    pub fn loopback_pair() -> io::Result<(UdpTransport, UdpTransport)> {
+        let a = UdpSocket::bind("127.0.0.1:0")?;
+        let b = UdpSocket::bind("127.0.0.1:0")?;
+        let (aa, ba) = (a.local_addr()?, b.local_addr()?);
+        Ok((Self::from_socket(a, ba)?, Self::from_socket(b, aa)?))
+    }
+
+    pub fn local_addr(&self) -> io::Result<SocketAddr> {
+        self.sock.local_addr()
+    }
+}
+
+impl Transport for UdpTransport {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        let n = self.sock.send_to(frame, self.peer)?;
+        self.stats.sent(n);
+        Ok(())
+    }
+
+    fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
+        match timeout {
+            None => self.sock.set_nonblocking(true)?,
+            Some(d) => {
+                self.sock.set_nonblocking(false)?;
+                // A zero timeout is refused by the OS: wait 1 µs instead.
+                self.sock
+                    .set_read_timeout(Some(d.max(Duration::from_micros(1))))?;
+            }
+        }
+        let mut buf = [0u8; MAX_DATAGRAM];
+        loop {
+            match self.sock.recv_from(&mut buf) {
+                Ok((n, from)) if from == self.peer => {
+                    self.stats.received(n);
+                    return Ok(Some(buf[..n].to_vec()));
+                }
+                Ok(_) => {
+                    self.foreign += 1;
+                    if timeout.is_some() {
+                        // Do not restart the full wait for each stray datagram.
+                        self.sock.set_nonblocking(true)?;
+                    }
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    return Ok(None)
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn stats(&self) -> &LinkStats {
+        &self.stats
+    }
+
+    fn stats_mut(&mut self) -> &mut LinkStats {
+        &mut self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::link_exchange;
+
+    const WAIT: Option<Duration> = Some(Duration::from_secs(5));
+
+    #[test]
+    fn frames_between_two_sockets() {
+        let (mut a, mut b) = UdpTransport::loopback_pair().unwrap();
+        assert!(a.name().starts_with("udp:127.0.0.1:"));
+        let frames: Vec<Vec<u8>> = (1..=20u8).map(|i| vec![i; i as usize * 10]).collect();
+        for f in &frames {
+            a.send(f).unwrap();
+            // Loopback keeps order; wait for each so nothing is dropped.
+            assert_eq!(b.recv(WAIT).unwrap().as_ref(), Some(f));
+        }
+        b.send(&[7, 7, 0]).unwrap();
+        assert_eq!(a.recv(WAIT).unwrap(), Some(vec![7, 7, 0]));
+        assert_eq!(a.stats().frames_out, 20);
+        assert_eq!(b.stats().frames_in, 20);
+        assert_eq!(b.stats().bytes_in, (1..=20).map(|i| i * 10).sum::<u64>());
+    }
+
+    #[test]
+    fn nothing_waiting_and_foreign_ignored() {
+        let (mut a, mut b) = UdpTransport::loopback_pair().unwrap();
+        assert_eq!(b.recv(None).unwrap(), None);
+        let stranger = UdpSocket::bind("127.0.0.1:0").unwrap();
+        stranger
+            .send_to(&[1, 2, 0], b.local_addr().unwrap())
+            .unwrap();
+        a.send(&[3, 0]).unwrap();
+        assert_eq!(b.recv(WAIT).unwrap(), Some(vec![3, 0]));
+        assert_eq!(b.foreign, 1);
+    }
+
+    #[test]
+    fn link_over_udp_delivers_1000_in_order() {
+        let (mut a, mut b) = UdpTransport::loopback_pair().unwrap();
+        let got = link_exchange(&mut a, &mut b, 1000, Some(Duration::from_millis(20)));
+        assert_eq!(got, (0..1000).collect::<Vec<u32>>());
+    }
+}
