@@ -4,7 +4,7 @@
 
 use heapless::Vec;
 
-use super::component::{Component, ParamError, Phase};
+use super::component::{Component, Phase};
 use super::error::{Capacity, GraphError};
 use super::graph::{Block, Graph, DEFAULT_FRAME_US};
 use super::io::MAX_FRAME_STEPS;
@@ -135,16 +135,7 @@ impl<const C: usize, const M: usize> GraphBuilder<C, M> {
 
     /// Sets a parameter before the graph runs.
     pub fn set_param(&mut self, comp: u8, param: u8, value: f64) -> Result<(), GraphError> {
-        let b = self
-            .blocks
-            .get_mut(comp as usize)
-            .ok_or(GraphError::UnknownComponent(comp))?;
-        b.comp
-            .set_param(&mut b.ports, param, value)
-            .map_err(|e| match e {
-                ParamError::Unknown => GraphError::UnknownParam { comp, param },
-                ParamError::BadValue => GraphError::BadValue { comp, param },
-            })
+        super::graph::set_block_param(&mut self.blocks, comp, param, value)
     }
 
     fn check_pair(&self, from: PortRef, to: PortRef, mode: Mode) -> Result<(), GraphError> {

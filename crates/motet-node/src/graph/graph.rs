@@ -37,6 +37,25 @@ pub const DEFAULT_FRAME_US: f64 = 40.0;
 /// Slow frame period, µs (1 kHz).
 pub const SLOW_FRAME_US: f64 = 1000.0;
 
+/// Sets parameter `param` of block `comp`, for the builder and the running
+/// graph alike; on error nothing changes.
+pub(crate) fn set_block_param(
+    blocks: &mut [Block],
+    comp: u8,
+    param: u8,
+    value: f64,
+) -> Result<(), GraphError> {
+    let b = blocks
+        .get_mut(comp as usize)
+        .ok_or(GraphError::UnknownComponent(comp))?;
+    b.comp
+        .set_param(&mut b.ports, param, value)
+        .map_err(|e| match e {
+            ParamError::Unknown => GraphError::UnknownParam { comp, param },
+            ParamError::BadValue => GraphError::BadValue { comp, param },
+        })
+}
+
 /// A component with its ports and the ranges of its mappings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Block {
@@ -129,16 +148,7 @@ impl<const C: usize, const M: usize> Graph<C, M> {
 
     /// Sets parameter `param` of component `comp`; on error nothing changes.
     pub fn set_param(&mut self, comp: u8, param: u8, value: f64) -> Result<(), GraphError> {
-        let b = self
-            .blocks
-            .get_mut(comp as usize)
-            .ok_or(GraphError::UnknownComponent(comp))?;
-        b.comp
-            .set_param(&mut b.ports, param, value)
-            .map_err(|e| match e {
-                ParamError::Unknown => GraphError::UnknownParam { comp, param },
-                ParamError::BadValue => GraphError::BadValue { comp, param },
-            })
+        set_block_param(&mut self.blocks, comp, param, value)
     }
 
     pub fn param(&self, comp: u8, param: u8) -> Option<f64> {
