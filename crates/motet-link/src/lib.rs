@@ -10,9 +10,11 @@ use std::io;
 use std::time::Duration;
 
 pub mod mem;
+pub mod serial;
 pub mod udp;
 
 pub use mem::{pair, MemTransport};
+pub use serial::SerialTransport;
 pub use udp::UdpTransport;
 
 /// Traffic counters of one transport. Frames and bytes are counted by the
