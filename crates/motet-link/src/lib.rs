@@ -11,6 +11,7 @@ use std::time::Duration;
 
 pub mod mem;
 pub mod serial;
+pub mod slcan;
 pub mod udp;
 
 pub use mem::{pair, MemTransport};
