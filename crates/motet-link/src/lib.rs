@@ -9,11 +9,13 @@
 use std::io;
 use std::time::Duration;
 
+pub mod can;
 pub mod mem;
 pub mod serial;
 pub mod slcan;
 pub mod udp;
 
+pub use can::{CanBus, CanNode, CanTransport};
 pub use mem::{pair, MemTransport};
 pub use serial::SerialTransport;
 pub use udp::UdpTransport;
