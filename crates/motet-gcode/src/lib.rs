@@ -807,10 +807,9 @@ impl<'t> Interp<'t> {
                     20 => Motion::Cw,
                     _ => Motion::Ccw,
                 };
-                if let Some((o, _)) = w.motion {
-                    return Err(self.same_group(at, &name(), o.name()));
-                }
-                w.motion = Some((m, at));
+                claim(&mut w.motion, m, at, |o| {
+                    self.same_group(at, &name(), o.name())
+                })?;
             }
             40 | 100 | 110 | 280 | 281 | 530 | 920 | 921 => {
                 let n = match code {
@@ -823,10 +822,9 @@ impl<'t> Interp<'t> {
                     920 => NonModal::SetPosition,
                     _ => NonModal::ResetPosition,
                 };
-                if let Some((o, _)) = w.nonmodal {
-                    return Err(self.same_group(at, &name(), o.name()));
-                }
-                w.nonmodal = Some((n, at));
+                claim(&mut w.nonmodal, n, at, |o| {
+                    self.same_group(at, &name(), o.name())
+                })?;
             }
             170 | 180 | 190 => {
                 let p = match code {
@@ -834,40 +832,34 @@ impl<'t> Interp<'t> {
                     180 => Plane::Zx,
                     _ => Plane::Yz,
                 };
-                if let Some((o, _)) = w.plane {
-                    return Err(self.same_group(at, &name(), o.name()));
-                }
-                w.plane = Some((p, at));
+                claim(&mut w.plane, p, at, |o| {
+                    self.same_group(at, &name(), o.name())
+                })?;
             }
             930 | 940 => {
-                if let Some((inv, _)) = w.feed_mode {
-                    return Err(self.same_group(at, &name(), if inv { "G93" } else { "G94" }));
-                }
-                w.feed_mode = Some((code == 930, at));
+                claim(&mut w.feed_mode, code == 930, at, |inv| {
+                    self.same_group(at, &name(), if inv { "G93" } else { "G94" })
+                })?;
             }
             200 | 210 => {
-                if let Some((inch, _)) = w.units {
-                    return Err(self.same_group(at, &name(), if inch { "G20" } else { "G21" }));
-                }
-                w.units = Some((code == 200, at));
+                claim(&mut w.units, code == 200, at, |inch| {
+                    self.same_group(at, &name(), if inch { "G20" } else { "G21" })
+                })?;
             }
             900 | 910 => {
-                if let Some((rel, _)) = w.distance {
-                    return Err(self.same_group(at, &name(), if rel { "G91" } else { "G90" }));
-                }
-                w.distance = Some((code == 910, at));
+                claim(&mut w.distance, code == 910, at, |rel| {
+                    self.same_group(at, &name(), if rel { "G91" } else { "G90" })
+                })?;
             }
             901 | 911 => {
-                if let Some((rel, _)) = w.arc_distance {
-                    return Err(self.same_group(at, &name(), if rel { "G91.1" } else { "G90.1" }));
-                }
-                w.arc_distance = Some((code == 911, at));
+                claim(&mut w.arc_distance, code == 911, at, |rel| {
+                    self.same_group(at, &name(), if rel { "G91.1" } else { "G90.1" })
+                })?;
             }
             540 | 550 | 560 | 570 | 580 | 590 => {
-                if let Some((o, _)) = w.wcs {
-                    return Err(self.same_group(at, &name(), &format!("G{}", 54 + o)));
-                }
-                w.wcs = Some(((code / 10 - 54) as usize, at));
+                claim(&mut w.wcs, (code / 10 - 54) as usize, at, |o| {
+                    self.same_group(at, &name(), &format!("G{}", 54 + o))
+                })?;
             }
             _ => {
                 if let Some(why) = ignored_g(code) {
@@ -903,10 +895,9 @@ impl<'t> Interp<'t> {
                     10 => Stop::OptionalPause,
                     _ => Stop::End(c),
                 };
-                if let Some((o, _)) = w.stop {
-                    return Err(self.same_group(at, &name(), o.name()));
-                }
-                w.stop = Some((s, at));
+                claim(&mut w.stop, s, at, |o| {
+                    self.same_group(at, &name(), o.name())
+                })?;
             }
             30 | 40 | 50 => {
                 let s = match c {
@@ -914,28 +905,24 @@ impl<'t> Interp<'t> {
                     40 => Spindle::Ccw,
                     _ => Spindle::Off,
                 };
-                if let Some((o, _)) = w.spindle {
-                    return Err(self.same_group(at, &name(), o.name()));
-                }
-                w.spindle = Some((s, at));
+                claim(&mut w.spindle, s, at, |o| {
+                    self.same_group(at, &name(), o.name())
+                })?;
             }
             70 | 80 | 90 => {
-                if let Some((o, _)) = w.coolant {
-                    let other = ["M9", "M7", "M8"][usize::from(o)];
-                    return Err(self.same_group(at, &name(), other));
-                }
                 let v = match c {
                     70 => 1,
                     80 => 2,
                     _ => 0,
                 };
-                w.coolant = Some((v, at));
+                claim(&mut w.coolant, v, at, |o| {
+                    self.same_group(at, &name(), ["M9", "M7", "M8"][usize::from(o)])
+                })?;
             }
             820 | 830 => {
-                if let Some((rel, _)) = w.extrusion {
-                    return Err(self.same_group(at, &name(), if rel { "M83" } else { "M82" }));
-                }
-                w.extrusion = Some((c == 830, at));
+                claim(&mut w.extrusion, c == 830, at, |rel| {
+                    self.same_group(at, &name(), if rel { "M83" } else { "M82" })
+                })?;
             }
             _ => {
                 if let Some(pc) = printer_code(c) {
@@ -1901,4 +1888,19 @@ impl<'t> Interp<'t> {
 /// Laser/spindle power from an S word, grbl `$30=1000`.
 fn power(s: f64) -> f32 {
     ((s / 1000.0).clamp(0.0, 1.0)) as f32
+}
+
+/// Puts `v` in a modal group's slot for this line; a second code of the same
+/// group on one line is the error `clash` makes from the first.
+fn claim<T: Copy>(
+    slot: &mut Option<(T, usize)>,
+    v: T,
+    at: usize,
+    clash: impl FnOnce(T) -> SourceError,
+) -> Result<(), SourceError> {
+    if let Some((other, _)) = *slot {
+        return Err(clash(other));
+    }
+    *slot = Some((v, at));
+    Ok(())
 }
