@@ -9,9 +9,13 @@
 #![forbid(unsafe_code)]
 
 pub mod frame;
+pub mod image;
 pub mod link;
 pub mod message;
+pub mod service;
 pub mod sync;
+
+pub use service::{ServiceError, ServiceReply, ServiceRequest};
 
 pub use message::{
     AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,

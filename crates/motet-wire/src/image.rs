@@ -1,0 +1,332 @@
+//! Firmware image files: a fixed header, then the payload a node runs.
+//!
+//! | byte | size | field |
+//! |---|---|---|
+//! | 0–3 | 4 | magic `MTFW` |
+//! | 4 | 1 | image format version ([`IMAGE_FORMAT`]) |
+//! | 5 | 1 | length of the node kind, 1..=16 |
+//! | 6–21 | 16 | node kind (ASCII, zero-padded) |
+//! | 22–27 | 6 | firmware version: major, minor, patch, u16 LE each |
+//! | 28–31 | 4 | payload length, u32 LE |
+//! | 32–35 | 4 | CRC-32C of the payload, u32 LE |
+//! | 36… | | payload |
+//!
+//! The header is fixed-size so that a bootloader can read it from flash into
+//! a stack buffer and check the payload a page at a time; the kind is in the
+//! image so that a node refuses firmware built for another node type even if
+//! the host announced it wrongly.
+
+use crate::frame::{crc32c, Crc32c};
+use crate::service::{Kind, Version, KIND_LEN};
+use serde::{Deserialize, Serialize};
+
+/// First four bytes of every image.
+pub const MAGIC: [u8; 4] = *b"MTFW";
+/// Image format version this crate writes and reads.
+pub const IMAGE_FORMAT: u8 = 1;
+/// Header bytes before the payload.
+pub const IMAGE_HEADER_LEN: usize = 36;
+
+/// Why bytes are not a firmware image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ImageError {
+    /// Fewer bytes than the header, or than the header says.
+    Truncated,
+    /// More bytes after the payload than the header says.
+    TrailingBytes,
+    BadMagic,
+    /// An image format version this parser does not know.
+    UnknownFormat {
+        format: u8,
+    },
+    /// The kind is empty, longer than 16 bytes, not ASCII, or not zero-padded.
+    BadKind,
+    /// The payload does not match the CRC-32C in the header.
+    CrcMismatch {
+        expected: u32,
+        actual: u32,
+    },
+    /// The output buffer cannot hold the image.
+    BufferTooSmall,
+}
+
+impl core::fmt::Display for ImageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ImageError::Truncated => f.write_str("firmware image truncated"),
+            ImageError::TrailingBytes => f.write_str("bytes after the firmware payload"),
+            ImageError::BadMagic => f.write_str("not a firmware image (bad magic)"),
+            ImageError::UnknownFormat { format } => {
+                write!(f, "unknown firmware image format {format}")
+            }
+            ImageError::BadKind => f.write_str("bad node kind in firmware image"),
+            ImageError::CrcMismatch { expected, actual } => write!(
+                f,
+                "firmware payload CRC-32C {actual:#010x}, header says {expected:#010x}"
+            ),
+            ImageError::BufferTooSmall => f.write_str("buffer too small for the firmware image"),
+        }
+    }
+}
+
+/// An image's header.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageHeader {
+    pub kind: Kind,
+    pub version: Version,
+    pub payload_len: u32,
+    pub payload_crc: u32,
+}
+
+fn u16_at(b: &[u8], i: usize) -> u16 {
+    u16::from_le_bytes([b[i], b[i + 1]])
+}
+
+fn u32_at(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+impl ImageHeader {
+    /// Parses the header at the start of `bytes` (the payload is not checked).
+    pub fn parse(bytes: &[u8]) -> Result<ImageHeader, ImageError> {
+        if bytes.len() < IMAGE_HEADER_LEN {
+            return Err(ImageError::Truncated);
+        }
+        if bytes[0..4] != MAGIC {
+            return Err(ImageError::BadMagic);
+        }
+        if bytes[4] != IMAGE_FORMAT {
+            return Err(ImageError::UnknownFormat { format: bytes[4] });
+        }
+        let n = bytes[5] as usize;
+        let field = &bytes[6..6 + KIND_LEN];
+        if n == 0 || n > KIND_LEN || field[n..].iter().any(|&b| b != 0) {
+            return Err(ImageError::BadKind);
+        }
+        let text = &field[..n];
+        if !text.iter().all(|&b| b.is_ascii_graphic()) {
+            return Err(ImageError::BadKind);
+        }
+        let mut kind = Kind::new();
+        for &b in text {
+            kind.push(b as char).map_err(|_| ImageError::BadKind)?;
+        }
+        Ok(ImageHeader {
+            kind,
+            version: Version {
+                major: u16_at(bytes, 22),
+                minor: u16_at(bytes, 24),
+                patch: u16_at(bytes, 26),
+            },
+            payload_len: u32_at(bytes, 28),
+            payload_crc: u32_at(bytes, 32),
+        })
+    }
+
+    /// The header's bytes; fails only for a kind that [`ImageHeader::parse`]
+    /// would refuse.
+    pub fn to_bytes(&self) -> Result<[u8; IMAGE_HEADER_LEN], ImageError> {
+        let kind = self.kind.as_bytes();
+        if kind.is_empty() || !kind.iter().all(|b| b.is_ascii_graphic()) {
+            return Err(ImageError::BadKind);
+        }
+        let mut h = [0u8; IMAGE_HEADER_LEN];
+        h[0..4].copy_from_slice(&MAGIC);
+        h[4] = IMAGE_FORMAT;
+        h[5] = kind.len() as u8;
+        h[6..6 + kind.len()].copy_from_slice(kind);
+        h[22..24].copy_from_slice(&self.version.major.to_le_bytes());
+        h[24..26].copy_from_slice(&self.version.minor.to_le_bytes());
+        h[26..28].copy_from_slice(&self.version.patch.to_le_bytes());
+        h[28..32].copy_from_slice(&self.payload_len.to_le_bytes());
+        h[32..36].copy_from_slice(&self.payload_crc.to_le_bytes());
+        Ok(h)
+    }
+
+    /// Whole image length, header included.
+    pub fn image_len(&self) -> u64 {
+        IMAGE_HEADER_LEN as u64 + self.payload_len as u64
+    }
+}
+
+/// A parsed image borrowing its bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Image<'a> {
+    pub header: ImageHeader,
+    pub payload: &'a [u8],
+}
+
+/// Parses a whole image: header, exact length and payload CRC.
+pub fn parse(bytes: &[u8]) -> Result<Image<'_>, ImageError> {
+    let header = ImageHeader::parse(bytes)?;
+    let len = bytes.len() as u64;
+    if len < header.image_len() {
+        return Err(ImageError::Truncated);
+    }
+    if len > header.image_len() {
+        return Err(ImageError::TrailingBytes);
+    }
+    let payload = &bytes[IMAGE_HEADER_LEN..];
+    let actual = crc32c(payload);
+    if actual != header.payload_crc {
+        return Err(ImageError::CrcMismatch {
+            expected: header.payload_crc,
+            actual,
+        });
+    }
+    Ok(Image { header, payload })
+}
+
+/// Writes an image of `payload` into `out`, returning its length.
+pub fn build(
+    kind: &str,
+    version: Version,
+    payload: &[u8],
+    out: &mut [u8],
+) -> Result<usize, ImageError> {
+    let mut k = Kind::new();
+    k.push_str(kind).map_err(|_| ImageError::BadKind)?;
+    let payload_len = u32::try_from(payload.len()).map_err(|_| ImageError::BufferTooSmall)?;
+    let mut crc = Crc32c::new();
+    crc.update(payload);
+    let header = ImageHeader {
+        kind: k,
+        version,
+        payload_len,
+        payload_crc: crc.finish(),
+    };
+    let total = IMAGE_HEADER_LEN + payload.len();
+    if out.len() < total {
+        return Err(ImageError::BufferTooSmall);
+    }
+    out[..IMAGE_HEADER_LEN].copy_from_slice(&header.to_bytes()?);
+    out[IMAGE_HEADER_LEN..total].copy_from_slice(payload);
+    Ok(total)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec;
+    use std::vec::Vec;
+
+    const V: Version = Version {
+        major: 1,
+        minor: 2,
+        patch: 300,
+    };
+
+    fn image(kind: &str, payload: &[u8]) -> Vec<u8> {
+        let mut out = vec![0u8; IMAGE_HEADER_LEN + payload.len()];
+        let n = build(kind, V, payload, &mut out).unwrap();
+        assert_eq!(n, out.len());
+        out
+    }
+
+    #[test]
+    fn header_layout() {
+        let img = image("stepper", b"abc");
+        assert_eq!(&img[0..4], b"MTFW");
+        assert_eq!(img[4], 1);
+        assert_eq!(img[5], 7);
+        assert_eq!(&img[6..13], b"stepper");
+        assert!(img[13..22].iter().all(|&b| b == 0));
+        assert_eq!(&img[22..28], &[1, 0, 2, 0, 0x2c, 1]);
+        assert_eq!(&img[28..32], &[3, 0, 0, 0]);
+        assert_eq!(u32_at(&img, 32), crc32c(b"abc"));
+        assert_eq!(&img[36..], b"abc");
+    }
+
+    #[test]
+    fn bad_images_are_named() {
+        let good = image("laser", &[7u8; 300]);
+        let mut cases: Vec<(Vec<u8>, ImageError)> = Vec::new();
+        cases.push((good[..20].to_vec(), ImageError::Truncated));
+        cases.push((good[..good.len() - 1].to_vec(), ImageError::Truncated));
+        let mut t = good.clone();
+        t.push(0);
+        cases.push((t, ImageError::TrailingBytes));
+        let mut m = good.clone();
+        m[0] = b'X';
+        cases.push((m, ImageError::BadMagic));
+        let mut f = good.clone();
+        f[4] = 9;
+        cases.push((f, ImageError::UnknownFormat { format: 9 }));
+        let mut k = good.clone();
+        k[5] = 0;
+        cases.push((k, ImageError::BadKind));
+        let mut k = good.clone();
+        k[5] = 17;
+        cases.push((k, ImageError::BadKind));
+        let mut k = good.clone();
+        k[20] = b'x';
+        cases.push((k, ImageError::BadKind));
+        let mut k = good.clone();
+        k[6] = b' ';
+        cases.push((k, ImageError::BadKind));
+        let mut p = good.clone();
+        p[100] ^= 1;
+        let actual = crc32c(&p[36..]);
+        cases.push((
+            p,
+            ImageError::CrcMismatch {
+                expected: crc32c(&[7u8; 300]),
+                actual,
+            },
+        ));
+        for (bytes, want) in cases {
+            assert_eq!(parse(&bytes), Err(want));
+        }
+        assert_eq!(
+            build("stepper", V, b"abc", &mut [0u8; 38]),
+            Err(ImageError::BufferTooSmall)
+        );
+        assert_eq!(
+            build("", V, b"abc", &mut [0u8; 64]),
+            Err(ImageError::BadKind)
+        );
+        assert_eq!(
+            build("seventeen-chars!!", V, b"", &mut [0u8; 64]),
+            Err(ImageError::BadKind)
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
+            let _ = parse(&bytes);
+            let _ = ImageHeader::parse(&bytes);
+        }
+
+        #[test]
+        fn good_images_parse(
+            kind in "[a-z0-9_-]{1,16}",
+            major in any::<u16>(), minor in any::<u16>(), patch in any::<u16>(),
+            payload in proptest::collection::vec(any::<u8>(), 0..600),
+        ) {
+            let version = Version { major, minor, patch };
+            let mut out = vec![0u8; IMAGE_HEADER_LEN + payload.len()];
+            build(&kind, version, &payload, &mut out).unwrap();
+            let img = parse(&out).unwrap();
+            prop_assert_eq!(img.header.kind.as_str(), kind.as_str());
+            prop_assert_eq!(img.header.version, version);
+            prop_assert_eq!(img.payload, &payload[..]);
+        }
+
+        #[test]
+        fn one_flipped_bit_is_caught(
+            payload in proptest::collection::vec(any::<u8>(), 1..300),
+            at in any::<proptest::sample::Index>(),
+            bit in 0u8..8,
+        ) {
+            let mut img = vec![0u8; IMAGE_HEADER_LEN + payload.len()];
+            build("servo", V, &payload, &mut img).unwrap();
+            let i = IMAGE_HEADER_LEN + at.index(payload.len());
+            img[i] ^= 1 << bit;
+            let is_crc_mismatch = matches!(parse(&img), Err(ImageError::CrcMismatch { .. }));
+            prop_assert!(is_crc_mismatch);
+        }
+    }
+}
