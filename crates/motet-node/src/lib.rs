@@ -13,6 +13,8 @@ pub mod board;
 pub mod channel;
 pub mod graph;
 pub mod node;
+pub mod service;
+pub mod storage;
 pub mod tool;
 
 pub use board::Board;
@@ -21,3 +23,5 @@ pub use node::{
     Node, NodeGraph, NodeStatus, DEFAULT_QUEUE, GRAPH_COMPONENTS, GRAPH_MAPPINGS, MAX_CHANNELS,
     MAX_STEPS_PER_UNIT, MAX_TOOLS,
 };
+pub use service::{Action, Handled, NodeConfig, Services};
+pub use storage::{Flash, Persisted, RamFlash, RamStore, StorageError, Store};

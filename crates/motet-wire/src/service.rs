@@ -10,9 +10,13 @@
 //! [`UNPAIRED`] and answers only broadcast requests and requests naming its
 //! unique id; paired nodes take [`FIRST_NODE_ADDRESS`]..=[`LAST_NODE_ADDRESS`].
 //!
-//! A reply to a broadcast is never an error: every node on a bus would answer
-//! and bury the replies that matter, so a node stays silent on a broadcast it
-//! refuses. Unicast requests always get a reply.
+//! A broadcast (or group multicast) request gets a reply only when the reply
+//! carries information (status, info, paired, time): acks and errors from every
+//! node on a bus would bury the replies that matter, so a node stays silent on
+//! a broadcast it refuses ([`ServiceReply::answers_broadcast`]). Firmware
+//! and clock-model requests are ignored when broadcast
+//! ([`ServiceRequest::allowed_by_broadcast`]). Unicast requests to a paired
+//! node always get a reply.
 
 use crate::image::ImageError;
 use heapless::{String, Vec};
@@ -163,6 +167,20 @@ impl ServiceRequest {
             ServiceRequest::TimeGet { .. } | ServiceRequest::TimeSet { .. } => port::TIME,
         }
     }
+
+    /// False for requests a node ignores when broadcast: firmware (one node
+    /// at a time) and a clock model (each node has its own).
+    pub const fn allowed_by_broadcast(&self) -> bool {
+        !matches!(
+            self,
+            ServiceRequest::FirmwareBegin { .. }
+                | ServiceRequest::FirmwarePage { .. }
+                | ServiceRequest::FirmwareRead { .. }
+                | ServiceRequest::FirmwareVerify
+                | ServiceRequest::FirmwareStart
+                | ServiceRequest::TimeSet { .. }
+        )
+    }
 }
 
 /// What a node is doing.
@@ -257,6 +275,19 @@ pub enum ServiceReply {
 }
 
 impl ServiceReply {
+    /// Whether this reply is sent when the request was a broadcast: only
+    /// replies that carry information; acks and errors from
+    /// every node on a bus would bury them.
+    pub const fn answers_broadcast(&self) -> bool {
+        matches!(
+            self,
+            ServiceReply::Status(_)
+                | ServiceReply::Info(_)
+                | ServiceReply::Paired { .. }
+                | ServiceReply::Time { .. }
+        )
+    }
+
     /// Sets `t3` of a [`ServiceReply::Time`] to the moment it is sent, for an
     /// endpoint that can stamp closer to the wire than the service handler.
     pub fn stamp_t3(&mut self, now_local_us: u64) {
