@@ -279,7 +279,7 @@ impl<T: Transport> Faulty<T> {
     }
 
     /// Applies faults to one frame from the inner transport.
-    fn admit(&mut self, mut frame: Vec<u8>) {
+    fn admit(&mut self, frame: Vec<u8>) {
         let now = self.clock.now_us();
         self.counts.frames += 1;
         // Frames whose wait ends with this one go out behind it.

@@ -14,12 +14,14 @@ pub mod fault;
 pub mod mem;
 pub mod serial;
 pub mod slcan;
+pub mod slcan_port;
 pub mod udp;
 
 pub use can::{CanBus, CanNode, CanTransport};
 pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty, SimClock};
 pub use mem::{pair, MemTransport};
 pub use serial::SerialTransport;
+pub use slcan_port::{SlcanConfig, SlcanTransport};
 pub use udp::UdpTransport;
 
 /// Traffic counters of one transport. Frames and bytes are counted by the
