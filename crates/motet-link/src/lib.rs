@@ -15,6 +15,7 @@ pub mod mem;
 pub mod serial;
 pub mod slcan;
 pub mod slcan_port;
+pub mod spec;
 pub mod udp;
 
 pub use can::{CanBus, CanNode, CanTransport};
@@ -22,6 +23,7 @@ pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty, SimClock};
 pub use mem::{pair, MemTransport};
 pub use serial::SerialTransport;
 pub use slcan_port::{SlcanConfig, SlcanTransport};
+pub use spec::{open, LinkSpec, OpenError, SpecError};
 pub use udp::UdpTransport;
 
 /// Traffic counters of one transport. Frames and bytes are counted by the

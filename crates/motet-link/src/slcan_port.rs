@@ -390,7 +390,7 @@ mod tests {
         let (mut master, host) =
             pty::open_with(|path| SlcanTransport::open(path, host_cfg()).unwrap());
         let mut host = host;
-        let mut setup = vec![0u8; 64];
+        let mut setup = [0u8; 64];
         let mut n = 0;
         master.set_timeout(Duration::from_secs(5)).unwrap();
         while n < 7 {
