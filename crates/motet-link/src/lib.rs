@@ -10,14 +10,20 @@ use std::io;
 use std::time::Duration;
 
 pub mod can;
+pub mod fault;
 pub mod mem;
 pub mod serial;
 pub mod slcan;
+pub mod slcan_port;
+pub mod spec;
 pub mod udp;
 
 pub use can::{CanBus, CanNode, CanTransport};
+pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty, SimClock};
 pub use mem::{pair, MemTransport};
 pub use serial::SerialTransport;
+pub use slcan_port::{SlcanConfig, SlcanTransport};
+pub use spec::{open, LinkSpec, OpenError, SpecError};
 pub use udp::UdpTransport;
 
 /// Traffic counters of one transport. Frames and bytes are counted by the
@@ -138,6 +144,22 @@ pub(crate) mod testutil {
         count: u32,
         wait: Option<Duration>,
     ) -> Vec<u32> {
+        let mut now = 0u64;
+        link_exchange_clocked(a, b, count, wait, &mut || {
+            now += 50;
+            now
+        })
+    }
+
+    /// Like [`link_exchange`] with the links' time taken from `clock` once
+    /// per round.
+    pub fn link_exchange_clocked(
+        a: &mut dyn Transport,
+        b: &mut dyn Transport,
+        count: u32,
+        wait: Option<Duration>,
+        clock: &mut dyn FnMut() -> u64,
+    ) -> Vec<u32> {
         let mut host = Link::new(Config {
             isn: 1000,
             ..Config::new(1, 2, true)
@@ -148,13 +170,12 @@ pub(crate) mod testutil {
         });
         let mut got = Vec::new();
         let mut next = 0u32;
-        let mut now = 0u64;
         let mut out = [0u8; MAX_FRAME];
-        for _round in 0..200_000 {
+        for _round in 0..1_000_000 {
             if got.len() as u32 == count {
                 break;
             }
-            now += 50;
+            let now = clock();
             while next < count && host.send(&next.to_le_bytes(), now).is_ok() {
                 next += 1;
             }

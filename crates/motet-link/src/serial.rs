@@ -7,6 +7,19 @@ use std::collections::VecDeque;
 use std::io::{self, Read, Write};
 use std::time::{Duration, Instant};
 
+/// Opens the device at `path` in raw mode, 8N1, no flow control, reads not
+/// blocking.
+pub fn open_raw(path: &str, baud: u32) -> io::Result<Box<dyn SerialPort>> {
+    serialport::new(path, baud)
+        .data_bits(serialport::DataBits::Eight)
+        .parity(serialport::Parity::None)
+        .stop_bits(serialport::StopBits::One)
+        .flow_control(serialport::FlowControl::None)
+        .timeout(Duration::ZERO)
+        .open()
+        .map_err(io::Error::from)
+}
+
 /// A serial port carrying motet frames.
 pub struct SerialTransport {
     name: String,
@@ -30,14 +43,7 @@ impl std::fmt::Debug for SerialTransport {
 impl SerialTransport {
     /// Opens the device at `path` in raw mode, 8N1, no flow control.
     pub fn open(path: &str, baud: u32) -> io::Result<SerialTransport> {
-        let port = serialport::new(path, baud)
-            .data_bits(serialport::DataBits::Eight)
-            .parity(serialport::Parity::None)
-            .stop_bits(serialport::StopBits::One)
-            .flow_control(serialport::FlowControl::None)
-            .timeout(Duration::ZERO)
-            .open()
-            .map_err(io::Error::from)?;
+        let port = open_raw(path, baud)?;
         Ok(Self::from_port(format!("serial:{path}"), port))
     }
 
@@ -137,6 +143,16 @@ pub(crate) mod pty {
     /// A pty pair: the slave opened by its path through `serialport` (raw
     /// mode), the master wrapped directly. Returns (master, slave).
     pub fn pair() -> (SerialTransport, SerialTransport) {
+        let (m, s) = open_with(|path| SerialTransport::open(path, 115_200).unwrap());
+        (
+            SerialTransport::from_port("pty-master".into(), Box::new(m)),
+            s,
+        )
+    }
+
+    /// Opens a pty, hands the slave's path to `open` (which must open it)
+    /// and returns the raw master with what `open` made.
+    pub fn open_with<T>(open: impl FnOnce(&str) -> T) -> (TTYPort, T) {
         let (mut master, mut slave) = (-1, -1);
         // SAFETY: openpty fills the two descriptors; null name/termios/winsize
         // are allowed.
@@ -159,16 +175,13 @@ pub(crate) mod pty {
             .to_str()
             .unwrap()
             .to_owned();
-        let s = SerialTransport::open(&path, 115_200).unwrap();
+        let s = open(&path);
         // SAFETY: `slave` is our descriptor; the port opened by path keeps the
         // device open.
         unsafe { libc::close(slave) };
         // SAFETY: `master` is an open descriptor we own from here on.
         let m = unsafe { TTYPort::from_raw_fd(master) };
-        (
-            SerialTransport::from_port("pty-master".into(), Box::new(m)),
-            s,
-        )
+        (m, s)
     }
 }
 

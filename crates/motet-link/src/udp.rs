@@ -10,12 +10,15 @@ use std::time::Duration;
 const MAX_DATAGRAM: usize = 2048;
 
 /// A UDP socket sending every frame to one peer. Datagrams from other
-/// addresses are ignored.
+/// addresses are ignored, except by a listening socket ([`UdpTransport::listen`]),
+/// which answers whoever sent the latest datagram.
 #[derive(Debug)]
 pub struct UdpTransport {
     name: String,
     sock: UdpSocket,
-    peer: SocketAddr,
+    /// `None` until a listening socket hears from someone.
+    peer: Option<SocketAddr>,
+    listening: bool,
     stats: LinkStats,
     /// Datagrams from other addresses, dropped.
     pub foreign: u64,
@@ -34,10 +37,42 @@ impl UdpTransport {
         Ok(UdpTransport {
             name,
             sock,
-            peer,
+            peer: Some(peer),
+            listening: false,
             stats: LinkStats::default(),
             foreign: 0,
         })
+    }
+
+    /// Sends to `peer` from an ephemeral port of the matching address family
+    /// (a host reaching a node).
+    pub fn connect(peer: SocketAddr) -> io::Result<UdpTransport> {
+        let any: SocketAddr = if peer.is_ipv4() {
+            (std::net::Ipv4Addr::UNSPECIFIED, 0).into()
+        } else {
+            (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
+        };
+        Self::bind(any, peer)
+    }
+
+    /// Binds `local` and answers the sender of the latest datagram received
+    /// (a node waiting for its host, which may come back from a new port).
+    /// Sending before anything arrived fails with `NotConnected`.
+    pub fn listen(local: impl ToSocketAddrs) -> io::Result<UdpTransport> {
+        let sock = UdpSocket::bind(local)?;
+        Ok(UdpTransport {
+            name: format!("udp-listen:{}", sock.local_addr()?),
+            sock,
+            peer: None,
+            listening: true,
+            stats: LinkStats::default(),
+            foreign: 0,
+        })
+    }
+
+    /// Where frames go, if known.
+    pub fn peer(&self) -> Option<SocketAddr> {
+        self.peer
     }
 
     /// Two sockets on 127.0.0.1 (ephemeral ports) aimed at each other.
@@ -59,7 +94,10 @@ impl Transport for UdpTransport {
     }
 
     fn send(&mut self, frame: &[u8]) -> io::Result<()> {
-        let n = self.sock.send_to(frame, self.peer)?;
+        let peer = self
+            .peer
+            .ok_or_else(|| io::Error::new(io::ErrorKind::NotConnected, "no datagram heard yet"))?;
+        let n = self.sock.send_to(frame, peer)?;
         self.stats.sent(n);
         Ok(())
     }
@@ -77,7 +115,8 @@ impl Transport for UdpTransport {
         let mut buf = [0u8; MAX_DATAGRAM];
         loop {
             match self.sock.recv_from(&mut buf) {
-                Ok((n, from)) if from == self.peer => {
+                Ok((n, from)) if self.listening || Some(from) == self.peer => {
+                    self.peer = Some(from);
                     self.stats.received(n);
                     return Ok(Some(buf[..n].to_vec()));
                 }
@@ -145,6 +184,34 @@ mod tests {
         a.send(&[3, 0]).unwrap();
         assert_eq!(b.recv(WAIT).unwrap(), Some(vec![3, 0]));
         assert_eq!(b.foreign, 1);
+    }
+
+    #[test]
+    fn listener_answers_latest_sender() {
+        let mut node = UdpTransport::listen("127.0.0.1:0").unwrap();
+        let addr = node.local_addr().unwrap();
+        assert!(node.name().starts_with("udp-listen:127.0.0.1:"));
+        assert_eq!(
+            node.send(&[1, 0]).unwrap_err().kind(),
+            io::ErrorKind::NotConnected
+        );
+        let mut host = UdpTransport::connect(addr).unwrap();
+        host.send(&[2, 0]).unwrap();
+        assert_eq!(node.recv(WAIT).unwrap(), Some(vec![2, 0]));
+        assert_eq!(
+            node.peer(),
+            Some(host.local_addr().unwrap().port())
+                .map(|p| (std::net::Ipv4Addr::LOCALHOST, p).into())
+        );
+        node.send(&[3, 0]).unwrap();
+        assert_eq!(host.recv(WAIT).unwrap(), Some(vec![3, 0]));
+        // A restarted host on a new port is answered there.
+        let mut host2 = UdpTransport::connect(addr).unwrap();
+        host2.send(&[4, 0]).unwrap();
+        assert_eq!(node.recv(WAIT).unwrap(), Some(vec![4, 0]));
+        node.send(&[5, 0]).unwrap();
+        assert_eq!(host2.recv(WAIT).unwrap(), Some(vec![5, 0]));
+        assert_eq!(host.recv(None).unwrap(), None);
     }
 
     #[test]

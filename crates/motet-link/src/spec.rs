@@ -1,0 +1,395 @@
+//! Link spec strings: which transport to open, written as one word on a
+//! command line or in a config file.
+//!
+//! | spec | transport |
+//! |---|---|
+//! | `udp:HOST:PORT` | UDP to a node at HOST:PORT, from an ephemeral port |
+//! | `udp-listen:HOST:PORT` | UDP bound to HOST:PORT (a node; port 0 takes any free one), answering its latest sender |
+//! | `serial:PATH[@BAUD]` | COBS stream on a serial port, BAUD default 115200 |
+//! | `slcan:PATH[@BITRATE]` | CAN-FD through an slcan adapter, BITRATE default 500k (`500000`, `500k`, `1M`) |
+//!
+//! HOST is a name, an IPv4 address or a bracketed IPv6 address (`[::1]`).
+
+use crate::slcan_port::{bitrate_code, SlcanConfig, SlcanTransport};
+use crate::{SerialTransport, Transport, UdpTransport};
+use std::io;
+use std::net::ToSocketAddrs;
+
+/// Serial baud rate when a spec gives none.
+pub const DEFAULT_BAUD: u32 = 115_200;
+/// CAN bit rate when an slcan spec gives none.
+pub const DEFAULT_BITRATE: u32 = 500_000;
+
+/// A parsed link spec.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LinkSpec {
+    /// `udp:HOST:PORT`.
+    Udp { host: String, port: u16 },
+    /// `udp-listen:HOST:PORT`.
+    UdpListen { host: String, port: u16 },
+    /// `serial:PATH[@BAUD]`.
+    Serial { path: String, baud: u32 },
+    /// `slcan:PATH[@BITRATE]`.
+    Slcan { path: String, bitrate: u32 },
+}
+
+/// Why a spec string was refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SpecError {
+    #[error("empty link spec")]
+    Empty,
+    #[error("link spec {0:?} has no scheme (expected udp:, udp-listen:, serial: or slcan:)")]
+    NoScheme(String),
+    #[error("unknown link scheme {0:?} (expected udp, udp-listen, serial or slcan)")]
+    UnknownScheme(String),
+    #[error("missing host in {0:?} (expected HOST:PORT)")]
+    MissingHost(String),
+    #[error("missing port in {0:?} (expected HOST:PORT)")]
+    MissingPort(String),
+    #[error("bad port {0:?} (expected 1-65535, or 0 to listen on any)")]
+    BadPort(String),
+    #[error("unbalanced brackets in host {0:?}")]
+    BadHost(String),
+    #[error("missing device path")]
+    MissingPath,
+    #[error("bad baud rate {0:?} (expected a positive integer)")]
+    BadBaud(String),
+    #[error("bad CAN bit rate {0:?} (expected one of 10k 20k 50k 100k 125k 250k 500k 800k 1M)")]
+    BadBitrate(String),
+}
+
+/// Why [`open`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    #[error(transparent)]
+    Spec(#[from] SpecError),
+    #[error("cannot resolve {addr:?}: {source}")]
+    Resolve { addr: String, source: io::Error },
+    #[error("cannot open {spec}: {source}")]
+    Io { spec: String, source: io::Error },
+}
+
+/// `any_port` lets port 0 (any free port) through, for binding.
+fn host_port(rest: &str, any_port: bool) -> Result<(String, u16), SpecError> {
+    let (host, port) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| SpecError::MissingPort(rest.to_owned()))?;
+    if port.is_empty() {
+        return Err(SpecError::MissingPort(rest.to_owned()));
+    }
+    let port = match port.parse::<u16>() {
+        Ok(p) if (p > 0 || any_port) && port.bytes().all(|b| b.is_ascii_digit()) => p,
+        _ => return Err(SpecError::BadPort(port.to_owned())),
+    };
+    let bracketed = host.starts_with('[') || host.ends_with(']');
+    if bracketed && !(host.len() >= 2 && host.starts_with('[') && host.ends_with(']')) {
+        return Err(SpecError::BadHost(host.to_owned()));
+    }
+    let bare = host.trim_start_matches('[').trim_end_matches(']');
+    if bare.is_empty() {
+        return Err(SpecError::MissingHost(rest.to_owned()));
+    }
+    // An unbracketed IPv6 address would be ambiguous with the port.
+    if !bracketed && bare.contains(':') {
+        return Err(SpecError::BadHost(host.to_owned()));
+    }
+    Ok((host.to_owned(), port))
+}
+
+fn path_and(rest: &str) -> Result<(String, Option<&str>), SpecError> {
+    let (path, arg) = match rest.rsplit_once('@') {
+        Some((p, a)) => (p, Some(a)),
+        None => (rest, None),
+    };
+    if path.is_empty() {
+        return Err(SpecError::MissingPath);
+    }
+    Ok((path.to_owned(), arg))
+}
+
+fn parse_bitrate(s: &str) -> Result<u32, SpecError> {
+    let bad = || SpecError::BadBitrate(s.to_owned());
+    let (digits, mul) = match s.as_bytes().last() {
+        Some(b'k' | b'K') => (&s[..s.len() - 1], 1_000),
+        Some(b'M' | b'm') => (&s[..s.len() - 1], 1_000_000),
+        _ => (s, 1),
+    };
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(bad());
+    }
+    let v = digits
+        .parse::<u32>()
+        .ok()
+        .and_then(|v| v.checked_mul(mul))
+        .ok_or_else(bad)?;
+    bitrate_code(v).map(|_| v).ok_or_else(bad)
+}
+
+impl LinkSpec {
+    /// Parses a spec string; never panics.
+    pub fn parse(spec: &str) -> Result<LinkSpec, SpecError> {
+        let spec = spec.trim();
+        if spec.is_empty() {
+            return Err(SpecError::Empty);
+        }
+        let (scheme, rest) = spec
+            .split_once(':')
+            .ok_or_else(|| SpecError::NoScheme(spec.to_owned()))?;
+        match scheme {
+            "udp" => host_port(rest, false).map(|(host, port)| LinkSpec::Udp { host, port }),
+            "udp-listen" => {
+                host_port(rest, true).map(|(host, port)| LinkSpec::UdpListen { host, port })
+            }
+            "serial" => {
+                let (path, arg) = path_and(rest)?;
+                let baud = match arg {
+                    None => DEFAULT_BAUD,
+                    Some(a) => match a.parse::<u32>() {
+                        Ok(b) if b > 0 && a.bytes().all(|c| c.is_ascii_digit()) => b,
+                        _ => return Err(SpecError::BadBaud(a.to_owned())),
+                    },
+                };
+                Ok(LinkSpec::Serial { path, baud })
+            }
+            "slcan" => {
+                let (path, arg) = path_and(rest)?;
+                let bitrate = arg.map_or(Ok(DEFAULT_BITRATE), parse_bitrate)?;
+                Ok(LinkSpec::Slcan { path, bitrate })
+            }
+            _ => Err(SpecError::UnknownScheme(scheme.to_owned())),
+        }
+    }
+
+    /// Opens the transport.
+    pub fn open(&self) -> Result<Box<dyn Transport + Send>, OpenError> {
+        let io_err = |source| OpenError::Io {
+            spec: self.to_string(),
+            source,
+        };
+        let resolve = |host: &str, port: u16| {
+            let addr = format!("{host}:{port}");
+            let mut all = addr
+                .to_socket_addrs()
+                .map_err(|source| OpenError::Resolve {
+                    addr: addr.clone(),
+                    source,
+                })?;
+            all.next().ok_or_else(|| OpenError::Resolve {
+                addr,
+                source: io::Error::new(io::ErrorKind::NotFound, "no address"),
+            })
+        };
+        Ok(match self {
+            LinkSpec::Udp { host, port } => {
+                Box::new(UdpTransport::connect(resolve(host, *port)?).map_err(io_err)?)
+            }
+            LinkSpec::UdpListen { host, port } => {
+                Box::new(UdpTransport::listen(resolve(host, *port)?).map_err(io_err)?)
+            }
+            LinkSpec::Serial { path, baud } => {
+                Box::new(SerialTransport::open(path, *baud).map_err(io_err)?)
+            }
+            LinkSpec::Slcan { path, bitrate } => {
+                let cfg = SlcanConfig {
+                    bitrate: *bitrate,
+                    ..SlcanConfig::default()
+                };
+                Box::new(SlcanTransport::open(path, cfg).map_err(io_err)?)
+            }
+        })
+    }
+}
+
+impl std::fmt::Display for LinkSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinkSpec::Udp { host, port } => write!(f, "udp:{host}:{port}"),
+            LinkSpec::UdpListen { host, port } => write!(f, "udp-listen:{host}:{port}"),
+            LinkSpec::Serial { path, baud } => write!(f, "serial:{path}@{baud}"),
+            LinkSpec::Slcan { path, bitrate } => write!(f, "slcan:{path}@{bitrate}"),
+        }
+    }
+}
+
+impl std::str::FromStr for LinkSpec {
+    type Err = SpecError;
+    fn from_str(s: &str) -> Result<LinkSpec, SpecError> {
+        LinkSpec::parse(s)
+    }
+}
+
+/// Opens the transport a spec string names.
+pub fn open(spec: &str) -> Result<Box<dyn Transport + Send>, OpenError> {
+    LinkSpec::parse(spec)?.open()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::time::Duration;
+
+    #[test]
+    fn good_specs() {
+        let s = |x: &str| x.to_owned();
+        let cases = [
+            (
+                "udp:192.168.1.20:4000",
+                LinkSpec::Udp {
+                    host: s("192.168.1.20"),
+                    port: 4000,
+                },
+            ),
+            (
+                "udp:node-3.local:9",
+                LinkSpec::Udp {
+                    host: s("node-3.local"),
+                    port: 9,
+                },
+            ),
+            (
+                "udp:[::1]:4000",
+                LinkSpec::Udp {
+                    host: s("[::1]"),
+                    port: 4000,
+                },
+            ),
+            (
+                " udp-listen:0.0.0.0:4000 ",
+                LinkSpec::UdpListen {
+                    host: s("0.0.0.0"),
+                    port: 4000,
+                },
+            ),
+            (
+                "serial:/dev/ttyACM0",
+                LinkSpec::Serial {
+                    path: s("/dev/ttyACM0"),
+                    baud: 115_200,
+                },
+            ),
+            (
+                "serial:/dev/ttyUSB1@921600",
+                LinkSpec::Serial {
+                    path: s("/dev/ttyUSB1"),
+                    baud: 921_600,
+                },
+            ),
+            (
+                "slcan:/dev/ttyACM1",
+                LinkSpec::Slcan {
+                    path: s("/dev/ttyACM1"),
+                    bitrate: 500_000,
+                },
+            ),
+            (
+                "slcan:/dev/ttyACM1@1M",
+                LinkSpec::Slcan {
+                    path: s("/dev/ttyACM1"),
+                    bitrate: 1_000_000,
+                },
+            ),
+            (
+                "slcan:/dev/ttyACM1@125000",
+                LinkSpec::Slcan {
+                    path: s("/dev/ttyACM1"),
+                    bitrate: 125_000,
+                },
+            ),
+            (
+                "slcan:/dev/ttyACM1@250k",
+                LinkSpec::Slcan {
+                    path: s("/dev/ttyACM1"),
+                    bitrate: 250_000,
+                },
+            ),
+        ];
+        for (text, want) in cases {
+            let got = LinkSpec::parse(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+            assert_eq!(got, want, "{text:?}");
+            // Display gives a spec that parses back to the same thing.
+            assert_eq!(LinkSpec::parse(&got.to_string()), Ok(got));
+        }
+    }
+
+    #[test]
+    fn bad_specs() {
+        let s = |x: &str| x.to_owned();
+        let cases = [
+            ("", SpecError::Empty),
+            ("   ", SpecError::Empty),
+            ("/dev/ttyACM0", SpecError::NoScheme(s("/dev/ttyACM0"))),
+            ("tcp:1.2.3.4:5", SpecError::UnknownScheme(s("tcp"))),
+            ("UDP:1.2.3.4:5", SpecError::UnknownScheme(s("UDP"))),
+            ("udp:1.2.3.4", SpecError::MissingPort(s("1.2.3.4"))),
+            ("udp:localhost", SpecError::MissingPort(s("localhost"))),
+            ("udp:1.2.3.4:", SpecError::MissingPort(s("1.2.3.4:"))),
+            ("udp::4000", SpecError::MissingHost(s(":4000"))),
+            ("udp:[]:4000", SpecError::MissingHost(s("[]:4000"))),
+            ("udp:h:0", SpecError::BadPort(s("0"))),
+            ("udp:h:65536", SpecError::BadPort(s("65536"))),
+            ("udp:h:+80", SpecError::BadPort(s("+80"))),
+            ("udp:::1:4000", SpecError::BadHost(s("::1"))),
+            ("udp:[::1:4000", SpecError::BadHost(s("[::1"))),
+            ("udp-listen:h:x", SpecError::BadPort(s("x"))),
+            ("serial:", SpecError::MissingPath),
+            ("serial:@9600", SpecError::MissingPath),
+            ("serial:/dev/x@", SpecError::BadBaud(s(""))),
+            ("serial:/dev/x@0", SpecError::BadBaud(s("0"))),
+            ("serial:/dev/x@fast", SpecError::BadBaud(s("fast"))),
+            ("slcan:", SpecError::MissingPath),
+            ("slcan:/dev/x@", SpecError::BadBitrate(s(""))),
+            ("slcan:/dev/x@k", SpecError::BadBitrate(s("k"))),
+            ("slcan:/dev/x@300k", SpecError::BadBitrate(s("300k"))),
+            ("slcan:/dev/x@5000M", SpecError::BadBitrate(s("5000M"))),
+            ("slcan:/dev/x@1.5M", SpecError::BadBitrate(s("1.5M"))),
+        ];
+        for (text, want) in cases {
+            assert_eq!(LinkSpec::parse(text), Err(want), "{text:?}");
+        }
+        // Errors carry a readable message.
+        let e = open("tcp:1.2.3.4:5").err().unwrap();
+        assert!(e.to_string().contains("unknown link scheme"), "{e}");
+    }
+
+    #[test]
+    fn open_udp_pair_and_missing_device() {
+        let mut node = open("udp-listen:127.0.0.1:0").unwrap();
+        assert!(node.name().starts_with("udp-listen:127.0.0.1:"));
+        // Find the bound port through the name: the spec asked for any.
+        let port: u16 = node.name().rsplit(':').next().unwrap().parse().unwrap();
+        let mut host = open(&format!("udp:127.0.0.1:{port}")).unwrap();
+        host.send(&[1, 2, 0]).unwrap();
+        let wait = Some(Duration::from_secs(5));
+        assert_eq!(node.recv(wait).unwrap(), Some(vec![1, 2, 0]));
+        node.send(&[3, 0]).unwrap();
+        assert_eq!(host.recv(wait).unwrap(), Some(vec![3, 0]));
+        for spec in [
+            "serial:/dev/motet-no-such-tty",
+            "slcan:/dev/motet-no-such-tty@1M",
+        ] {
+            match open(spec) {
+                Err(OpenError::Io { spec: s, .. }) => assert!(s.contains("motet-no-such-tty")),
+                other => panic!("{spec}: {:?}", other.map(|t| t.name().to_owned())),
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn parse_never_panics(s in ".{0,40}") {
+            let _ = LinkSpec::parse(&s);
+        }
+
+        #[test]
+        fn parse_never_panics_near_valid(
+            scheme in prop::sample::select(vec!["udp", "udp-listen", "serial", "slcan", "x"]),
+            rest in "[\\[\\]:@a-zA-Z0-9./kM+-]{0,24}",
+        ) {
+            if let Ok(spec) = LinkSpec::parse(&format!("{scheme}:{rest}")) {
+                // Whatever parses prints back to itself.
+                prop_assert_eq!(LinkSpec::parse(&spec.to_string()), Ok(spec));
+            }
+        }
+    }
+}
