@@ -77,10 +77,23 @@ impl Channel {
 
     /// The next step on the queued segments, if they hold one.
     pub fn next_step<const Q: usize>(&mut self, segments: &Deque<Segment, Q>) -> Option<Step> {
+        self.next_step_within(segments, segments.len())
+    }
+
+    /// The next step on the first `end` queued segments (the committed ones;
+    /// the rest are not to be run yet).
+    pub fn next_step_within<const Q: usize>(
+        &mut self,
+        segments: &Deque<Segment, Q>,
+        end: usize,
+    ) -> Option<Step> {
         if self.pending.is_some() {
             return self.pending;
         }
         loop {
+            if self.seg >= end {
+                return None;
+            }
             let seg = segments.get(self.seg)?;
             let path = match self.path {
                 Some(p) => p,
@@ -123,6 +136,18 @@ impl Channel {
             let step = Step { time, positive };
             self.pending = Some(step);
             return Some(step);
+        }
+    }
+
+    /// The profiles of queued segments `from..` were replaced (same
+    /// geometry): a step already found in them keeps its place on the path
+    /// and takes that place's new time.
+    pub fn retime<const Q: usize>(&mut self, segments: &Deque<Segment, Q>, from: usize) {
+        if self.seg < from {
+            return;
+        }
+        if let (Some(step), Some(seg)) = (self.pending.as_mut(), segments.get(self.seg)) {
+            step.time = seg.time_at_distance(self.s).max(self.last_time);
         }
     }
 

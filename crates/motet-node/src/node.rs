@@ -8,7 +8,7 @@ use crate::graph::{
 };
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
-use motet_trajectory::{JointMap, Point, Profile, Segment, MAX_AXES};
+use motet_trajectory::{Contingency, JointMap, Point, Profile, Segment, MAX_AXES};
 use motet_wire::message::{GraphInputKind, GraphMode};
 use motet_wire::{
     decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig,
@@ -65,6 +65,11 @@ pub struct NodeStatus {
     pub event_space: usize,
     pub next_seq: u32,
     pub underruns: u32,
+    /// Sequence number after the last committed segment (`next_seq` unless
+    /// windowed segments are pending).
+    pub committed: u32,
+    /// The node stopped on its committed window's tail (or at its end).
+    pub stopped: bool,
 }
 
 /// A node with a segment queue of `Q` places and a recording tape of `T`
@@ -88,6 +93,15 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     frame_out: FrameOut,
     tape: [u8; T],
     tape_len: usize,
+    /// Segments and events are held pending until a seal.
+    windowed: bool,
+    /// Segments at the back of the queue not yet sealed.
+    pending: usize,
+    /// Events at the back of the event queue not yet sealed.
+    pending_events: usize,
+    /// When the committed window's contingency tail takes over, µs.
+    tail_start: Option<f64>,
+    stopped: bool,
 }
 
 impl<const Q: usize, const T: usize> Default for Node<Q, T> {
@@ -122,6 +136,11 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             },
             tape: [0; T],
             tape_len: 0,
+            windowed: false,
+            pending: 0,
+            pending_events: 0,
+            tail_start: None,
+            stopped: false,
         }
     }
 
@@ -219,6 +238,15 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 self.building = None;
                 Ok(())
             }
+            HostMessage::Windowed => {
+                if self.segments.is_empty() {
+                    self.windowed = true;
+                    Ok(())
+                } else {
+                    Err(Refusal::NotAtRest)
+                }
+            }
+            HostMessage::Seal { next_seq } => self.seal(next_seq),
         };
         result.err().map(|reason| NodeMessage::Refused { reason })
     }
@@ -379,6 +407,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         if !(time.is_finite() && value.is_finite()) {
             return Err(Refusal::Malformed);
         }
+        if self.stopped {
+            return Err(Refusal::Stopped);
+        }
         self.events
             .push_back(Event {
                 track,
@@ -386,7 +417,92 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 value,
                 feed,
             })
-            .map_err(|_| Refusal::QueueFull)
+            .map_err(|_| Refusal::QueueFull)?;
+        if self.windowed {
+            self.pending_events += 1;
+        }
+        Ok(())
+    }
+
+    /// Segments that run: all but the pending ones.
+    fn committed_len(&self) -> usize {
+        self.segments.len() - self.pending
+    }
+
+    /// Whether a committed event is queued.
+    fn event_due(&self) -> Option<f64> {
+        if self.events.len() > self.pending_events {
+            self.events.front().map(|e| e.time)
+        } else {
+            None
+        }
+    }
+
+    /// Commits the pending segments and events, if the window they close can
+    /// still stop on its tail.
+    fn seal(&mut self, next_seq: u32) -> Result<(), Refusal> {
+        if !self.windowed {
+            return Err(Refusal::BadConfig);
+        }
+        if self.stopped {
+            return Err(Refusal::TailStarted);
+        }
+        if next_seq != self.next_seq {
+            return Err(Refusal::OutOfOrder {
+                expected: self.next_seq,
+                got: next_seq,
+            });
+        }
+        if self.pending > 0 {
+            // The queue may have retired the window's head; the tail is found
+            // from the end, so a tail still ahead of `now` is found the same.
+            let c = Contingency::of(self.segments.iter()).map_err(|_| Refusal::TailStarted)?;
+            if c.start_time < self.now {
+                return Err(Refusal::TailStarted);
+            }
+            let first = self.segments.get(self.committed_len()).map(|s| s.t0);
+            self.tail_start = Some(c.start_time);
+            self.pending = 0;
+            self.starved = false;
+            if let Some(t0) = first {
+                for t in self.tools.iter_mut() {
+                    t.wake(t0.max(self.now));
+                }
+            }
+        }
+        self.pending_events = 0;
+        Ok(())
+    }
+
+    /// The committed window's tail takes over at `at`: the tail's profiles
+    /// replace the planned ones, anything not yet committed or due later is
+    /// dropped, every tool goes to 0, and the node stops taking segments.
+    fn stop_on_tail<B: Board>(&mut self, at: f64, board: &mut B) {
+        for _ in 0..self.pending {
+            self.segments.pop_back();
+        }
+        self.next_seq = self.next_seq.wrapping_sub(self.pending as u32);
+        self.pending = 0;
+        self.pending_events = 0;
+        self.events.clear();
+        if let Ok(c) = Contingency::of(self.segments.iter()) {
+            let mut walk = c.walk();
+            for j in c.start..c.len {
+                if let Some(s) = self.segments.get_mut(j) {
+                    *s = walk.next(s);
+                }
+            }
+            for ch in self.channels.iter_mut() {
+                ch.retime(&self.segments, c.start);
+            }
+            self.tail = c.stop;
+        }
+        for t in self.tools.iter_mut() {
+            t.set(0.0, 0.0, at, None);
+            board.set_tool(t.output(), 0.0, at);
+        }
+        self.tail_start = None;
+        self.stopped = true;
     }
 
     fn configure_tool(&mut self, t: ToolConfig) -> Result<(), Refusal> {
@@ -401,11 +517,12 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// Path speed at host time `t`, from the queued segments; `None` when nothing
     /// is queued at or after `t`.
     fn speed_at(&self, t: f64) -> Option<f64> {
-        let last = self.segments.back()?;
+        let n = self.committed_len();
+        let last = self.segments.get(n.checked_sub(1)?)?;
         if t >= last.t1() {
             return None;
         }
-        for s in self.segments.iter() {
+        for s in self.segments.iter().take(n) {
             if t < s.t0 {
                 return Some(0.0);
             }
@@ -427,6 +544,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             ch.set_position(p);
         }
         self.tail = *p;
+        self.stopped = false;
+        self.pending_events = 0;
+        self.events.clear();
         Ok(())
     }
 
@@ -436,6 +556,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 expected: self.next_seq,
                 got: m.seq,
             });
+        }
+        if self.stopped {
+            return Err(Refusal::Stopped);
         }
         if self.segments.is_full() {
             return Err(Refusal::QueueFull);
@@ -467,6 +590,11 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         let _ = self.segments.push_back(seg);
         self.tail = end;
         self.next_seq = self.next_seq.wrapping_add(1);
+        if self.windowed {
+            // Runs only once sealed.
+            self.pending += 1;
+            return Ok(());
+        }
         self.starved = false;
         let t0 = m.t0.max(self.now);
         for t in self.tools.iter_mut() {
@@ -481,6 +609,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             event_space: Q - self.events.len(),
             next_seq: self.next_seq,
             underruns: self.underruns,
+            committed: self.next_seq.wrapping_sub(self.pending as u32),
+            stopped: self.stopped,
         }
     }
 
@@ -491,7 +621,20 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             event_space: s.event_space as u16,
             next_seq: s.next_seq,
             underruns: s.underruns,
+            committed: s.committed,
+            stopped: s.stopped,
         }
+    }
+
+    /// Whether the node stopped on its contingency tail.
+    pub fn stopped(&self) -> bool {
+        self.stopped
+    }
+
+    /// When the committed window's tail takes over, µs, if a window is
+    /// committed and the tail has not started.
+    pub fn tail_start(&self) -> Option<f64> {
+        self.tail_start
     }
 
     /// Segments queued (including the one executing).
@@ -513,14 +656,18 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// A caller may skip frames up to it; the outputs are the same as polling
     /// every frame because every output carries its own exact time.
     pub fn next_deadline(&mut self) -> Option<f64> {
-        let mut best = self.events.front().map(|e| e.time);
+        let mut best = self.event_due();
+        if let Some(t) = self.tail_start {
+            best = Some(best.map_or(t, |b: f64| b.min(t)));
+        }
+        let end = self.committed_len();
         for t in self.tools.iter() {
             if let Some(u) = t.next_update() {
                 best = Some(best.map_or(u, |b: f64| b.min(u)));
             }
         }
         for ch in self.channels.iter_mut() {
-            if let Some(st) = ch.next_step(&self.segments) {
+            if let Some(st) = ch.next_step_within(&self.segments, end) {
                 best = Some(best.map_or(st.time, |b: f64| b.min(st.time)));
             }
         }
@@ -535,7 +682,18 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// frames at its frame period over `[now, until)`, interleaved in time
     /// with the trajectory: its channels' steps go to `board` at their
     /// frame's time, as channel ids from [`Node::graph_channel_base`] on.
+    ///
+    /// In windowed mode, reaching the committed window's tail start applies
+    /// the tail there, between the outputs before it and those after.
     pub fn poll<B: Board>(&mut self, until: f64, board: &mut B) {
+        if let Some(ts) = self.tail_start.filter(|&t| t < until) {
+            self.poll_until(ts, board);
+            self.stop_on_tail(ts, board);
+        }
+        self.poll_until(until, board);
+    }
+
+    fn poll_until<B: Board>(&mut self, until: f64, board: &mut B) {
         while let Some(t) = self.graph_next().filter(|&t| t < until) {
             self.poll_trajectory(t, board);
             self.graph_frame(t, board);
@@ -579,16 +737,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     }
 
     fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {
+        let end = self.committed_len();
         loop {
             let mut best: Option<(usize, f64)> = None;
             for (i, ch) in self.channels.iter_mut().enumerate() {
-                if let Some(st) = ch.next_step(&self.segments) {
+                if let Some(st) = ch.next_step_within(&self.segments, end) {
                     if st.time < until && best.is_none_or(|(_, t)| st.time < t) {
                         best = Some((i, st.time));
                     }
                 }
             }
-            let event_time = self.events.front().map(|e| e.time).filter(|&t| t < until);
+            let event_time = self.event_due().filter(|&t| t < until);
             let refresh = self
                 .tools
                 .iter()
@@ -647,6 +806,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             .map(|c| c.segments_done())
             .min()
             .unwrap_or(usize::MAX);
+        let done = done.min(self.committed_len());
         let mut n = 0;
         let mut exit_speed = 0.0;
         while n < done {

@@ -321,11 +321,15 @@ fn status_reply<const Q: usize>(node: &mut Node<Q>) -> NodeStatus {
             event_space,
             next_seq,
             underruns,
+            committed,
+            stopped,
         }) => NodeStatus {
             segment_space: segment_space as usize,
             event_space: event_space as usize,
             next_seq,
             underruns,
+            committed,
+            stopped,
         },
         other => panic!("no status: {other:?}"),
     }
@@ -340,7 +344,9 @@ fn status_tracks_queue<const Q: usize>() {
             segment_space: Q,
             event_space: Q,
             next_seq: 0,
-            underruns: 0
+            underruns: 0,
+            committed: 0,
+            stopped: false,
         }
     );
     let mut seen = 0;
@@ -361,7 +367,9 @@ fn status_tracks_queue<const Q: usize>() {
             segment_space: Q,
             event_space: Q,
             next_seq: segs,
-            underruns: 0
+            underruns: 0,
+            committed: segs,
+            stopped: false,
         }
     );
     // A Status request changes nothing either.

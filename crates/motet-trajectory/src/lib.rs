@@ -7,6 +7,7 @@
 #![forbid(unsafe_code)]
 
 pub mod chain;
+pub mod contingency;
 pub mod kinematics;
 mod math;
 pub mod point;
@@ -14,6 +15,7 @@ pub mod profile;
 pub mod segment;
 
 pub use chain::{ChainError, Element, ElementChain, Unit};
+pub use contingency::{Contingency, TailError, TailWalk};
 pub use kinematics::{JointMap, JointPath, KinematicsKind};
 pub use point::{Point, MAX_AXES};
 pub use profile::{Profile, ProfileKind, ProfileParams};

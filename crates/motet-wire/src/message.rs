@@ -116,6 +116,16 @@ pub enum HostMessage {
     },
     /// Remove the running graph (and any graph being built).
     GraphClear,
+    /// Windowed mode (until `Reset`): segments and events are held pending
+    /// until a [`HostMessage::Seal`] commits them, and the committed window
+    /// always ends at rest through its contingency tail. Only valid with an
+    /// empty segment queue.
+    Windowed,
+    /// Commit every pending segment and event. `next_seq` is the sequence
+    /// number after the last pending segment; a mismatch is refused
+    /// (`OutOfOrder`), as is a seal once the committed window's tail has
+    /// started (`TailStarted`).
+    Seal { next_seq: u32 },
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -214,6 +224,12 @@ pub enum NodeMessage {
         next_seq: u32,
         /// Times the node ran out of segments while moving.
         underruns: u32,
+        /// Sequence number after the last committed segment: the machine
+        /// stops at that segment's end if nothing more is sealed.
+        committed: u32,
+        /// The committed window's tail has started (or its end was reached):
+        /// the node takes no segments until `SetPosition` or `Reset`.
+        stopped: bool,
     },
     /// A message was refused; nothing in the queues changed.
     Refused { reason: Refusal },
@@ -233,6 +249,12 @@ pub enum Refusal {
     /// parameter, a graph that does not validate at commit, or a graph message
     /// out of place (building without `GraphBegin`, a parameter with no graph).
     BadGraph,
+    /// The node stopped on its contingency tail; `SetPosition` or `Reset`
+    /// first.
+    Stopped,
+    /// A seal came after the committed window's tail started, or would
+    /// commit a window whose tail start has already passed.
+    TailStarted,
 }
 
 #[cfg(test)]
@@ -310,11 +332,34 @@ mod tests {
                 value: -1234.0,
             },
             HostMessage::GraphClear,
+            HostMessage::Windowed,
+            HostMessage::Seal { next_seq: 300 },
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {
             let bytes = encode(&m, &mut buf).unwrap();
             let back: HostMessage = decode(bytes).unwrap();
+            assert_eq!(back, m);
+        }
+        let replies = [
+            NodeMessage::Status {
+                segment_space: 3,
+                event_space: 60,
+                next_seq: 1000,
+                underruns: 1,
+                committed: 990,
+                stopped: true,
+            },
+            NodeMessage::Refused {
+                reason: Refusal::Stopped,
+            },
+            NodeMessage::Refused {
+                reason: Refusal::TailStarted,
+            },
+        ];
+        for m in replies {
+            let bytes = encode(&m, &mut buf).unwrap();
+            let back: NodeMessage = decode(bytes).unwrap();
             assert_eq!(back, m);
         }
     }

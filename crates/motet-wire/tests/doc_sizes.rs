@@ -20,8 +20,11 @@ fn documented_sizes() {
         encode(&ev, &mut buf).unwrap(),
         &[5, 1, 0, 0, 0, 0, 0, 0xe0, 0x58, 0x40, 0, 0, 0x80, 0x3e]
     );
-    let host: [(HostMessage, usize); 5] = [
+    let host: [(HostMessage, usize); 8] = [
         (HostMessage::Reset, 1),
+        (HostMessage::Windowed, 1),
+        (HostMessage::Seal { next_seq: 0 }, 2),
+        (HostMessage::Seal { next_seq: u32::MAX }, 6),
         (HostMessage::Status, 1),
         (HostMessage::SetPosition { position: [1.0; 6] }, 49),
         (
@@ -52,8 +55,10 @@ fn documented_sizes() {
                 event_space: 0,
                 next_seq: 0,
                 underruns: 0,
+                committed: 0,
+                stopped: false,
             },
-            5,
+            7,
         ),
         (
             NodeMessage::Status {
@@ -61,12 +66,20 @@ fn documented_sizes() {
                 event_space: u16::MAX,
                 next_seq: u32::MAX,
                 underruns: u32::MAX,
+                committed: u32::MAX,
+                stopped: true,
             },
-            17,
+            23,
         ),
         (
             NodeMessage::Refused {
                 reason: Refusal::QueueFull,
+            },
+            2,
+        ),
+        (
+            NodeMessage::Refused {
+                reason: Refusal::TailStarted,
             },
             2,
         ),
