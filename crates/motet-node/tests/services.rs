@@ -1353,3 +1353,70 @@ proptest! {
         }
     }
 }
+
+/// A store that loads a record but cannot save.
+#[derive(Clone)]
+struct ReadOnlyStore(Option<Persisted>);
+
+impl motet_node::Store for ReadOnlyStore {
+    fn load(&mut self) -> Option<Persisted> {
+        self.0
+    }
+    fn save(&mut self, _: &Persisted) -> Result<(), motet_node::StorageError> {
+        Err(motet_node::StorageError::Device)
+    }
+}
+
+#[test]
+fn storage_failures_change_nothing() {
+    let mut s = Services::new(cfg(UID), ReadOnlyStore(None), RamFlash::<FLASH>::new(), 0);
+    assert_eq!(s.uid(), UID, "works unpaired in RAM without a store");
+    s.handle(
+        port::ADDRESS,
+        &bytes(&ServiceRequest::Pair { address: 7 }),
+        true,
+        0,
+    );
+    let h = s.press_button(0).unwrap();
+    assert_eq!(h.reply, err(ServiceError::Storage));
+    assert_eq!(h.action, Action::None);
+    assert_eq!(s.address(), 0);
+    assert!(s.pairing(), "a second press may still succeed");
+
+    let rec = Persisted {
+        uid: UID,
+        address: ADDR,
+        firmware: V1,
+    };
+    let mut s = Services::new(
+        cfg(UID),
+        ReadOnlyStore(Some(rec)),
+        RamFlash::<FLASH>::new(),
+        0,
+    );
+    let set = ServiceRequest::SetAddress {
+        uid: UID,
+        address: 9,
+    };
+    assert_eq!(
+        s.handle(port::ADDRESS, &bytes(&set), false, 0).reply,
+        err(ServiceError::Storage)
+    );
+    assert_eq!(s.address(), ADDR);
+    let img = firmware_image("stepper", V2, 200);
+    let mut send = |r: &ServiceRequest| s.handle(r.port(), &bytes(r), false, 0).reply;
+    send(&begin(&img, V2));
+    for (i, c) in img.chunks(PAGE_SIZE).enumerate() {
+        send(&page(i * PAGE_SIZE, c));
+    }
+    assert_eq!(
+        send(&ServiceRequest::FirmwareVerify),
+        Some(ServiceReply::FirmwareVerified { version: V2 })
+    );
+    assert_eq!(
+        send(&ServiceRequest::FirmwareStart),
+        err(ServiceError::Storage)
+    );
+    assert_eq!(s.firmware(), V1);
+    assert!(s.in_bootloader());
+}

@@ -113,3 +113,276 @@ fn documented_sizes() {
     );
     assert_eq!(OVERHEAD, 16);
 }
+
+mod services {
+    use super::len;
+    use motet_wire::frame::{self, Flags, Header, MAX_FRAME, OVERHEAD};
+    use motet_wire::image::ImageError;
+    use motet_wire::service::{
+        Info, Kind, NodeState, ServiceError as E, ServiceReply as P, ServiceRequest as R, Status,
+        Version, PAGE_SIZE,
+    };
+    use motet_wire::{encode, MAX_MESSAGE};
+
+    fn kind(n: usize) -> Kind {
+        let mut k = Kind::new();
+        for _ in 0..n {
+            k.push('k').unwrap();
+        }
+        k
+    }
+
+    const VMIN: Version = Version {
+        major: 0,
+        minor: 0,
+        patch: 0,
+    };
+    const VMAX: Version = Version {
+        major: u16::MAX,
+        minor: u16::MAX,
+        patch: u16::MAX,
+    };
+
+    fn data(n: usize) -> heapless::Vec<u8, PAGE_SIZE> {
+        heapless::Vec::from_slice(&vec![0xA5; n]).unwrap()
+    }
+
+    fn info(k: usize, big: bool) -> Info {
+        let (w, b) = if big { (u16::MAX, u64::MAX) } else { (0, 0) };
+        Info {
+            kind: kind(k),
+            firmware: if big { VMAX } else { VMIN },
+            uid: b,
+            address: w,
+            protocol_min: w,
+            protocol_max: w,
+            queue_capacity: w,
+            channels: 255,
+            tools: 255,
+        }
+    }
+
+    /// The "total" ranges of the service tables: (smallest, largest) of each variant.
+    #[test]
+    fn documented_service_sizes() {
+        let requests: Vec<(R, R, usize, usize)> = vec![
+            (R::Status, R::Status, 1, 1),
+            (R::Identify { ms: 0 }, R::Identify { ms: u32::MAX }, 2, 6),
+            (R::Info, R::Info, 1, 1),
+            (R::Pair { address: 2 }, R::Pair { address: 0xFFEF }, 2, 4),
+            (R::PairCancel, R::PairCancel, 1, 1),
+            (
+                R::SetAddress { uid: 0, address: 2 },
+                R::SetAddress {
+                    uid: u64::MAX,
+                    address: 0xFFEF,
+                },
+                3,
+                14,
+            ),
+            (R::Reset, R::Reset, 1, 1),
+            (
+                R::FirmwareBegin {
+                    size: 0,
+                    crc32c: 0,
+                    kind: kind(0),
+                    version: VMIN,
+                },
+                R::FirmwareBegin {
+                    size: u32::MAX,
+                    crc32c: u32::MAX,
+                    kind: kind(16),
+                    version: VMAX,
+                },
+                7,
+                37,
+            ),
+            (
+                R::FirmwarePage {
+                    offset: 0,
+                    data: data(0),
+                },
+                R::FirmwarePage {
+                    offset: u32::MAX,
+                    data: data(PAGE_SIZE),
+                },
+                3,
+                136,
+            ),
+            (
+                R::FirmwareRead { offset: 0, len: 0 },
+                R::FirmwareRead {
+                    offset: u32::MAX,
+                    len: 128,
+                },
+                3,
+                7,
+            ),
+            (R::FirmwareVerify, R::FirmwareVerify, 1, 1),
+            (R::FirmwareStart, R::FirmwareStart, 1, 1),
+            (R::TimeGet { t1: 0 }, R::TimeGet { t1: u64::MAX }, 2, 11),
+            (
+                R::TimeSet {
+                    offset: 0.0,
+                    skew: 0.0,
+                },
+                R::TimeSet {
+                    offset: 0.0,
+                    skew: 0.0,
+                },
+                17,
+                17,
+            ),
+        ];
+        assert_eq!(requests.len(), 14, "one row per request variant");
+        for (lo, hi, a, b) in requests {
+            assert_eq!((len(&lo), len(&hi)), (a, b), "{lo:?}");
+        }
+
+        let status = |big: bool| Status {
+            state: NodeState::Bootloader,
+            address: if big { u16::MAX } else { 0 },
+            paired: true,
+            link_up: true,
+            synced: true,
+            uptime_us: if big { u64::MAX } else { 0 },
+        };
+        let replies: Vec<(P, P, usize, usize)> = vec![
+            (P::Ack, P::Ack, 1, 1),
+            (
+                P::Error(E::Malformed),
+                P::Error(E::BadImage(ImageError::CrcMismatch {
+                    expected: u32::MAX,
+                    actual: u32::MAX,
+                })),
+                2,
+                13,
+            ),
+            (
+                P::UnknownPort { port: 0 },
+                P::UnknownPort { port: 255 },
+                2,
+                2,
+            ),
+            (P::Status(status(false)), P::Status(status(true)), 7, 18),
+            (P::Info(info(0, false)), P::Info(info(16, true)), 12, 51),
+            (
+                P::Paired { uid: 0, address: 2 },
+                P::Paired {
+                    uid: u64::MAX,
+                    address: 0xFFEF,
+                },
+                3,
+                14,
+            ),
+            (
+                P::FirmwareWritten { offset: 0, len: 0 },
+                P::FirmwareWritten {
+                    offset: u32::MAX,
+                    len: 128,
+                },
+                3,
+                7,
+            ),
+            (
+                P::FirmwareData {
+                    offset: 0,
+                    data: data(0),
+                },
+                P::FirmwareData {
+                    offset: u32::MAX,
+                    data: data(PAGE_SIZE),
+                },
+                3,
+                136,
+            ),
+            (
+                P::FirmwareVerified { version: VMIN },
+                P::FirmwareVerified { version: VMAX },
+                4,
+                10,
+            ),
+            (
+                P::Time {
+                    t1: 0,
+                    t2: 0,
+                    t3: 0,
+                },
+                P::Time {
+                    t1: u64::MAX,
+                    t2: u64::MAX,
+                    t3: u64::MAX,
+                },
+                4,
+                31,
+            ),
+        ];
+        assert_eq!(replies.len(), 10, "one row per reply variant");
+        for (lo, hi, a, b) in replies {
+            assert_eq!((len(&lo), len(&hi)), (a, b), "{lo:?}");
+            assert!(b <= MAX_MESSAGE);
+        }
+
+        // ServiceError rows, each at its largest (the error's own bytes).
+        let errors: [(E, usize); 17] = [
+            (E::Malformed, 1),
+            (E::WrongPort { port: 255 }, 2),
+            (E::BadAddress { address: u16::MAX }, 4),
+            (E::AlreadyPaired, 1),
+            (E::WrongUid { uid: u64::MAX }, 11),
+            (E::NoUpload, 1),
+            (E::TooLarge { capacity: u32::MAX }, 6),
+            (E::WrongKind, 1),
+            (
+                E::OutOfRange {
+                    offset: u32::MAX,
+                    len: u32::MAX,
+                },
+                11,
+            ),
+            (E::OutOfOrder { expected: u32::MAX }, 6),
+            (
+                E::SizeMismatch {
+                    expected: u32::MAX,
+                    written: u32::MAX,
+                },
+                11,
+            ),
+            (
+                E::CrcMismatch {
+                    expected: u32::MAX,
+                    actual: u32::MAX,
+                },
+                11,
+            ),
+            (E::BadImage(ImageError::UnknownFormat { format: 9 }), 3),
+            (E::VersionMismatch { image: VMAX }, 10),
+            (E::NotVerified, 1),
+            (E::Storage, 1),
+            (E::BadClock, 1),
+        ];
+        for (e, n) in errors {
+            assert_eq!(len(&e), n, "{e:?}");
+        }
+
+        // The examples.
+        let mut buf = [0u8; 16];
+        assert_eq!(
+            encode(&R::Pair { address: 7 }, &mut buf).unwrap(),
+            &[0x03, 0x07]
+        );
+        let t = encode(&R::TimeGet { t1: 1000 }, &mut buf).unwrap().to_vec();
+        assert_eq!(t, [0x0c, 0xe8, 0x07]);
+        let h = Header {
+            dst: motet_wire::frame::BROADCAST,
+            src: 1,
+            port: 7,
+            flags: Flags::NONE,
+            seq: 0,
+            ack: 0,
+        };
+        let mut out = [0u8; MAX_FRAME];
+        assert_eq!(frame::encode(&h, &t, &mut out).unwrap(), 3 + OVERHEAD);
+        assert_eq!(OVERHEAD, 16);
+    }
+}
