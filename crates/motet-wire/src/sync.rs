@@ -57,22 +57,28 @@ pub struct SyncConfig {
     pub rtt_gate_us: f64,
     /// Added to a point's excess half-width before weighting, µs.
     pub weight_floor_us: f64,
-    /// Two points in a row this many standard deviations off the fit mean
-    /// the drift changed: the fit then keeps only [`SyncConfig::forget`]²⁰ of its
-    /// past weight (0 disables).
-    pub change_sigma: f64,
+    /// Drift-change alarm: a one-sided CUSUM of the innovations in units of
+    /// their standard deviation, each clipped to ±4 and less
+    /// [`SyncConfig::change_slack`], beyond this threshold means the drift
+    /// changed; the fit is then rebuilt from the points since the sum left
+    /// zero (0 disables).
+    pub change_threshold: f64,
+    /// Innovations up to this many standard deviations do not add to the
+    /// CUSUM.
+    pub change_slack: f64,
 }
 
 impl Default for SyncConfig {
     /// 32 exchanges per point, forget 0.95 (about 20 points of memory), gate
-    /// 10 ms, weight floor 10 µs, change detection at 4σ.
+    /// 10 ms, weight floor 10 µs, change alarm at a CUSUM of 10σ with 0.5σ slack.
     fn default() -> Self {
         SyncConfig {
             bin: 32,
             forget: 0.95,
             rtt_gate_us: 10_000.0,
             weight_floor_us: 10.0,
-            change_sigma: 4.0,
+            change_threshold: 10.0,
+            change_slack: 0.5,
         }
     }
 }
@@ -100,8 +106,29 @@ fn sqrt(x: f64) -> f64 {
     y
 }
 
-fn powi(x: f64, n: u32) -> f64 {
-    (0..n).fold(1.0, |p, _| p * x)
+/// Points kept for rebuilding the fit after a drift change.
+const HISTORY: usize = 16;
+
+/// One filtered point: host time, θ, half-width.
+#[derive(Clone, Copy, Debug, Default)]
+struct Point {
+    x: f64,
+    y: f64,
+    half: f64,
+}
+
+/// One side of the two-sided CUSUM: the sum and the points since it was 0.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cusum {
+    sum: f64,
+    run: u32,
+}
+
+impl Cusum {
+    fn add(&mut self, z: f64, slack: f64) {
+        self.sum = (self.sum + z - slack).max(0.0);
+        self.run = if self.sum > 0.0 { self.run + 1 } else { 0 };
+    }
 }
 
 /// Clock offset and skew estimator (see the module documentation).
@@ -132,7 +159,10 @@ pub struct ClockSync {
     nres: f64,
     nres_n: f64,
     ures: f64,
-    outliers: u8,
+    up: Cusum,
+    down: Cusum,
+    history: [Point; HISTORY],
+    history_len: usize,
     changes: u32,
     exchanges: u64,
     rejected: u64,
@@ -168,7 +198,10 @@ impl ClockSync {
             nres: 0.0,
             nres_n: 0.0,
             ures: 0.0,
-            outliers: 0,
+            up: Cusum::default(),
+            down: Cusum::default(),
+            history: [Point::default(); HISTORY],
+            history_len: 0,
             changes: 0,
             exchanges: 0,
             rejected: 0,
@@ -248,6 +281,66 @@ impl ClockSync {
     }
 
     fn add_point(&mut self, x: f64, y: f64, half: f64) {
+        self.history.copy_within(1.., 0);
+        self.history[HISTORY - 1] = Point { x, y, half };
+        self.history_len = (self.history_len + 1).min(HISTORY);
+        if let Some(run) = self.detect_change(x, y, half) {
+            self.changes += 1;
+            self.rebuild(run);
+        } else {
+            self.fit_point(x, y, half, true);
+        }
+    }
+
+    /// Feeds the innovation of a new point to the CUSUMs; returns the
+    /// points since the change when they raise the alarm.
+    fn detect_change(&mut self, x: f64, y: f64, _half: f64) -> Option<usize> {
+        let h = self.cfg.change_threshold;
+        if h <= 0.0 || self.points < 6 || self.nres_n <= 0.0 {
+            return None;
+        }
+        let sigma = sqrt(self.ures / self.nres_n);
+        if sigma <= 0.0 {
+            return None;
+        }
+        // Clipped so that a single wild point cannot raise the alarm.
+        let z = ((y - self.theta(x)) / sigma).clamp(-4.0, 4.0);
+        let k = self.cfg.change_slack;
+        self.up.add(z, k);
+        self.down.add(-z, k);
+        let run = if self.up.sum > h {
+            self.up.run
+        } else if self.down.sum > h {
+            self.down.run
+        } else {
+            return None;
+        };
+        Some((run as usize).clamp(2, self.history_len))
+    }
+
+    /// Refits from the newest `n` points only (the drift before them is
+    /// stale).
+    fn rebuild(&mut self, n: usize) {
+        self.up = Cusum::default();
+        self.down = Cusum::default();
+        self.points = 0;
+        self.sw = 0.0;
+        self.swx = 0.0;
+        self.swy = 0.0;
+        self.swxx = 0.0;
+        self.swxy = 0.0;
+        self.a = 0.0;
+        self.b = 0.0;
+        let first = HISTORY - n;
+        for i in first..HISTORY {
+            let p = self.history[i];
+            self.fit_point(p.x, p.y, p.half, false);
+        }
+    }
+
+    /// Adds a point to the decayed fit; `learn` also updates the innovation
+    /// statistics.
+    fn fit_point(&mut self, x: f64, y: f64, half: f64, learn: bool) {
         if self.points == 0 {
             self.x_ref = x;
             self.y_ref = y;
@@ -255,34 +348,21 @@ impl ClockSync {
         self.min_half = self.min_half.min(half);
         let excess = (half - self.min_half).max(0.0) + self.cfg.weight_floor_us;
         let w = 1.0 / (excess * excess);
-        // Innovation against the fit so far.
-        let mut k = self.cfg.forget;
-        if self.points >= 2 {
+        let k = self.cfg.forget;
+        if learn && self.points >= 2 {
             let innov = y - self.theta(x);
-            let z2 = innov * innov * w;
-            // Change detection on plain innovations: the weights make a lucky
-            // point's normalised innovation large without any change.
             let u2 = innov * innov;
-            let usigma2 = if self.nres_n > 0.0 {
-                self.ures / self.nres_n
+            // Plain innovations size the change detector (the weights make a
+            // lucky point's normalised innovation large without any change);
+            // clipped at 3σ so that a drift change does not inflate them.
+            let u2 = if self.nres_n > 0.0 {
+                u2.min(9.0 * self.ures / self.nres_n)
             } else {
-                f64::INFINITY
+                u2
             };
-            self.ures = self.cfg.forget * self.ures + u2;
-            let c = self.cfg.change_sigma;
-            if c > 0.0 && self.points >= 6 && u2 > c * c * usigma2 {
-                self.outliers += 1;
-                if self.outliers >= 2 {
-                    // Drift changed: keep little of the past.
-                    self.outliers = 0;
-                    self.changes += 1;
-                    k = powi(k, 20);
-                }
-            } else {
-                self.outliers = 0;
-            }
-            self.nres = self.cfg.forget * self.nres + z2;
-            self.nres_n = self.cfg.forget * self.nres_n + 1.0;
+            self.ures = k * self.ures + u2;
+            self.nres = k * self.nres + innov * innov * w;
+            self.nres_n = k * self.nres_n + 1.0;
         }
         // Decay and move the reference to the new point.
         let d = x - self.x_ref;
