@@ -68,6 +68,13 @@ impl Distributor {
         out
     }
 
+    /// Sequence number of the next segment for node `node`; `None` for a node
+    /// that reads no axis (it gets no segments, so no seals either).
+    pub fn next_seq(&self, node: usize) -> Option<u32> {
+        let s = &self.subscriptions[node];
+        (s.axes != 0).then_some(s.next_seq)
+    }
+
     /// The message node `node` needs for `item`, if any.
     pub fn route(&mut self, node: usize, item: &Planned) -> Option<HostMessage> {
         let sub = &mut self.subscriptions[node];

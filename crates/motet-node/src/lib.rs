@@ -11,6 +11,7 @@
 
 pub mod board;
 pub mod channel;
+pub mod endpoint;
 pub mod graph;
 pub mod node;
 pub mod service;
@@ -19,6 +20,7 @@ pub mod tool;
 
 pub use board::Board;
 pub use channel::Channel;
+pub use endpoint::{Endpoint, EndpointStats};
 pub use node::{
     Node, NodeGraph, NodeStatus, DEFAULT_QUEUE, GRAPH_COMPONENTS, GRAPH_MAPPINGS, MAX_CHANNELS,
     MAX_STEPS_PER_UNIT, MAX_TOOLS,

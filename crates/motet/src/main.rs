@@ -3,6 +3,9 @@
 
 mod bench;
 mod dance;
+mod netrun;
+mod node;
+mod nodes;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -12,11 +15,62 @@ use std::path::PathBuf;
 #[command(
     name = "motet",
     version,
-    about = "Describe a machine, drive it from G-code and SVG, on simulated nodes"
+    about = "Describe a machine, drive it from G-code, SVG and photos, on simulated or networked nodes"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum NodesCmd {
+    /// List the nodes that answer on links.
+    Scan {
+        /// Link to scan (repeatable): udp:HOST:PORT, serial:PATH[@BAUD], slcan:PATH[@BITRATE].
+        #[arg(long = "link", required = true)]
+        links: Vec<String>,
+        /// Seconds to wait for answers.
+        #[arg(long, default_value_t = 1.0)]
+        wait: f64,
+    },
+    /// Give each node of a machine an address and write the pairing file beside it.
+    Pair {
+        machine: PathBuf,
+        /// NODE=LINK for each node of the machine (repeatable).
+        #[arg(long = "link", required = true)]
+        links: Vec<String>,
+        /// Ask for a button press even for a node alone on its link.
+        #[arg(long)]
+        button: bool,
+        /// Seconds to wait for a button press.
+        #[arg(long, default_value_t = 60.0)]
+        wait: f64,
+    },
+    /// State of each paired node of a machine.
+    Status { machine: PathBuf },
+    /// Make a paired node blink.
+    Identify {
+        machine: PathBuf,
+        node: String,
+        #[arg(long, default_value_t = 5.0)]
+        seconds: f64,
+    },
+    /// Upload a firmware image to a paired node (write, read back, verify, start).
+    Flash {
+        machine: PathBuf,
+        node: String,
+        image: PathBuf,
+    },
+    /// Build a firmware image file from a payload.
+    Image {
+        #[arg(long)]
+        kind: String,
+        #[arg(long)]
+        version: String,
+        payload: PathBuf,
+        #[arg(long, short)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -36,6 +90,67 @@ enum Cmd {
         /// No progress bar or summary.
         #[arg(long, short)]
         quiet: bool,
+        /// Which nodes run the job: simulated in this process (render and
+        /// report), node processes started for the run, or the paired nodes.
+        #[arg(long, value_enum, default_value = "sim")]
+        nodes: netrun::NodesMode,
+        /// With --nodes spawn|paired: run time this many times faster than
+        /// real time (nodes started by hand need the same --time-scale).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// With --nodes spawn|paired: least time the committed trajectory
+        /// reaches ahead, ms (at least 2×RTT is used anyway).
+        #[arg(long, default_value_t = 50.0)]
+        lead_ms: f64,
+    },
+    /// Continue a networked job that stopped, from where every node came to rest.
+    Resume {
+        /// The stopped run's output folder (it holds resume.toml and the journal).
+        out: PathBuf,
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Run a simulated node in this process, reachable on UDP or a
+    /// pseudo-terminal.
+    Node {
+        /// Simulated node (the only kind this command runs).
+        #[arg(long, required = true)]
+        sim: bool,
+        /// Node type reported to the host.
+        #[arg(long = "type", default_value = "stepper")]
+        kind: String,
+        /// `udp:HOST:PORT` (port 0: any free one) or `pty` (a new
+        /// pseudo-terminal; its path is printed).
+        #[arg(long, default_value = "udp:127.0.0.1:0")]
+        listen: String,
+        /// Print one line `motet-node listening LINK uid UID` first (for scripts).
+        #[arg(long)]
+        announce: bool,
+        /// File keeping the node's uid, address and firmware version across restarts.
+        #[arg(long)]
+        state: Option<PathBuf>,
+        /// Unique id (hex) when the state file has none [default: random].
+        #[arg(long)]
+        uid: Option<String>,
+        /// Crystal error of the node's clock, parts per million.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        ppm: f64,
+        /// Run the node's clock this many times faster than real time.
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// Press the pairing button as soon as the node is asked to pair.
+        #[arg(long)]
+        auto_press: bool,
+        /// Exit after this many seconds without a frame from a host.
+        #[arg(long)]
+        idle_exit: Option<f64>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Find, pair, inspect and update nodes.
+    Nodes {
+        #[command(subcommand)]
+        command: NodesCmd,
     },
     /// Check a machine file and a job without running it.
     Check {
@@ -119,7 +234,73 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             out,
             allow_unknown,
             quiet,
-        } => run::run(&machine, &job, out, allow_unknown, quiet),
+            nodes,
+            time_scale,
+            lead_ms,
+        } => match nodes {
+            netrun::NodesMode::Sim => run::run(&machine, &job, out, allow_unknown, quiet),
+            mode => netrun::run(netrun::NetArgs {
+                machine_path: &machine,
+                job_path: &job,
+                out,
+                allow_unknown,
+                quiet,
+                mode,
+                time_scale,
+                lead_ms,
+            }),
+        },
+        Cmd::Resume { out, quiet } => netrun::resume_cmd(&out, quiet),
+        Cmd::Node {
+            sim: _,
+            kind,
+            listen,
+            announce,
+            state,
+            uid,
+            ppm,
+            time_scale,
+            auto_press,
+            idle_exit,
+            quiet,
+        } => node::node(node::NodeArgs {
+            kind,
+            listen,
+            announce,
+            state,
+            uid,
+            ppm,
+            time_scale,
+            auto_press,
+            idle_exit,
+            quiet,
+        }),
+        Cmd::Nodes { command } => match command {
+            NodesCmd::Scan { links, wait } => nodes::scan(&links, wait),
+            NodesCmd::Pair {
+                machine,
+                links,
+                button,
+                wait,
+            } => nodes::pair(&machine, &links, button, wait),
+            NodesCmd::Status { machine } => nodes::status(&machine),
+            NodesCmd::Identify {
+                machine,
+                node,
+                seconds,
+            } => nodes::identify(&machine, &node, seconds),
+            NodesCmd::Flash {
+                machine,
+                node,
+                image,
+            } => nodes::flash(&machine, &node, &image),
+            NodesCmd::Image {
+                kind,
+                version,
+                payload,
+                out,
+            } => nodes::image(&kind, &version, &payload, &out),
+        },
         Cmd::Check {
             machine,
             job,

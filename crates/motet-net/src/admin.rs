@@ -1,0 +1,357 @@
+//! Talking to nodes outside a run: scan a link, pair, identify, read status,
+//! upload firmware. Requests travel as datagrams (frames without link flags)
+//! and are repeated until answered, so no link has to be set up first; every
+//! request here is safe to repeat (a page written twice writes the same bytes).
+
+use motet_link::Transport;
+use motet_wire::frame::{self, Flags, Header, BROADCAST, MAX_FRAME, MAX_RAW};
+use motet_wire::image;
+use motet_wire::service::{
+    is_node_address, Info, ServiceReply, ServiceRequest, Version, HOST_ADDRESS, PAGE_SIZE,
+};
+use motet_wire::{decode, encode, MAX_MESSAGE};
+use std::time::{Duration, Instant};
+
+#[derive(Debug, thiserror::Error)]
+pub enum AdminError {
+    #[error("{link}: {source}")]
+    Io {
+        link: String,
+        source: std::io::Error,
+    },
+    #[error("{link}: no answer from node {address:#06x} after {tries} tries")]
+    NoAnswer {
+        link: String,
+        address: u16,
+        tries: u32,
+    },
+    #[error("{link}: node {address:#06x} refused: {error}")]
+    Refused {
+        link: String,
+        address: u16,
+        error: String,
+    },
+    #[error("{link}: node {address:#06x} answered {got} to {asked}")]
+    Unexpected {
+        link: String,
+        address: u16,
+        asked: String,
+        got: String,
+    },
+    #[error("{link}: a node answered as uid {got:016x} address {got_address} where uid {want:016x} address {want_address} was asked")]
+    WrongNode {
+        link: String,
+        want: u64,
+        want_address: u16,
+        got: u64,
+        got_address: u16,
+    },
+    #[error("{link}: no node's button was pressed within {seconds:.0} s")]
+    NoButton { link: String, seconds: f64 },
+    #[error("firmware image: {0}")]
+    Image(String),
+    #[error("{link}: firmware read-back differs at byte {offset}")]
+    ReadBack { link: String, offset: u32 },
+}
+
+/// A node found by a scan.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Found {
+    /// The address the answer came from.
+    pub from: u16,
+    pub info: Info,
+}
+
+/// Administrative requests over one transport.
+pub struct Admin {
+    transport: Box<dyn Transport + Send>,
+    link: String,
+    /// Wait for an answer before repeating the request.
+    pub timeout: Duration,
+    pub tries: u32,
+}
+
+impl Admin {
+    pub fn new(transport: Box<dyn Transport + Send>, link: &str) -> Admin {
+        Admin {
+            transport,
+            link: link.to_string(),
+            timeout: Duration::from_millis(200),
+            tries: 5,
+        }
+    }
+
+    pub fn link(&self) -> &str {
+        &self.link
+    }
+
+    /// The transport, for a run to go on with.
+    pub fn into_transport(self) -> Box<dyn Transport + Send> {
+        self.transport
+    }
+
+    fn io(&self, source: std::io::Error) -> AdminError {
+        AdminError::Io {
+            link: self.link.clone(),
+            source,
+        }
+    }
+
+    fn send(&mut self, dst: u16, req: &ServiceRequest) -> Result<(), AdminError> {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let payload = encode(req, &mut buf).expect("service requests fit MAX_MESSAGE");
+        let header = Header {
+            dst,
+            src: HOST_ADDRESS,
+            port: req.port(),
+            flags: Flags::NONE,
+            seq: 0,
+            ack: 0,
+        };
+        let mut out = [0u8; MAX_FRAME];
+        let n = frame::encode(&header, payload, &mut out).expect("one message fits a frame");
+        let r = self.transport.send(&out[..n]);
+        r.map_err(|e| self.io(e))
+    }
+
+    /// The next service reply datagram to the host before `until`, with its source.
+    fn receive(&mut self, until: Instant) -> Result<Option<(u16, u8, ServiceReply)>, AdminError> {
+        loop {
+            let now = Instant::now();
+            if now >= until {
+                return Ok(None);
+            }
+            let r = self.transport.recv(Some(until - now));
+            let Some(bytes) = r.map_err(|e| self.io(e))? else {
+                continue;
+            };
+            let mut raw = [0u8; MAX_RAW];
+            let Ok(f) = frame::decode(&bytes, &mut raw) else {
+                continue;
+            };
+            if f.header.dst != HOST_ADDRESS || f.header.flags != Flags::NONE {
+                continue;
+            }
+            if let Ok(reply) = decode::<ServiceReply>(f.payload) {
+                return Ok(Some((f.header.src, f.header.port, reply)));
+            }
+        }
+    }
+
+    /// Sends `req` to `dst` until a reply on its port comes from `dst`.
+    pub fn request(&mut self, dst: u16, req: &ServiceRequest) -> Result<ServiceReply, AdminError> {
+        for _ in 0..self.tries {
+            self.send(dst, req)?;
+            let until = Instant::now() + self.timeout;
+            while let Some((src, port, reply)) = self.receive(until)? {
+                if port != req.port() || (dst != BROADCAST && src != dst) {
+                    continue;
+                }
+                if let ServiceReply::Error(e) = reply {
+                    return Err(AdminError::Refused {
+                        link: self.link.clone(),
+                        address: dst,
+                        error: e.to_string(),
+                    });
+                }
+                return Ok(reply);
+            }
+        }
+        Err(AdminError::NoAnswer {
+            link: self.link.clone(),
+            address: dst,
+            tries: self.tries,
+        })
+    }
+
+    fn unexpected(&self, dst: u16, asked: &ServiceRequest, got: &ServiceReply) -> AdminError {
+        AdminError::Unexpected {
+            link: self.link.clone(),
+            address: dst,
+            asked: format!("{asked:?}"),
+            got: format!("{got:?}"),
+        }
+    }
+
+    /// Every node that answers a broadcast Info within `wait`.
+    pub fn scan(&mut self, wait: Duration) -> Result<Vec<Found>, AdminError> {
+        let mut found: Vec<Found> = Vec::new();
+        let start = Instant::now();
+        // Asked a few times: a datagram may be lost.
+        for _ in 0..3 {
+            self.send(BROADCAST, &ServiceRequest::Info)?;
+            let until = (Instant::now() + wait / 3).min(start + wait);
+            while let Some((src, _, reply)) = self.receive(until)? {
+                if let ServiceReply::Info(info) = reply {
+                    if !found.iter().any(|f| f.info.uid == info.uid) {
+                        found.push(Found { from: src, info });
+                    }
+                }
+            }
+        }
+        Ok(found)
+    }
+
+    /// Info of the node at `address`.
+    pub fn info(&mut self, address: u16) -> Result<Info, AdminError> {
+        let req = ServiceRequest::Info;
+        match self.request(address, &req)? {
+            ServiceReply::Info(i) => Ok(i),
+            other => Err(self.unexpected(address, &req, &other)),
+        }
+    }
+
+    /// Status of the node at `address`.
+    pub fn status(&mut self, address: u16) -> Result<motet_wire::service::Status, AdminError> {
+        let req = ServiceRequest::Status;
+        match self.request(address, &req)? {
+            ServiceReply::Status(s) => Ok(s),
+            other => Err(self.unexpected(address, &req, &other)),
+        }
+    }
+
+    /// Makes the node at `address` blink for `ms`.
+    pub fn identify(&mut self, address: u16, ms: u32) -> Result<(), AdminError> {
+        let req = ServiceRequest::Identify { ms };
+        match self.request(address, &req)? {
+            ServiceReply::Ack => Ok(()),
+            other => Err(self.unexpected(address, &req, &other)),
+        }
+    }
+
+    /// Gives the node with `uid` the address `address` (a node alone on its
+    /// link, or one already known). The answer must name the same uid and address.
+    pub fn set_address(&mut self, uid: u64, address: u16) -> Result<(), AdminError> {
+        let req = ServiceRequest::SetAddress { uid, address };
+        match self.request(BROADCAST, &req)? {
+            ServiceReply::Paired {
+                uid: got,
+                address: got_address,
+            } if got == uid && got_address == address => Ok(()),
+            ServiceReply::Paired {
+                uid: got,
+                address: got_address,
+            } => Err(AdminError::WrongNode {
+                link: self.link.clone(),
+                want: uid,
+                want_address: address,
+                got,
+                got_address,
+            }),
+            other => Err(self.unexpected(BROADCAST, &req, &other)),
+        }
+    }
+
+    /// Asks every unpaired node to blink and waits up to `wait` for a person
+    /// to press one's button; that node takes `address`. Returns its uid.
+    pub fn pair_by_button(&mut self, address: u16, wait: Duration) -> Result<u64, AdminError> {
+        let start = Instant::now();
+        let mut next_ask = start;
+        while start.elapsed() < wait {
+            if Instant::now() >= next_ask {
+                // Repeated so that a lost datagram or a node started late still blinks.
+                self.send(BROADCAST, &ServiceRequest::Pair { address })?;
+                next_ask = Instant::now() + Duration::from_secs(1);
+            }
+            let until = next_ask.min(start + wait);
+            while let Some((_, _, reply)) = self.receive(until)? {
+                if let ServiceReply::Paired { uid, address: got } = reply {
+                    let _ = self.send(BROADCAST, &ServiceRequest::PairCancel);
+                    if got != address {
+                        return Err(AdminError::WrongNode {
+                            link: self.link.clone(),
+                            want: uid,
+                            want_address: address,
+                            got: uid,
+                            got_address: got,
+                        });
+                    }
+                    return Ok(uid);
+                }
+            }
+        }
+        let _ = self.send(BROADCAST, &ServiceRequest::PairCancel);
+        Err(AdminError::NoButton {
+            link: self.link.clone(),
+            seconds: wait.as_secs_f64(),
+        })
+    }
+
+    /// Uploads a firmware image to the node at `address`: pages, read-back,
+    /// verify, start. Returns the version the node then runs. `progress`
+    /// gets bytes written and the total.
+    pub fn flash(
+        &mut self,
+        address: u16,
+        image_bytes: &[u8],
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Version, AdminError> {
+        let img = image::parse(image_bytes).map_err(|e| AdminError::Image(e.to_string()))?;
+        let header = img.header.clone();
+        let begin = ServiceRequest::FirmwareBegin {
+            size: image_bytes.len() as u32,
+            crc32c: frame::crc32c(image_bytes),
+            kind: header.kind.clone(),
+            version: header.version,
+        };
+        self.expect_ack(address, &begin)?;
+        for (i, chunk) in image_bytes.chunks(PAGE_SIZE).enumerate() {
+            let offset = (i * PAGE_SIZE) as u32;
+            let req = ServiceRequest::FirmwarePage {
+                offset,
+                data: heapless::Vec::from_slice(chunk).expect("chunks are one page"),
+            };
+            match self.request(address, &req)? {
+                ServiceReply::FirmwareWritten { offset: o, len }
+                    if o == offset && len as usize == chunk.len() => {}
+                other => return Err(self.unexpected(address, &req, &other)),
+            }
+            progress(offset as usize + chunk.len(), image_bytes.len());
+        }
+        for (i, chunk) in image_bytes.chunks(PAGE_SIZE).enumerate() {
+            let offset = (i * PAGE_SIZE) as u32;
+            let req = ServiceRequest::FirmwareRead {
+                offset,
+                len: chunk.len() as u8,
+            };
+            match self.request(address, &req)? {
+                ServiceReply::FirmwareData { offset: o, data } if o == offset => {
+                    if data.as_slice() != chunk {
+                        let at = data
+                            .iter()
+                            .zip(chunk)
+                            .position(|(a, b)| a != b)
+                            .unwrap_or(0);
+                        return Err(AdminError::ReadBack {
+                            link: self.link.clone(),
+                            offset: offset + at as u32,
+                        });
+                    }
+                }
+                other => return Err(self.unexpected(address, &req, &other)),
+            }
+        }
+        let req = ServiceRequest::FirmwareVerify;
+        let version = match self.request(address, &req)? {
+            ServiceReply::FirmwareVerified { version } => version,
+            other => return Err(self.unexpected(address, &req, &other)),
+        };
+        self.expect_ack(address, &ServiceRequest::FirmwareStart)?;
+        Ok(version)
+    }
+
+    fn expect_ack(&mut self, address: u16, req: &ServiceRequest) -> Result<(), AdminError> {
+        match self.request(address, req)? {
+            ServiceReply::Ack => Ok(()),
+            other => Err(self.unexpected(address, req, &other)),
+        }
+    }
+}
+
+/// The next free node address not in `taken`.
+pub fn free_address(taken: &[u16]) -> u16 {
+    (2..=0xFFEFu16)
+        .find(|a| !taken.contains(a))
+        .filter(|a| is_node_address(*a))
+        .unwrap_or(2)
+}

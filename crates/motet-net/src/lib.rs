@@ -1,0 +1,25 @@
+//! The node network on the host side: reaching nodes over links, pairing
+//! them, synchronising their clocks, streaming a job to them in sealed
+//! windows with a safe stop, and resuming after a stop. Also the simulated
+//! node that runs the node firmware's endpoint in its own process.
+//!
+//! Everything here takes the time as an argument (see [`clock`]), so the same
+//! code runs on the wall clock with real processes and on a simulated clock
+//! in tests ([`loopback`]).
+
+pub mod admin;
+pub mod clock;
+pub mod journal;
+pub mod loopback;
+pub mod pairing_file;
+pub mod peer;
+pub mod registry;
+pub mod resume;
+pub mod run;
+pub mod session;
+pub mod sim_node;
+pub mod source;
+pub mod spawn;
+pub mod tail;
+
+pub use run::{NetConfig, NetError, NetRun, Phase, StopInfo};

@@ -1,0 +1,159 @@
+//! A networked run in one process on a simulated clock: the host's [`NetRun`]
+//! and simulated nodes ([`SimNode`], the node firmware's endpoint) joined by
+//! any transports (in-memory pairs, optionally with faults injected), with
+//! node crystals off by given ppm. Deterministic and faster than real time;
+//! the tests of the network and `motet bench net` use it.
+
+use crate::peer::Peer;
+use crate::run::{NetConfig, NetError, NetRun, Phase};
+use crate::sim_node::{sim_config, SimNode};
+use motet_host::Machine;
+use motet_link::Transport;
+use motet_node::storage::{Persisted, RamStore};
+use motet_planner::{Command, Located};
+use motet_trajectory::Point;
+
+/// One simulated node and its clock.
+pub struct LoopbackNode {
+    pub node: SimNode<RamStore>,
+    /// Crystal error, parts per million.
+    pub ppm: f64,
+    /// Local clock at host time 0, µs.
+    pub offset_us: u64,
+    /// A dead node is no longer stepped: it neither moves nor answers.
+    pub alive: bool,
+}
+
+impl LoopbackNode {
+    fn local(&self, host: u64) -> u64 {
+        self.offset_us + (host as f64 * (1.0 + self.ppm * 1e-6)) as u64
+    }
+    fn host(&self, local: u64) -> u64 {
+        (local.saturating_sub(self.offset_us) as f64 / (1.0 + self.ppm * 1e-6)) as u64
+    }
+}
+
+/// Clock of a loopback node: crystal error and starting offset.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NodeClock {
+    pub ppm: f64,
+    pub offset_us: u64,
+}
+
+pub struct Loopback {
+    pub run: NetRun,
+    pub nodes: Vec<LoopbackNode>,
+    /// Host time, µs.
+    pub now: u64,
+    /// A dead host is no longer polled (its process was killed).
+    pub host_alive: bool,
+}
+
+impl Loopback {
+    /// A run of `commands` on `machine` from `start`; `links[k]` joins the
+    /// host (`.0`) to the node of machine node `k` (`.1`). Nodes are paired
+    /// already (addresses 2, 3, …) and keep a trace of every step.
+    pub fn new(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)>,
+        clocks: &[NodeClock],
+        cfg: NetConfig,
+    ) -> Loopback {
+        let mut peers = Vec::new();
+        let mut nodes = Vec::new();
+        for (k, (host_end, node_end)) in links.into_iter().enumerate() {
+            let address = 2 + k as u16;
+            let name = machine
+                .nodes
+                .get(k)
+                .map_or_else(|| format!("node{k}"), |n| n.name.clone());
+            peers.push(Peer::new(&name, address, host_end, 0x1000 + k as u16));
+            let uid = 0x5157_0000 + k as u64;
+            let cfg = sim_config("stepper", uid).expect("a short kind");
+            let store = RamStore {
+                record: Some(Persisted {
+                    uid,
+                    address,
+                    firmware: cfg.firmware,
+                }),
+                saves: 0,
+            };
+            let clock = clocks.get(k).copied().unwrap_or_default();
+            let mut node = SimNode::new(cfg, store, node_end, clock.offset_us);
+            node.board.trace = Some(Vec::new());
+            node.board.tool_trace = Some(Vec::new());
+            nodes.push(LoopbackNode {
+                node,
+                ppm: clock.ppm,
+                offset_us: clock.offset_us,
+                alive: true,
+            });
+        }
+        Loopback {
+            run: NetRun::new(machine, commands, peers, start, cfg, None),
+            nodes,
+            now: 0,
+            host_alive: true,
+        }
+    }
+
+    /// One round of the host and every live node, then time moves on to the
+    /// next thing any of them has to do (at least 10 µs, at most 1 ms).
+    pub fn step(&mut self) -> Result<(), NetError> {
+        if self.host_alive {
+            self.run.poll(self.now)?;
+        }
+        let mut next = if self.host_alive {
+            self.run.next_wakeup(self.now)
+        } else {
+            self.now + 1_000
+        };
+        for n in self.nodes.iter_mut().filter(|n| n.alive) {
+            let local = n.local(self.now);
+            n.node.step(local).map_err(|source| NetError::Io {
+                node: "loopback".into(),
+                source,
+            })?;
+            if let Some(w) = n.node.endpoint.next_wakeup(local) {
+                next = next.min(n.host(w));
+            }
+        }
+        if self.host_alive {
+            // Replies are taken at once, as on a link without delay: time
+            // moves only when the links are quiet.
+            self.run.poll(self.now)?;
+            next = next.min(self.run.next_wakeup(self.now));
+        }
+        self.now = next.clamp(self.now + 10, self.now + 1_000);
+        Ok(())
+    }
+
+    /// Steps until the run is done or stopped, the host is dead and the nodes
+    /// idle for a second, or `max_us` of simulated time passed.
+    pub fn run_until_settled(&mut self, max_us: u64) -> Result<Phase, NetError> {
+        let end = self.now + max_us;
+        let mut dead_since = None;
+        while self.now < end {
+            self.step()?;
+            if self.host_alive {
+                if matches!(self.run.phase(), Phase::Done | Phase::Stopped(_)) {
+                    break;
+                }
+            } else {
+                let busy = self.nodes.iter().any(|n| {
+                    n.alive
+                        && n.node.endpoint.node().queued() > 0
+                        && !n.node.endpoint.node().stopped()
+                });
+                if busy {
+                    dead_since = None;
+                } else if dead_since.get_or_insert(self.now).saturating_add(1_000_000) < self.now {
+                    break;
+                }
+            }
+        }
+        Ok(self.run.phase().clone())
+    }
+}

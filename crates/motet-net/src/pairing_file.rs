@@ -1,0 +1,203 @@
+//! The pairing file: which device on which link is each node of a machine.
+//!
+//! `motet nodes pair` writes it beside the machine file (`printer.toml` →
+//! `printer.nodes.toml`); later runs read it and need no pairing:
+//!
+//! ```toml
+//! [nodes.mainboard]
+//! link = "udp:127.0.0.1:47001"
+//! address = 2
+//! uid = "00c0ffee12345678"
+//! kind = "stepper"
+//! firmware = "0.1.0"
+//! ```
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One paired node.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairedNode {
+    /// Link spec the node is reached on (see `motet_link::open`).
+    pub link: String,
+    /// Node address assigned at pairing.
+    pub address: u16,
+    /// The device's unique id, hex.
+    pub uid: String,
+    /// Node type reported by the device.
+    pub kind: String,
+    /// Firmware version at pairing.
+    pub firmware: String,
+}
+
+/// All paired nodes of a machine, by machine node name.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairingFile {
+    #[serde(default)]
+    pub nodes: BTreeMap<String, PairedNode>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum PairingFileError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}:{message}")]
+    Parse { path: String, message: String },
+    #[error("{path}: node {node}: {message}")]
+    Invalid {
+        path: String,
+        node: String,
+        message: String,
+    },
+}
+
+/// Where the pairing file of `machine` lives: beside it, `NAME.nodes.toml`.
+pub fn pairing_path(machine: &Path) -> PathBuf {
+    let stem = machine
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "machine".into());
+    machine.with_file_name(format!("{stem}.nodes.toml"))
+}
+
+/// Parses the uid written as hex.
+pub fn parse_uid(s: &str) -> Option<u64> {
+    u64::from_str_radix(s.trim_start_matches("0x"), 16).ok()
+}
+
+/// The uid as written in the file.
+pub fn format_uid(uid: u64) -> String {
+    format!("{uid:016x}")
+}
+
+impl PairingFile {
+    /// Reads and checks a pairing file. Errors name the file and, for syntax
+    /// errors, line and column.
+    pub fn load(path: &Path) -> Result<PairingFile, PairingFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| PairingFileError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        PairingFile::parse(&text, &path.display().to_string())
+    }
+
+    pub fn parse(text: &str, path: &str) -> Result<PairingFile, PairingFileError> {
+        let file: PairingFile = toml::from_str(text).map_err(|e| PairingFileError::Parse {
+            path: path.to_string(),
+            message: toml_location(text, &e),
+        })?;
+        for (name, n) in &file.nodes {
+            let bad = |message: String| PairingFileError::Invalid {
+                path: path.to_string(),
+                node: name.clone(),
+                message,
+            };
+            if !(2..=0xFFEF).contains(&n.address) {
+                return Err(bad(format!("address {} is not in 2..=65519", n.address)));
+            }
+            if parse_uid(&n.uid).is_none() {
+                return Err(bad(format!("uid {:?} is not a hex number", n.uid)));
+            }
+        }
+        Ok(file)
+    }
+
+    /// Writes the file (creating or replacing it).
+    pub fn save(&self, path: &Path) -> Result<(), PairingFileError> {
+        let body = toml::to_string_pretty(self).expect("pairing file serialises");
+        let text = format!(
+            "# Written by `motet nodes pair`: the device behind each node of the machine.\n{body}"
+        );
+        std::fs::write(path, text).map_err(|source| PairingFileError::Io {
+            path: path.display().to_string(),
+            source,
+        })
+    }
+}
+
+/// "line:column: message" for a TOML error.
+fn toml_location(text: &str, e: &toml::de::Error) -> String {
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("{line}:{col}: {}", e.message())
+        }
+        None => format!(" {}", e.message()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip() {
+        let mut f = PairingFile::default();
+        f.nodes.insert(
+            "mainboard".into(),
+            PairedNode {
+                link: "udp:127.0.0.1:47001".into(),
+                address: 2,
+                uid: format_uid(0xc0ffee),
+                kind: "stepper".into(),
+                firmware: "0.1.0".into(),
+            },
+        );
+        let dir = std::env::temp_dir().join(format!("motet-pairing-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("m.nodes.toml");
+        f.save(&path).unwrap();
+        assert_eq!(PairingFile::load(&path).unwrap(), f);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_files_say_where() {
+        // (text, expected part of the error)
+        let cases = [
+            ("[nodes.a]\nlink = 3\n", "2:8"),
+            (
+                "[nodes.a]\nlink='x'\naddress=1\nuid='1'\nkind='k'\nfirmware='1'\n",
+                "node a: address 1",
+            ),
+            (
+                "[nodes.a]\nlink='x'\naddress=2\nuid='zz'\nkind='k'\nfirmware='1'\n",
+                "uid \"zz\"",
+            ),
+            (
+                "[nodes.a]\nlink='x'\naddress=2\nuid='1'\nkind='k'\nfirmware='1'\ncolour=1\n",
+                "7:1",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = PairingFile::parse(text, "p.toml").unwrap_err().to_string();
+            assert!(
+                e.contains(want) && e.starts_with("p.toml"),
+                "{text:?} gave {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn path_beside_machine() {
+        assert_eq!(
+            pairing_path(Path::new("examples/printer.toml")),
+            PathBuf::from("examples/printer.nodes.toml")
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_text_never_panics(s in ".{0,200}") {
+            let _ = PairingFile::parse(&s, "p.toml");
+        }
+    }
+}

@@ -1,0 +1,277 @@
+//! One node as the host sees it: its transport, the reliable link over it,
+//! its clock model, and what it last said.
+
+use motet_link::Transport;
+use motet_wire::frame::{self, Flags, Header, MAX_FRAME, MAX_RAW};
+use motet_wire::link::{Config as LinkConfig, Link, State};
+use motet_wire::service::{port, ServiceReply, ServiceRequest};
+use motet_wire::sync::{ClockSync, Exchange, SyncConfig};
+use motet_wire::{decode, encode, HostMessage, NodeMessage, MAX_MESSAGE};
+use std::collections::VecDeque;
+
+/// The host's own address on every link.
+pub const HOST_ADDRESS: u16 = 1;
+
+/// The clock estimator's settings for exchanges every 100 ms: points of 16
+/// exchanges (1.6 s), so a node is synchronised 3.2 s after the first exchange.
+pub fn sync_config() -> SyncConfig {
+    SyncConfig {
+        bin: 16,
+        ..SyncConfig::default()
+    }
+}
+
+/// Something a node sent that the run acts on.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Incoming {
+    Motion(NodeMessage),
+    Service(ServiceReply),
+}
+
+/// A payload waiting for room in the link's window.
+#[derive(Clone, Debug)]
+struct Outgoing {
+    port: u8,
+    bytes: Vec<u8>,
+    /// A seal: the messages before it are a committed window.
+    seal: bool,
+}
+
+pub struct Peer {
+    pub name: String,
+    pub address: u16,
+    transport: Box<dyn Transport + Send>,
+    link: Link,
+    pub sync: ClockSync,
+    outbox: VecDeque<Outgoing>,
+    /// Host time of the last frame from the node, µs.
+    pub last_heard: Option<u64>,
+    /// Frames that came from another address than the node's.
+    pub wrong_address: u64,
+    /// Frames that did not decode (CRC, COBS, length).
+    pub bad_frames: u64,
+    /// Replies the run has not taken yet.
+    inbox: VecDeque<Incoming>,
+    /// Clock exchanges sent and answered.
+    pub exchanges: (u64, u64),
+    seal_sent: bool,
+}
+
+impl Peer {
+    /// A peer reached over `transport` at `address`; `isn` should differ across
+    /// host restarts so that the node sees a new session.
+    pub fn new(name: &str, address: u16, transport: Box<dyn Transport + Send>, isn: u16) -> Peer {
+        let link = Link::new(LinkConfig {
+            isn,
+            ..LinkConfig::new(HOST_ADDRESS, address, true)
+        });
+        Peer {
+            name: name.to_string(),
+            address,
+            transport,
+            link,
+            sync: ClockSync::new(sync_config()),
+            outbox: VecDeque::new(),
+            last_heard: None,
+            wrong_address: 0,
+            bad_frames: 0,
+            inbox: VecDeque::new(),
+            exchanges: (0, 0),
+            seal_sent: false,
+        }
+    }
+
+    pub fn link_state(&self) -> State {
+        self.link.state()
+    }
+
+    pub fn link(&self) -> &Link {
+        &self.link
+    }
+
+    pub fn transport(&self) -> &dyn Transport {
+        self.transport.as_ref()
+    }
+
+    /// Queues a motion message on the reliable link.
+    pub fn send_motion(&mut self, msg: &HostMessage) {
+        self.queue(
+            motet_wire::link::DATA_PORT,
+            msg,
+            matches!(msg, HostMessage::Seal { .. }),
+        );
+    }
+
+    /// Queues a service request on the reliable link.
+    pub fn send_service(&mut self, req: &ServiceRequest) {
+        self.queue(req.port(), req, false);
+    }
+
+    fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, seal: bool) {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let bytes = encode(msg, &mut buf).expect("host messages fit MAX_MESSAGE");
+        self.outbox.push_back(Outgoing {
+            port,
+            bytes: bytes.to_vec(),
+            seal,
+        });
+    }
+
+    /// Drops every queued message after the last queued seal: a window that
+    /// was not sealed must never reach the node, a seal already queued must.
+    pub fn drop_unsealed(&mut self) {
+        match self.outbox.iter().rposition(|o| o.seal) {
+            Some(i) => self.outbox.truncate(i + 1),
+            None => self.outbox.clear(),
+        }
+    }
+
+    /// A seal queued or sent and not yet acknowledged.
+    pub fn seal_in_flight(&self) -> bool {
+        self.outbox.iter().any(|o| o.seal) || self.seal_sent
+    }
+
+    /// Payloads queued or in flight, not yet acknowledged.
+    pub fn backlog(&self) -> usize {
+        self.outbox.len() + self.link.unacked()
+    }
+
+    /// Sends a clock exchange request as a datagram (no retransmission: a
+    /// late answer is worthless).
+    pub fn send_time_get(&mut self, now: u64) -> std::io::Result<()> {
+        self.exchanges.0 += 1;
+        self.datagram(&ServiceRequest::TimeGet { t1: now })
+    }
+
+    /// Sends a service request as a datagram to `dst` (broadcast for scans).
+    pub fn datagram_to(&mut self, dst: u16, req: &ServiceRequest) -> std::io::Result<()> {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let payload = encode(req, &mut buf).expect("service requests fit MAX_MESSAGE");
+        let header = Header {
+            dst,
+            src: HOST_ADDRESS,
+            port: req.port(),
+            flags: Flags::NONE,
+            seq: 0,
+            ack: 0,
+        };
+        let mut out = [0u8; MAX_FRAME];
+        let n = frame::encode(&header, payload, &mut out)
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+        self.transport.send(&out[..n])
+    }
+
+    fn datagram(&mut self, req: &ServiceRequest) -> std::io::Result<()> {
+        self.datagram_to(self.address, req)
+    }
+
+    /// Takes every frame the transport has, without blocking.
+    pub fn receive(&mut self, now: u64) -> std::io::Result<()> {
+        while let Some(bytes) = self.transport.recv(None)? {
+            self.on_frame(&bytes, now);
+        }
+        Ok(())
+    }
+
+    fn on_frame(&mut self, bytes: &[u8], now: u64) {
+        let mut raw = [0u8; MAX_RAW];
+        let f = match frame::decode(bytes, &mut raw) {
+            Ok(f) => f,
+            Err(e) => {
+                self.bad_frames += 1;
+                self.link.on_frame_error(e);
+                return;
+            }
+        };
+        if f.header.dst != HOST_ADDRESS {
+            return;
+        }
+        if f.header.src != self.address {
+            self.wrong_address += 1;
+            return;
+        }
+        self.last_heard = Some(now);
+        if f.header.flags == Flags::NONE {
+            // A datagram: a service reply outside the link.
+            if let Ok(reply) = decode::<ServiceReply>(f.payload) {
+                if let ServiceReply::Time { t1, t2, t3 } = reply {
+                    self.exchanges.1 += 1;
+                    self.sync.add(Exchange {
+                        t1,
+                        t2,
+                        t3,
+                        t4: now,
+                    });
+                } else {
+                    self.inbox.push_back(Incoming::Service(reply));
+                }
+            }
+            return;
+        }
+        let mut d = self
+            .link
+            .on_decoded(&f, now)
+            .map(|d| (d.port, d.payload.to_vec()));
+        while let Some((p, payload)) = d {
+            let msg = if p == motet_wire::link::DATA_PORT {
+                decode::<NodeMessage>(&payload).ok().map(Incoming::Motion)
+            } else if p != port::LINK {
+                decode::<ServiceReply>(&payload).ok().map(Incoming::Service)
+            } else {
+                None
+            };
+            if let Some(m) = msg {
+                self.inbox.push_back(m);
+            }
+            d = self.link.recv().map(|d| (d.port, d.payload.to_vec()));
+        }
+    }
+
+    /// The next reply the node sent.
+    pub fn take(&mut self) -> Option<Incoming> {
+        self.inbox.pop_front()
+    }
+
+    /// Moves queued payloads into the link and transmits what the link has.
+    pub fn flush(&mut self, now: u64) -> std::io::Result<()> {
+        while let Some(o) = self.outbox.front() {
+            if self.link.send_space() == 0 {
+                break;
+            }
+            match self.link.send_port(o.port, &o.bytes, now) {
+                Ok(()) => {
+                    // The seal is acknowledged once nothing is unacked.
+                    self.seal_sent |= o.seal;
+                    self.outbox.pop_front();
+                }
+                Err(_) => break,
+            }
+        }
+        let mut out = [0u8; MAX_FRAME];
+        while let Some(f) = self.link.poll(now, &mut out) {
+            self.transport.send(f)?;
+        }
+        if self.link.unacked() == 0 {
+            self.seal_sent = false;
+        }
+        let stats = *self.link.stats();
+        self.transport_stats_absorb(&stats);
+        Ok(())
+    }
+
+    fn transport_stats_absorb(&mut self, s: &motet_wire::link::Stats) {
+        self_absorb(self.transport.as_mut(), s);
+    }
+
+    /// When the link wants to be polled again.
+    pub fn next_timeout(&self) -> Option<u64> {
+        if !self.outbox.is_empty() && self.link.send_space() > 0 {
+            return Some(0);
+        }
+        self.link.next_timeout()
+    }
+}
+
+fn self_absorb(t: &mut dyn Transport, s: &motet_wire::link::Stats) {
+    t.stats_mut().absorb(s);
+}

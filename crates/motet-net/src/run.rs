@@ -1,0 +1,669 @@
+//! A job streamed to networked nodes: connect, synchronise clocks, configure,
+//! stream the trajectory in sealed windows, and finish or stop safely.
+//!
+//! Safety rests on the nodes, not on the host: every node runs only committed
+//! (sealed) segments and computes, with the same code as the host, a
+//! contingency tail that brings the machine to rest exactly at the end of the
+//! committed window. The host keeps the next seal arriving before that tail
+//! would start (minimal buffering: at least 2 segments and 2×RTT ahead, at most
+//! the node's queue). If the host stops sealing, for any reason (it dies, a
+//! link is cut, a node stops answering, a node refuses a message), every node
+//! runs its tail from the same boundary and all come to rest together on the
+//! path, where the journal says.
+
+use crate::journal::{JournalSeal, JournalSegment, JournalWriter};
+use crate::peer::{Incoming, Peer};
+use crate::source::{Sourced, SourcedPlanner};
+use motet_host::{Distributor, Machine};
+use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
+use motet_trajectory::{Point, Segment};
+use motet_wire::link::State;
+use motet_wire::service::ServiceRequest;
+use motet_wire::{HostMessage, NodeMessage};
+use std::collections::VecDeque;
+
+/// Clock exchanges µs apart until every node's clock is measured.
+const SYNC_FAST_US: u64 = 2_000;
+
+/// Settings of a networked run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NetConfig {
+    /// Least time the committed window reaches ahead of now, µs (the run uses
+    /// at least 2×RTT + 4×RTTVAR of the slowest link).
+    pub lead_min_us: u64,
+    /// A node silent this long is lost, µs.
+    pub node_timeout_us: u64,
+    /// Status requests to each node, µs apart.
+    pub status_interval_us: u64,
+    /// Clock exchanges with each node, µs apart.
+    pub sync_interval_us: u64,
+    /// Clock model updates sent to each node, µs apart.
+    pub model_interval_us: u64,
+    /// Give up connecting after this long, µs.
+    pub connect_timeout_us: u64,
+    /// How far past the lead a new window reaches, µs: longer windows mean
+    /// fewer seals on the wire, shorter ones keep more of the trajectory
+    /// editable.
+    pub window_us: u64,
+}
+
+impl Default for NetConfig {
+    fn default() -> Self {
+        NetConfig {
+            lead_min_us: 50_000,
+            node_timeout_us: 1_500_000,
+            status_interval_us: 2_000_000,
+            sync_interval_us: 100_000,
+            model_interval_us: 1_000_000,
+            connect_timeout_us: 5_000_000,
+            window_us: 400_000,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum NetError {
+    #[error("{loc}: {error}")]
+    Plan { loc: SourceLoc, error: PlanError },
+    #[error("node {node}: {message}")]
+    Node { node: String, message: String },
+    #[error("journal: {0}")]
+    Journal(#[from] crate::journal::JournalError),
+    #[error("node {node}: link: {source}")]
+    Io {
+        node: String,
+        source: std::io::Error,
+    },
+}
+
+/// Where a run is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Phase {
+    /// Links handshaking, clocks being measured, nodes being configured.
+    Starting,
+    /// Windows streaming.
+    Streaming,
+    /// Everything sealed; waiting for the machine to finish.
+    Draining,
+    /// Finished: every node at rest at the job's end.
+    Done,
+    /// Sealing stopped; the nodes are running their tails.
+    Stopping(StopInfo),
+    /// Stopped on the path; `motet resume` continues from `info`.
+    Stopped(StopInfo),
+}
+
+/// A coordinated stop.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StopInfo {
+    pub reason: String,
+    /// Segments before this index were committed; the machine rests at the
+    /// end of the one before it.
+    pub window_end: u32,
+    /// First segment the contingency tail slowed down.
+    pub tail_start: u32,
+    /// Where every axis came to rest.
+    pub point: Point,
+    /// Host time at which the machine is at rest, µs.
+    pub rest_time: f64,
+}
+
+/// A sealed segment the host keeps until the machine is past it.
+#[derive(Clone, Copy, Debug)]
+struct Committed {
+    index: u32,
+    seg: Segment,
+}
+
+/// Per-node figures for the report.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PeerFigures {
+    pub name: String,
+    pub rtt_us: u64,
+    pub retransmits: u64,
+    pub crc_errors: u64,
+    pub bytes_out: u64,
+    pub bytes_in: u64,
+    pub frames_out: u64,
+    pub frames_in: u64,
+    pub sync_error_us: f64,
+    pub skew_ppm: f64,
+    pub underruns: u32,
+}
+
+pub struct NetRun {
+    machine: Machine,
+    cfg: NetConfig,
+    peers: Vec<Peer>,
+    dist: Distributor,
+    commands: Vec<Located<Command>>,
+    next_command: usize,
+    planner: Option<SourcedPlanner>,
+    planner_done: bool,
+    start_point: Point,
+    /// Items taken from the planner but not routed yet (capacity full).
+    held: Option<Sourced>,
+    /// Routed to the nodes but not sealed.
+    pending: Vec<(Committed, usize)>,
+    committed: VecDeque<Committed>,
+    next_index: u32,
+    /// End time of the last committed segment, µs.
+    committed_end: f64,
+    /// Tail start time of the committed window, µs.
+    deadline: f64,
+    tail_start: u32,
+    journal: Option<JournalWriter>,
+    phase: Phase,
+    started_at: Option<u64>,
+    configured: bool,
+    model_sent: Vec<Option<u64>>,
+    next_sync: u64,
+    next_status: u64,
+    pub windows: u64,
+    pub segments_sent: u64,
+    pub pauses: u64,
+    status: Vec<Option<NodeMessage>>,
+}
+
+impl NetRun {
+    /// A run of `commands` on `machine` through `peers` (one per machine node,
+    /// in the machine's order), starting at rest at `start`.
+    pub fn new(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        peers: Vec<Peer>,
+        start: Point,
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+    ) -> NetRun {
+        let n = peers.len();
+        NetRun {
+            machine: machine.clone(),
+            cfg,
+            peers,
+            dist: Distributor::new(machine),
+            commands,
+            next_command: 0,
+            planner: None,
+            planner_done: false,
+            start_point: start,
+            held: None,
+            pending: Vec::new(),
+            committed: VecDeque::new(),
+            next_index: 0,
+            committed_end: f64::NEG_INFINITY,
+            deadline: f64::NEG_INFINITY,
+            tail_start: 0,
+            journal,
+            phase: Phase::Starting,
+            started_at: None,
+            configured: false,
+            model_sent: vec![None; n],
+            next_sync: 0,
+            next_status: 0,
+            windows: 0,
+            segments_sent: 0,
+            pauses: 0,
+            status: vec![None; n],
+        }
+    }
+
+    pub fn phase(&self) -> &Phase {
+        &self.phase
+    }
+
+    pub fn peers(&self) -> &[Peer] {
+        &self.peers
+    }
+
+    /// Commands planned so far and in all.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.next_command, self.commands.len())
+    }
+
+    /// When the committed trajectory ends, µs.
+    pub fn committed_end(&self) -> f64 {
+        self.committed_end
+    }
+
+    /// Stops sealing: the nodes run their tails. Safe to call at any time.
+    pub fn stop(&mut self, reason: &str, now: u64) {
+        if matches!(
+            self.phase,
+            Phase::Stopping(_) | Phase::Stopped(_) | Phase::Done
+        ) {
+            return;
+        }
+        for p in self.peers.iter_mut() {
+            p.drop_unsealed();
+        }
+        self.pending.clear();
+        let point = self
+            .committed
+            .back()
+            .map(|c| c.seg.end)
+            .unwrap_or(self.start_point);
+        let rest_time = crate::tail::rest_time(self.committed.iter().map(|c| &c.seg), now as f64)
+            .max(self.committed_end.min(now as f64));
+        self.phase = Phase::Stopping(StopInfo {
+            reason: reason.to_string(),
+            window_end: self.next_index_committed(),
+            tail_start: self.tail_start,
+            point,
+            rest_time,
+        });
+    }
+
+    fn next_index_committed(&self) -> u32 {
+        self.committed.back().map_or(0, |c| c.index + 1)
+    }
+
+    /// Least lead: the configured minimum or 2×RTT + 4×RTTVAR of the slowest link.
+    pub fn lead_us(&self) -> u64 {
+        let rtt = self
+            .peers
+            .iter()
+            .map(|p| {
+                let s = p.link().stats();
+                2 * s.srtt_us + 4 * s.rttvar_us
+            })
+            .max()
+            .unwrap_or(0);
+        rtt.max(self.cfg.lead_min_us)
+    }
+
+    /// One round: take what arrived, act, transmit. Returns the phase.
+    pub fn poll(&mut self, now: u64) -> Result<&Phase, NetError> {
+        if self.started_at.is_none() {
+            self.started_at = Some(now);
+        }
+        for p in self.peers.iter_mut() {
+            p.receive(now).map_err(|source| NetError::Io {
+                node: p.name.clone(),
+                source,
+            })?;
+        }
+        self.take_replies(now)?;
+        self.keep_time(now);
+        match self.phase.clone() {
+            Phase::Starting => self.start(now)?,
+            Phase::Streaming => {
+                self.watch(now);
+                if matches!(self.phase, Phase::Streaming) {
+                    self.fill(now)?;
+                }
+            }
+            Phase::Draining => {
+                self.watch(now);
+                self.ask_status(now);
+                if matches!(self.phase, Phase::Draining) && self.finished(now) {
+                    self.phase = Phase::Done;
+                }
+            }
+            Phase::Stopping(info) => {
+                self.ask_status(now);
+                if now as f64 > info.rest_time + 20_000.0 {
+                    self.phase = Phase::Stopped(info);
+                }
+            }
+            Phase::Done | Phase::Stopped(_) => {}
+        }
+        for p in self.peers.iter_mut() {
+            if let Err(source) = p.flush(now) {
+                let node = p.name.clone();
+                if matches!(self.phase, Phase::Streaming) {
+                    self.stop(&format!("node {node}: link error: {source}"), now);
+                } else if matches!(self.phase, Phase::Starting) {
+                    return Err(NetError::Io { node, source });
+                }
+                break;
+            }
+        }
+        Ok(&self.phase)
+    }
+
+    /// When to poll again at the latest, µs.
+    pub fn next_wakeup(&self, now: u64) -> u64 {
+        let mut t = now + 1_000;
+        for p in &self.peers {
+            if let Some(d) = p.next_timeout() {
+                t = t.min(d.max(now));
+            }
+        }
+        t.min(self.next_sync.max(now))
+    }
+
+    fn take_replies(&mut self, now: u64) -> Result<(), NetError> {
+        for k in 0..self.peers.len() {
+            while let Some(m) = self.peers[k].take() {
+                match m {
+                    Incoming::Motion(NodeMessage::Refused { reason }) => {
+                        let node = self.peers[k].name.clone();
+                        let message = format!("refused a message: {reason:?}");
+                        if matches!(self.phase, Phase::Starting) {
+                            return Err(NetError::Node { node, message });
+                        }
+                        self.stop(&format!("node {node} {message}"), now);
+                    }
+                    Incoming::Motion(m @ NodeMessage::Status { .. }) => self.status[k] = Some(m),
+                    Incoming::Service(_) => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Clock exchanges and model updates, in every phase.
+    fn keep_time(&mut self, now: u64) {
+        if now >= self.next_sync {
+            for p in self.peers.iter_mut() {
+                // A lost datagram is only a missing sample.
+                let _ = p.send_time_get(now);
+            }
+            // Evenly spaced: the estimator's filter assumes it.
+            self.next_sync = now + self.cfg.sync_interval_us;
+        }
+        for (k, p) in self.peers.iter_mut().enumerate() {
+            if !p.sync.synced() {
+                continue;
+            }
+            let due = self.model_sent[k].is_none_or(|t| now >= t + self.cfg.model_interval_us);
+            if due && matches!(p.link_state(), State::Established { .. }) {
+                let m = p.sync.model();
+                p.send_service(&ServiceRequest::TimeSet {
+                    offset: m.offset,
+                    skew: m.skew,
+                });
+                self.model_sent[k] = Some(now);
+            }
+        }
+    }
+
+    fn start(&mut self, now: u64) -> Result<(), NetError> {
+        let started = self.started_at.unwrap_or(now);
+        for p in &self.peers {
+            if let State::Failed(e) = p.link_state() {
+                return Err(NetError::Node {
+                    node: p.name.clone(),
+                    message: format!("link failed: {e:?}"),
+                });
+            }
+        }
+        let all_up = self
+            .peers
+            .iter()
+            .all(|p| matches!(p.link_state(), State::Established { .. }));
+        if now > started + self.cfg.connect_timeout_us {
+            let p = self
+                .peers
+                .iter()
+                .find(|p| !matches!(p.link_state(), State::Established { .. }) || !p.sync.synced());
+            return Err(NetError::Node {
+                node: p.map_or_else(|| "?".into(), |p| p.name.clone()),
+                message: format!(
+                    "no connection and clock sync after {:.1} s",
+                    self.cfg.connect_timeout_us as f64 * 1e-6
+                ),
+            });
+        }
+        if !all_up {
+            return Ok(());
+        }
+        if !self.configured {
+            for k in 0..self.peers.len() {
+                let mut msgs = self.dist.setup(&self.machine, k, &self.start_point);
+                msgs.push(HostMessage::Windowed);
+                for m in msgs {
+                    self.peers[k].send_motion(&m);
+                }
+            }
+            self.configured = true;
+        }
+        let ready = self
+            .peers
+            .iter()
+            .enumerate()
+            .all(|(k, p)| p.sync.synced() && self.model_sent[k].is_some() && p.backlog() == 0);
+        if ready {
+            let lead = self.lead_us();
+            let t0 = now as f64 + 2.0 * lead as f64;
+            let planner = Planner::new(self.machine.limits(), self.start_point, t0);
+            self.planner = Some(SourcedPlanner::new(planner));
+            self.phase = Phase::Streaming;
+            self.fill(now)?;
+        }
+        Ok(())
+    }
+
+    /// Node loss: silence longer than the timeout, or a failed link.
+    fn watch(&mut self, now: u64) {
+        let mut reason = None;
+        for p in &self.peers {
+            if let State::Failed(e) = p.link_state() {
+                reason = Some(format!("node {}: link failed ({e:?})", p.name));
+                break;
+            }
+            let silent = now.saturating_sub(p.last_heard.unwrap_or(now));
+            if silent > self.cfg.node_timeout_us {
+                reason = Some(format!(
+                    "node {} stopped answering ({} ms without a frame)",
+                    p.name,
+                    silent / 1000
+                ));
+                break;
+            }
+        }
+        if let Some(r) = reason {
+            self.stop(&r, now);
+        }
+        self.ask_status(now);
+    }
+
+    fn ask_status(&mut self, now: u64) {
+        if now >= self.next_status {
+            for p in self.peers.iter_mut() {
+                if matches!(p.link_state(), State::Established { .. }) && p.backlog() < 4 {
+                    p.send_motion(&HostMessage::Status);
+                }
+            }
+            self.next_status = now + self.cfg.status_interval_us;
+        }
+    }
+
+    /// Every node at rest after the trajectory's end.
+    fn finished(&self, now: u64) -> bool {
+        now as f64 > self.committed_end + 20_000.0 && self.peers.iter().all(|p| p.backlog() == 0)
+    }
+
+    /// Segments a node holds (committed and not yet run, and pending).
+    fn queued_on_nodes(&self, now: u64) -> usize {
+        let t = now as f64;
+        self.committed.iter().filter(|c| c.seg.t1() > t).count() + self.pending.len()
+    }
+
+    fn capacity(&self) -> usize {
+        self.machine
+            .nodes
+            .iter()
+            .map(|n| n.queue)
+            .min()
+            .unwrap_or(64)
+            .saturating_sub(1)
+            .max(2)
+    }
+
+    /// Seals windows until the committed trajectory reaches far enough ahead.
+    fn fill(&mut self, now: u64) -> Result<(), NetError> {
+        let lead = self.lead_us() as f64;
+        let t = now as f64;
+        // Forget what the machine is well past.
+        while self.committed.len() > 1 && self.committed[0].seg.t1() < t - 1e6 {
+            self.committed.pop_front();
+        }
+        while self.deadline < t + lead {
+            // One seal in flight at a time: a node that missed a seal can then
+            // differ from the others by at most that one window.
+            if self.peers.iter().any(|p| p.seal_in_flight()) {
+                break;
+            }
+            let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
+            if self.pending.is_empty() {
+                if !grew && self.planner_done && self.held.is_none() {
+                    self.phase = Phase::Draining;
+                }
+                break;
+            }
+            self.seal()?;
+        }
+        Ok(())
+    }
+
+    /// Routes planned items into the pending window until its tail would start
+    /// at or after `target`, the queue is full, or the job is planned out.
+    fn grow(&mut self, target: f64, now: u64) -> Result<bool, NetError> {
+        let mut grew = false;
+        loop {
+            if self.queued_on_nodes(now) >= self.capacity() {
+                break;
+            }
+            let Some(item) = self.next_item()? else {
+                break;
+            };
+            grew = true;
+            match item.item {
+                Planned::Segment(seg) => {
+                    let c = Committed {
+                        index: self.next_index,
+                        seg,
+                    };
+                    self.next_index += 1;
+                    for k in 0..self.peers.len() {
+                        if let Some(m) = self.dist.route(k, &item.item) {
+                            self.peers[k].send_motion(&m);
+                        }
+                    }
+                    self.pending.push((c, item.command));
+                    self.segments_sent += 1;
+                    let (start, _) = crate::tail::deadline(
+                        self.committed
+                            .iter()
+                            .map(|c| &c.seg)
+                            .chain(self.pending.iter().map(|(c, _)| &c.seg)),
+                    );
+                    if start >= target && self.pending.len() >= 2 {
+                        break;
+                    }
+                }
+                Planned::Event(_) => {
+                    for k in 0..self.peers.len() {
+                        if let Some(m) = self.dist.route(k, &item.item) {
+                            self.peers[k].send_motion(&m);
+                        }
+                    }
+                }
+                Planned::Pause { .. } => self.pauses += 1,
+                Planned::Aux(_) => {}
+            }
+        }
+        Ok(grew)
+    }
+
+    /// The next planned item, planning more commands as needed.
+    fn next_item(&mut self) -> Result<Option<Sourced>, NetError> {
+        if let Some(h) = self.held.take() {
+            return Ok(Some(h));
+        }
+        let Some(planner) = self.planner.as_mut() else {
+            return Ok(None);
+        };
+        loop {
+            if let Some(s) = planner.pop() {
+                return Ok(Some(s));
+            }
+            if self.next_command < self.commands.len() {
+                let i = self.next_command;
+                let c = &self.commands[i];
+                planner
+                    .push(i, &c.item)
+                    .map_err(|error| NetError::Plan { loc: c.loc, error })?;
+                self.next_command += 1;
+            } else if !self.planner_done {
+                planner.finish();
+                self.planner_done = true;
+            } else {
+                return Ok(None);
+            }
+        }
+    }
+
+    /// Commits the pending window on every node.
+    fn seal(&mut self) -> Result<(), NetError> {
+        let pending = std::mem::take(&mut self.pending);
+        if let Some(j) = self.journal.as_mut() {
+            for (c, command) in &pending {
+                j.segment(&JournalSegment {
+                    index: c.index,
+                    command: *command,
+                    start: c.seg.start,
+                    end: c.seg.end,
+                })?;
+            }
+        }
+        for (c, _) in &pending {
+            self.committed.push_back(*c);
+            self.committed_end = c.seg.t1();
+        }
+        let segs: Vec<&Segment> = self.committed.iter().map(|c| &c.seg).collect();
+        let (deadline, tail_pos) = crate::tail::deadline(segs.iter().copied());
+        self.deadline = deadline;
+        self.tail_start = self.committed[0].index + tail_pos as u32;
+        let end = self.next_index_committed();
+        if let Some(j) = self.journal.as_mut() {
+            j.seal(JournalSeal {
+                end,
+                tail: self.tail_start,
+            })?;
+        }
+        for k in 0..self.peers.len() {
+            if let Some(next_seq) = self.dist.next_seq(k) {
+                self.peers[k].send_motion(&HostMessage::Seal { next_seq });
+            }
+        }
+        self.windows += 1;
+        Ok(())
+    }
+
+    /// Figures for the report.
+    pub fn figures(&self, now: u64) -> Vec<PeerFigures> {
+        self.peers
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let t = p.transport().stats();
+                let l = p.link().stats();
+                let underruns = match self.status[k] {
+                    Some(NodeMessage::Status { underruns, .. }) => underruns,
+                    _ => 0,
+                };
+                PeerFigures {
+                    name: p.name.clone(),
+                    rtt_us: l.srtt_us,
+                    retransmits: l.retransmits,
+                    crc_errors: l.crc_errors,
+                    bytes_out: t.bytes_out,
+                    bytes_in: t.bytes_in,
+                    frames_out: t.frames_out,
+                    frames_in: t.frames_in,
+                    sync_error_us: p.sync.error_estimate(now as f64),
+                    skew_ppm: p.sync.model().skew * 1e6,
+                    underruns,
+                }
+            })
+            .collect()
+    }
+
+    /// The last status each node sent.
+    pub fn node_status(&self, k: usize) -> Option<&NodeMessage> {
+        self.status[k].as_ref()
+    }
+}

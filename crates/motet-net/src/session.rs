@@ -1,0 +1,205 @@
+//! The nodes of one run: started here (`spawn`), found through the pairing
+//! file (`paired`), or named directly (`attach`, for `motet resume`), each
+//! checked against the machine before any motion is sent.
+
+use crate::admin::{Admin, AdminError};
+use crate::clock::Clock;
+use crate::pairing_file::{format_uid, parse_uid, PairingFile};
+use crate::peer::{Incoming, Peer};
+use crate::registry;
+use crate::spawn::{spawn_sim_node, SpawnError, SpawnedNode};
+use motet_host::Machine;
+use motet_wire::link::State;
+use motet_wire::{HostMessage, NodeMessage};
+use std::path::Path;
+use std::time::Duration;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    #[error("node {node}: {source}")]
+    Spawn { node: String, source: SpawnError },
+    #[error("node {node}: cannot open {link}: {message}")]
+    Open {
+        node: String,
+        link: String,
+        message: String,
+    },
+    #[error("node {node}: {source}")]
+    Admin { node: String, source: AdminError },
+    #[error("node {node}: {message}")]
+    Node { node: String, message: String },
+}
+
+/// Where a node of the run is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NodeAddr {
+    pub name: String,
+    pub link: String,
+    pub address: u16,
+}
+
+pub struct Session {
+    pub peers: Vec<Peer>,
+    pub nodes: Vec<NodeAddr>,
+    /// Node processes this session started; they stop with it.
+    pub spawned: Vec<SpawnedNode>,
+}
+
+fn isn(k: usize) -> u16 {
+    // Differs across host runs, so a node sees a new session.
+    let t = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_micros() as u64)
+        .unwrap_or(0);
+    (t as u16) ^ ((k as u16) << 12)
+}
+
+fn open(node: &str, link: &str) -> Result<Admin, SessionError> {
+    let t = motet_link::open(link).map_err(|e| SessionError::Open {
+        node: node.into(),
+        link: link.into(),
+        message: e.to_string(),
+    })?;
+    Ok(Admin::new(t, link))
+}
+
+impl Session {
+    /// Starts one simulated node process per machine node (`exe node --sim
+    /// …` plus `extra`) and pairs each (alone on its link).
+    pub fn spawn(machine: &Machine, exe: &Path, extra: &[String]) -> Result<Session, SessionError> {
+        let mut s = Session {
+            peers: Vec::new(),
+            nodes: Vec::new(),
+            spawned: Vec::new(),
+        };
+        for (k, spec) in machine.nodes.iter().enumerate() {
+            let node =
+                spawn_sim_node(exe, "stepper", extra).map_err(|source| SessionError::Spawn {
+                    node: spec.name.clone(),
+                    source,
+                })?;
+            let address = 2 + k as u16;
+            let mut a = open(&spec.name, &node.link)?;
+            let admin_err = |source| SessionError::Admin {
+                node: spec.name.clone(),
+                source,
+            };
+            a.set_address(node.uid, address).map_err(admin_err)?;
+            let info = a.info(address).map_err(admin_err)?;
+            registry::check(spec, &info).map_err(|message| SessionError::Node {
+                node: spec.name.clone(),
+                message,
+            })?;
+            s.nodes.push(NodeAddr {
+                name: spec.name.clone(),
+                link: node.link.clone(),
+                address,
+            });
+            s.peers
+                .push(Peer::new(&spec.name, address, a.into_transport(), isn(k)));
+            s.spawned.push(node);
+        }
+        Ok(s)
+    }
+
+    /// The nodes of the pairing file, each checked to be the device paired.
+    pub fn paired(
+        machine: &Machine,
+        file: &PairingFile,
+        path: &Path,
+    ) -> Result<Session, SessionError> {
+        let mut nodes = Vec::new();
+        let mut uids = Vec::new();
+        for spec in &machine.nodes {
+            let p = file
+                .nodes
+                .get(&spec.name)
+                .ok_or_else(|| SessionError::Node {
+                    node: spec.name.clone(),
+                    message: format!("not in {}: pair it with `motet nodes pair`", path.display()),
+                })?;
+            nodes.push(NodeAddr {
+                name: spec.name.clone(),
+                link: p.link.clone(),
+                address: p.address,
+            });
+            uids.push(parse_uid(&p.uid));
+        }
+        Session::attach_checked(machine, &nodes, &uids)
+    }
+
+    /// Nodes at known links and addresses.
+    pub fn attach(machine: &Machine, nodes: &[NodeAddr]) -> Result<Session, SessionError> {
+        Session::attach_checked(machine, nodes, &vec![None; nodes.len()])
+    }
+
+    fn attach_checked(
+        machine: &Machine,
+        nodes: &[NodeAddr],
+        uids: &[Option<u64>],
+    ) -> Result<Session, SessionError> {
+        let mut s = Session {
+            peers: Vec::new(),
+            nodes: nodes.to_vec(),
+            spawned: Vec::new(),
+        };
+        for (k, (spec, n)) in machine.nodes.iter().zip(nodes).enumerate() {
+            let mut a = open(&spec.name, &n.link)?;
+            let info = a.info(n.address).map_err(|source| SessionError::Admin {
+                node: spec.name.clone(),
+                source,
+            })?;
+            if let Some(Some(uid)) = uids.get(k) {
+                if info.uid != *uid {
+                    return Err(SessionError::Node {
+                        node: spec.name.clone(),
+                        message: format!(
+                            "the node at address {} on {} is uid {}, but uid {} was paired: pair again with `motet nodes pair`",
+                            n.address,
+                            n.link,
+                            format_uid(info.uid),
+                            format_uid(*uid)
+                        ),
+                    });
+                }
+            }
+            registry::check(spec, &info).map_err(|message| SessionError::Node {
+                node: spec.name.clone(),
+                message,
+            })?;
+            s.peers
+                .push(Peer::new(&spec.name, n.address, a.into_transport(), isn(k)));
+        }
+        Ok(s)
+    }
+}
+
+/// Connects every peer's link and asks each node's motion status: the
+/// committed window end and whether it stopped. `None` for a node that did
+/// not answer within `timeout`.
+pub fn probe(peers: &mut [Peer], clock: &dyn Clock, timeout: Duration) -> Vec<Option<NodeMessage>> {
+    let start = clock.now_us();
+    let mut got: Vec<Option<NodeMessage>> = vec![None; peers.len()];
+    let mut asked = vec![false; peers.len()];
+    while clock.now_us() < start + timeout.as_micros() as u64 {
+        let now = clock.now_us();
+        for (k, p) in peers.iter_mut().enumerate() {
+            let _ = p.receive(now);
+            while let Some(m) = p.take() {
+                if let Incoming::Motion(m @ NodeMessage::Status { .. }) = m {
+                    got[k] = Some(m);
+                }
+            }
+            if !asked[k] && matches!(p.link_state(), State::Established { .. }) {
+                p.send_motion(&HostMessage::Status);
+                asked[k] = true;
+            }
+            let _ = p.flush(now);
+        }
+        if got.iter().all(|g| g.is_some()) {
+            break;
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
+    got
+}

@@ -1,0 +1,162 @@
+//! A simulated node: the node firmware's endpoint with a file for its
+//! identity, RAM for its firmware slot, and a board that counts steps. The
+//! same [`motet_node::endpoint::Endpoint`] code runs on a real board.
+
+use motet_link::Transport;
+use motet_node::endpoint::Endpoint;
+use motet_node::service::NodeConfig;
+use motet_node::storage::{Persisted, RamFlash, StorageError, Store};
+use motet_node::{Board, DEFAULT_QUEUE, MAX_CHANNELS, MAX_TOOLS};
+use motet_wire::frame::MAX_FRAME;
+use motet_wire::link::PROTOCOL_VERSION;
+use motet_wire::service::{Kind, Version};
+use std::path::PathBuf;
+
+/// Bytes of a simulated node's firmware slot.
+pub const SIM_FLASH: usize = 256 * 1024;
+
+/// The firmware version simulated nodes report until one is flashed.
+pub fn sim_firmware() -> Version {
+    let mut v = env!("CARGO_PKG_VERSION")
+        .split('.')
+        .map(|p| p.parse().unwrap_or(0));
+    Version {
+        major: v.next().unwrap_or(0),
+        minor: v.next().unwrap_or(0),
+        patch: v.next().unwrap_or(0),
+    }
+}
+
+/// The configuration of a simulated node of `kind`.
+pub fn sim_config(kind: &str, uid: u64) -> Option<NodeConfig> {
+    let kind: Kind = Kind::try_from(kind).ok()?;
+    Some(NodeConfig {
+        kind,
+        uid,
+        firmware: sim_firmware(),
+        protocol_min: PROTOCOL_VERSION,
+        protocol_max: PROTOCOL_VERSION,
+        queue_capacity: DEFAULT_QUEUE as u16,
+        channels: MAX_CHANNELS as u8,
+        tools: MAX_TOOLS as u8,
+    })
+}
+
+/// A node's identity in a small text file (`uid`, `address`, `firmware`),
+/// written whole and renamed into place so a crash never leaves half a record.
+#[derive(Clone, Debug)]
+pub struct FileStore {
+    pub path: PathBuf,
+}
+
+impl Store for FileStore {
+    fn load(&mut self) -> Option<Persisted> {
+        let text = std::fs::read_to_string(&self.path).ok()?;
+        let mut uid = None;
+        let mut address = None;
+        let mut firmware = None;
+        for line in text.lines() {
+            let (k, v) = line.split_once('=')?;
+            let v = v.trim();
+            match k.trim() {
+                "uid" => uid = u64::from_str_radix(v, 16).ok(),
+                "address" => address = v.parse().ok(),
+                "firmware" => {
+                    let mut p = v.split('.').map(|x| x.parse::<u16>());
+                    firmware = match (p.next(), p.next(), p.next()) {
+                        (Some(Ok(major)), Some(Ok(minor)), Some(Ok(patch))) => Some(Version {
+                            major,
+                            minor,
+                            patch,
+                        }),
+                        _ => None,
+                    }
+                }
+                _ => {}
+            }
+        }
+        Some(Persisted {
+            uid: uid?,
+            address: address?,
+            firmware: firmware?,
+        })
+    }
+
+    fn save(&mut self, p: &Persisted) -> Result<(), StorageError> {
+        let text = format!(
+            "uid = {:016x}\naddress = {}\nfirmware = {}\n",
+            p.uid, p.address, p.firmware
+        );
+        let tmp = self.path.with_extension("tmp");
+        std::fs::write(&tmp, text)
+            .and_then(|_| std::fs::rename(&tmp, &self.path))
+            .map_err(|_| StorageError::Device)
+    }
+}
+
+/// What a simulated board did: step counts and positions per channel, tool values.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepCounter {
+    /// Net steps per channel (forward minus backward, in direction-output terms).
+    pub position: [i64; MAX_CHANNELS],
+    /// All steps per channel.
+    pub steps: [u64; MAX_CHANNELS],
+    pub tools: [f32; MAX_TOOLS],
+    /// Every step (host time µs, channel, forward) when tracing.
+    pub trace: Option<Vec<(f64, u8, bool)>>,
+    /// Every tool change (host time µs, output, value) when tracing.
+    pub tool_trace: Option<Vec<(f64, u8, f32)>>,
+}
+
+impl Board for StepCounter {
+    fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
+        if let Some(c) = self.position.get_mut(channel as usize) {
+            *c += if forward { 1 } else { -1 };
+            self.steps[channel as usize] += 1;
+        }
+        if let Some(t) = self.trace.as_mut() {
+            t.push((at_us, channel, forward));
+        }
+    }
+    fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
+        if let Some(t) = self.tools.get_mut(output as usize) {
+            *t = value;
+        }
+        if let Some(t) = self.tool_trace.as_mut() {
+            t.push((at_us, output, value));
+        }
+    }
+}
+
+/// The endpoint type of simulated nodes.
+pub type SimEndpoint<S> = Endpoint<S, RamFlash<SIM_FLASH>, DEFAULT_QUEUE>;
+
+/// A simulated node bound to a transport.
+pub struct SimNode<S: Store> {
+    pub endpoint: Box<SimEndpoint<S>>,
+    pub transport: Box<dyn Transport + Send>,
+    pub board: StepCounter,
+}
+
+impl<S: Store> SimNode<S> {
+    pub fn new(cfg: NodeConfig, store: S, transport: Box<dyn Transport + Send>, now: u64) -> Self {
+        SimNode {
+            endpoint: Box::new(Endpoint::new(cfg, store, RamFlash::new(), now)),
+            transport,
+            board: StepCounter::default(),
+        }
+    }
+
+    /// One round at local time `now`: take frames, run the motion, transmit.
+    pub fn step(&mut self, now: u64) -> std::io::Result<()> {
+        while let Some(f) = self.transport.recv(None)? {
+            self.endpoint.on_frame(&f, now);
+        }
+        self.endpoint.poll(now, &mut self.board);
+        let mut out = [0u8; MAX_FRAME];
+        while let Some(f) = self.endpoint.transmit(now, &mut out) {
+            self.transport.send(f)?;
+        }
+        Ok(())
+    }
+}

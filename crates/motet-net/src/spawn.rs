@@ -1,0 +1,109 @@
+//! Simulated node processes started by the host (`motet run --nodes spawn`).
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+/// A node process; killed when dropped.
+pub struct SpawnedNode {
+    child: Child,
+    /// Link spec to reach it, e.g. `udp:127.0.0.1:40123`.
+    pub link: String,
+    /// Its unique id.
+    pub uid: u64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SpawnError {
+    #[error("cannot start {exe}: {source}")]
+    Start { exe: String, source: std::io::Error },
+    #[error("node process did not announce its link (it printed {0:?})")]
+    NoAnnounce(String),
+}
+
+/// The line a node started with `--announce` prints first on stdout.
+pub fn announce_line(link: &str, uid: u64) -> String {
+    format!("motet-node listening {link} uid {uid:016x}")
+}
+
+/// Parses [`announce_line`].
+pub fn parse_announce(line: &str) -> Option<(String, u64)> {
+    let rest = line.trim().strip_prefix("motet-node listening ")?;
+    let (link, uid) = rest.split_once(" uid ")?;
+    Some((link.to_string(), u64::from_str_radix(uid, 16).ok()?))
+}
+
+/// Starts `exe node --sim --type KIND --listen udp:127.0.0.1:0 --announce`
+/// plus `extra` arguments, and waits for its announcement.
+pub fn spawn_sim_node(exe: &Path, kind: &str, extra: &[String]) -> Result<SpawnedNode, SpawnError> {
+    let mut child = Command::new(exe)
+        .args([
+            "node",
+            "--sim",
+            "--type",
+            kind,
+            "--listen",
+            "udp:127.0.0.1:0",
+            "--announce",
+        ])
+        .args(extra)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .map_err(|source| SpawnError::Start {
+            exe: exe.display().to_string(),
+            source,
+        })?;
+    let stdout = child.stdout.take().expect("stdout is piped");
+    let mut line = String::new();
+    let _ = BufReader::new(stdout).read_line(&mut line);
+    match parse_announce(&line) {
+        Some((link, uid)) => Ok(SpawnedNode { child, link, uid }),
+        None => {
+            let _ = child.kill();
+            let _ = child.wait();
+            Err(SpawnError::NoAnnounce(line))
+        }
+    }
+}
+
+impl SpawnedNode {
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Kills the process (a node crash, for tests).
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for SpawnedNode {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn announce_round_trip() {
+        let l = announce_line("udp:127.0.0.1:4000", 0xabc);
+        assert_eq!(
+            parse_announce(&l),
+            Some(("udp:127.0.0.1:4000".into(), 0xabc))
+        );
+        for bad in [
+            "",
+            "motet-node listening",
+            "motet-node listening x uid zz",
+            "hello",
+        ] {
+            assert_eq!(parse_announce(bad), None, "{bad:?}");
+        }
+    }
+}

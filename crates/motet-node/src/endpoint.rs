@@ -1,0 +1,331 @@
+//! A node on the network: frames in, frames out, the motion node and the base
+//! service routines behind them.
+//!
+//! The endpoint routes each frame it is given: datagrams (frames without link
+//! flags) straight to the service routines, link frames from the host through
+//! the reliable [`Link`] to the motion node (port 10) or the service routines
+//! (other ports), and sends each reply back the way its request came. It reads
+//! no clock and owns no transport: the firmware's main loop (or a simulated
+//! node process, or a test) passes the local time in µs, hands over received
+//! bytes with [`Endpoint::on_frame`], runs the motion with [`Endpoint::poll`]
+//! and transmits what [`Endpoint::transmit`] returns.
+//!
+//! Trajectory time is the host's: the motion node runs at the host time that
+//! the clock model set by the host gives for the local clock, and not at all
+//! before the host has set one.
+
+use crate::board::Board;
+use crate::node::{Node, DEFAULT_QUEUE};
+use crate::service::{Action, Handled, NodeConfig, Services};
+use crate::storage::{Flash, Store};
+use heapless::{Deque, Vec};
+use motet_wire::frame::{self, is_multicast, Flags, Header, MAX_RAW};
+use motet_wire::link::{Config as LinkConfig, Link, State, WINDOW};
+use motet_wire::service::{port, NodeState, ServiceReply, HOST_ADDRESS};
+use motet_wire::{encode, MAX_MESSAGE};
+
+/// Replies waiting for room (datagrams, or the link's window).
+const OUTBOX: usize = 8;
+
+type Payload = Vec<u8, MAX_MESSAGE>;
+
+/// A reply to send.
+#[derive(Clone)]
+struct Reply {
+    /// Datagram: (destination, source address); `None`: through the link.
+    datagram: Option<(u16, u16)>,
+    port: u8,
+    bytes: Payload,
+}
+
+/// Counters of what the endpoint took in, refused or dropped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EndpointStats {
+    pub frames_in: u64,
+    /// Frames that did not decode (CRC, COBS, length, version).
+    pub bad_frames: u64,
+    /// Frames for another address.
+    pub foreign: u64,
+    /// Replies dropped because the outbox was full.
+    pub replies_dropped: u64,
+    /// Link sessions started (the host connected or reconnected).
+    pub sessions: u64,
+}
+
+pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
+    services: Services<S, F>,
+    node: Node<Q>,
+    link: Option<Link>,
+    /// Replies through the link, in order.
+    outbox: Deque<Reply, OUTBOX>,
+    /// Replies as datagrams.
+    datagrams: Deque<Reply, OUTBOX>,
+    /// Host time up to which the motion node has run, µs.
+    ran_until: f64,
+    /// Local time of the last frame from the host.
+    last_host_frame: Option<u64>,
+    stats: EndpointStats,
+}
+
+impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
+    pub fn new(cfg: NodeConfig, store: S, flash: F, now_local_us: u64) -> Self {
+        Endpoint {
+            services: Services::new(cfg, store, flash, now_local_us),
+            node: Node::new(),
+            link: None,
+            outbox: Deque::new(),
+            datagrams: Deque::new(),
+            ran_until: f64::NEG_INFINITY,
+            last_host_frame: None,
+            stats: EndpointStats::default(),
+        }
+    }
+
+    pub fn services(&self) -> &Services<S, F> {
+        &self.services
+    }
+
+    pub fn node(&self) -> &Node<Q> {
+        &self.node
+    }
+
+    pub fn stats(&self) -> &EndpointStats {
+        &self.stats
+    }
+
+    pub fn link(&self) -> Option<&Link> {
+        self.link.as_ref()
+    }
+
+    /// Local time of the last frame from the host.
+    pub fn last_host_frame(&self) -> Option<u64> {
+        self.last_host_frame
+    }
+
+    /// The node's button (pairing).
+    pub fn press_button(&mut self, now_local_us: u64) {
+        let old = self.services.address();
+        if let Some(h) = self.services.press_button(now_local_us) {
+            self.after(h, Some((HOST_ADDRESS, old)), port::ADDRESS);
+        }
+    }
+
+    /// Takes one received frame (with or without its 0x00 delimiter).
+    pub fn on_frame(&mut self, bytes: &[u8], now: u64) {
+        self.stats.frames_in += 1;
+        let mut raw = [0u8; MAX_RAW];
+        let f = match frame::decode(bytes, &mut raw) {
+            Ok(f) => f,
+            Err(e) => {
+                self.stats.bad_frames += 1;
+                if let Some(l) = self.link.as_mut() {
+                    l.on_frame_error(e);
+                }
+                return;
+            }
+        };
+        let me = self.services.address();
+        let h = f.header;
+        let broadcast = is_multicast(h.dst);
+        if !broadcast && h.dst != me {
+            self.stats.foreign += 1;
+            return;
+        }
+        if h.src == HOST_ADDRESS {
+            self.last_host_frame = Some(now);
+        }
+        if h.flags == Flags::NONE {
+            if h.port == port::MOTION || h.port == port::LINK {
+                // Motion needs the link's order and exactly-once delivery.
+                return;
+            }
+            let handled = self.services.handle(h.port, f.payload, broadcast, now);
+            self.after(handled, Some((h.src, me)), h.port);
+            return;
+        }
+        if broadcast || !self.services.paired() {
+            return;
+        }
+        let fresh = match &self.link {
+            None => true,
+            Some(l) => {
+                l.config().peer != h.src
+                    || (matches!(l.state(), State::Failed(_)) && h.flags.contains(Flags::SYN))
+            }
+        };
+        if fresh {
+            if !h.flags.contains(Flags::SYN) {
+                return;
+            }
+            self.stats.sessions += 1;
+            // A different initial sequence number each session, so the host
+            // tells a restarted node from a retransmission.
+            let isn = (now as u16) ^ ((self.stats.sessions as u16) << 11);
+            self.link = Some(Link::new(LinkConfig {
+                isn,
+                port: port::MOTION,
+                ..LinkConfig::new(me, h.src, false)
+            }));
+        }
+        // Copied out first: acting on a payload needs the rest of `self`.
+        let mut got: Vec<(u8, Payload), WINDOW> = Vec::new();
+        if let Some(link) = self.link.as_mut() {
+            let mut d = link.on_decoded(&f, now);
+            while let Some(del) = d {
+                let _ = got.push((del.port, Vec::from_slice(del.payload).unwrap_or_default()));
+                d = link.recv();
+            }
+            let up = matches!(link.state(), State::Established { .. });
+            self.services.set_link_up(up);
+        }
+        for (p, payload) in got {
+            if p == port::MOTION {
+                if self.services.in_bootloader() {
+                    continue;
+                }
+                if let Some(reply) = self.node.handle(&payload) {
+                    self.push(None, port::MOTION, &reply);
+                }
+            } else {
+                let handled = self.services.handle(p, &payload, false, now);
+                self.after(handled, None, p);
+            }
+        }
+    }
+
+    fn push<T: serde::Serialize>(&mut self, datagram: Option<(u16, u16)>, port: u8, msg: &T) {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let Ok(bytes) = encode(msg, &mut buf) else {
+            return;
+        };
+        let r = Reply {
+            datagram,
+            port,
+            bytes: Vec::from_slice(bytes).unwrap_or_default(),
+        };
+        let q = if datagram.is_some() {
+            &mut self.datagrams
+        } else {
+            &mut self.outbox
+        };
+        if q.push_back(r).is_err() {
+            self.stats.replies_dropped += 1;
+        }
+    }
+
+    fn after(&mut self, h: Handled, datagram: Option<(u16, u16)>, port: u8) {
+        if let Some(r) = h.reply.as_ref() {
+            self.push(datagram, port, r);
+        }
+        match h.action {
+            Action::None => {}
+            Action::Reset => {
+                self.node = Node::new();
+                self.ran_until = f64::NEG_INFINITY;
+                // The host reconnects with a new SYN; a reply through the old
+                // link would be lost with it, so a reset is acknowledged
+                // as the request came and the link dropped after it.
+                if datagram.is_some() {
+                    self.link = None;
+                }
+            }
+            Action::AddressChanged(_) => {
+                self.link = None;
+            }
+            Action::EnterBootloader | Action::StartApplication => {
+                self.node = Node::new();
+                self.ran_until = f64::NEG_INFINITY;
+            }
+        }
+    }
+
+    /// Runs the motion node up to the host time of `now` (local µs); every
+    /// step and tool change goes to `board` with its host time.
+    pub fn poll<B: Board>(&mut self, now: u64, board: &mut B) {
+        if self.services.in_bootloader() {
+            return;
+        }
+        let Some(t) = self.services.host_time(now as f64) else {
+            return;
+        };
+        // A new clock model may put host time a hair back; never run backwards.
+        if t > self.ran_until {
+            self.node.poll(t, board);
+            self.ran_until = t;
+        }
+        let state = if self.node.stopped() {
+            NodeState::Stopped
+        } else if self.node.queued() > 0 {
+            NodeState::Running
+        } else {
+            NodeState::Idle
+        };
+        self.services.set_state(state);
+    }
+
+    /// The next frame to transmit, encoded into `out` (at least
+    /// `frame::MAX_FRAME` bytes). Call until `None`.
+    pub fn transmit<'o>(&mut self, now: u64, out: &'o mut [u8]) -> Option<&'o [u8]> {
+        // Link replies move into the link's window in order.
+        while let Some(r) = self.outbox.front() {
+            let Some(link) = self.link.as_mut() else {
+                self.outbox.pop_front();
+                continue;
+            };
+            if link.send_space() == 0 || link.send_port(r.port, &r.bytes, now).is_err() {
+                break;
+            }
+            self.outbox.pop_front();
+        }
+        if let Some(mut r) = self.datagrams.pop_front() {
+            let (dst, src) = r
+                .datagram
+                .unwrap_or((HOST_ADDRESS, self.services.address()));
+            stamp_time(&mut r.bytes, now);
+            let header = Header {
+                dst,
+                src,
+                port: r.port,
+                flags: Flags::NONE,
+                seq: 0,
+                ack: 0,
+            };
+            let n = frame::encode(&header, &r.bytes, out).ok()?;
+            return Some(&out[..n]);
+        }
+        self.link.as_mut()?.poll(now, out)
+    }
+
+    /// The earliest local time at which the endpoint has something to do.
+    pub fn next_wakeup(&mut self, now: u64) -> Option<u64> {
+        if !self.datagrams.is_empty() {
+            return Some(now);
+        }
+        let mut best = self.link.as_ref().and_then(|l| l.next_timeout());
+        if let Some(d) = self.node.next_deadline() {
+            if let Some(local) = self.services.local_time(d) {
+                let l = if local <= now as f64 {
+                    now
+                } else {
+                    local as u64
+                };
+                best = Some(best.map_or(l, |b| b.min(l)));
+            }
+        }
+        best
+    }
+}
+
+/// Sets `t3` of an encoded clock exchange reply to `now`, so that the time the
+/// reply waited in the outbox counts as the node's, not as the link's.
+fn stamp_time(bytes: &mut Payload, now: u64) {
+    if let Ok(mut r) = motet_wire::decode::<ServiceReply>(bytes) {
+        if matches!(r, ServiceReply::Time { .. }) {
+            r.stamp_t3(now);
+            let mut buf = [0u8; MAX_MESSAGE];
+            if let Ok(b) = encode(&r, &mut buf) {
+                *bytes = Vec::from_slice(b).unwrap_or_default();
+            }
+        }
+    }
+}

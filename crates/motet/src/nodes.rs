@@ -1,0 +1,244 @@
+//! `motet nodes …`: find, pair, identify, inspect and update nodes.
+
+use anyhow::{bail, Context, Result};
+use motet_host::Machine;
+use motet_net::admin::{free_address, Admin};
+use motet_net::pairing_file::{format_uid, pairing_path, PairedNode, PairingFile};
+use motet_wire::service::{Version, UNPAIRED};
+use std::path::Path;
+use std::time::Duration;
+
+pub fn admin(link: &str) -> Result<Admin> {
+    let t = motet_link::open(link).with_context(|| format!("cannot open link {link}"))?;
+    Ok(Admin::new(t, link))
+}
+
+/// `motet nodes scan --link SPEC…`
+pub fn scan(links: &[String], wait: f64) -> Result<()> {
+    if links.is_empty() {
+        bail!("name at least one link to scan with --link (e.g. udp:127.0.0.1:47001 or serial:/dev/ttyACM0)");
+    }
+    let mut total = 0;
+    for link in links {
+        let mut a = admin(link)?;
+        let found = a.scan(Duration::from_secs_f64(wait))?;
+        if found.is_empty() {
+            println!("{link}: no node answered");
+        }
+        for f in found {
+            total += 1;
+            let i = &f.info;
+            let driver = motet_net::registry::driver(i.kind.as_str())
+                .map_or("no driver on this host", |d| d.description);
+            println!(
+                "{link}: {} uid {} firmware {} {} — {} channels, {} tools, queue {} ({driver})",
+                i.kind,
+                format_uid(i.uid),
+                i.firmware,
+                if i.address == UNPAIRED {
+                    "unpaired".to_string()
+                } else {
+                    format!("address {}", i.address)
+                },
+                i.channels,
+                i.tools,
+                i.queue_capacity
+            );
+        }
+    }
+    println!("{total} node(s)");
+    Ok(())
+}
+
+/// `motet nodes pair MACHINE --link NAME=SPEC…`
+pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> Result<()> {
+    let machine = Machine::load(machine_path)?;
+    let mut assigned: Vec<(String, String)> = Vec::new();
+    for l in links {
+        let (name, spec) = l.split_once('=').with_context(|| {
+            format!("--link {l:?}: expected NODE=SPEC, e.g. mainboard=udp:127.0.0.1:47001")
+        })?;
+        if !machine.nodes.iter().any(|n| n.name == name) {
+            bail!(
+                "--link {l:?}: the machine has no node `{name}` (it has: {})",
+                machine
+                    .nodes
+                    .iter()
+                    .map(|n| n.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        assigned.push((name.to_string(), spec.to_string()));
+    }
+    for n in &machine.nodes {
+        if !assigned.iter().any(|(a, _)| *a == n.name) {
+            bail!("no --link for machine node `{}`", n.name);
+        }
+    }
+    let path = pairing_path(machine_path);
+    let mut file = PairingFile::default();
+    let mut taken = Vec::new();
+    for spec in &machine.nodes {
+        let link = &assigned
+            .iter()
+            .find(|(a, _)| *a == spec.name)
+            .expect("checked")
+            .1;
+        let mut a = admin(link)?;
+        let address = free_address(&taken);
+        let found = a.scan(Duration::from_millis(600))?;
+        let uid = if found.len() == 1 && !button {
+            // Alone on its link: no button needed.
+            let uid = found[0].info.uid;
+            a.set_address(uid, address)?;
+            println!(
+                "{}: the only node on {link} (uid {}) is now address {address}",
+                spec.name,
+                format_uid(uid)
+            );
+            uid
+        } else {
+            if found.is_empty() {
+                bail!("{}: no node answered on {link}", spec.name);
+            }
+            println!(
+                "{}: {} node(s) on {link}; press the button of the one to be `{}` (Enter in a simulated node's terminal)…",
+                spec.name,
+                found.len(),
+                spec.name
+            );
+            let uid = a.pair_by_button(address, Duration::from_secs_f64(wait))?;
+            println!(
+                "{}: uid {} is now address {address}",
+                spec.name,
+                format_uid(uid)
+            );
+            uid
+        };
+        let info = a.info(address)?;
+        if info.uid != uid {
+            bail!(
+                "{}: address {address} answered as uid {}, expected {}",
+                spec.name,
+                format_uid(info.uid),
+                format_uid(uid)
+            );
+        }
+        if let Err(e) = motet_net::registry::check(spec, &info) {
+            bail!("{}: {e}", spec.name);
+        }
+        taken.push(address);
+        file.nodes.insert(
+            spec.name.clone(),
+            PairedNode {
+                link: link.clone(),
+                address,
+                uid: format_uid(uid),
+                kind: info.kind.to_string(),
+                firmware: info.firmware.to_string(),
+            },
+        );
+    }
+    file.save(&path)?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn paired(machine_path: &Path) -> Result<PairingFile> {
+    let path = pairing_path(machine_path);
+    if !path.exists() {
+        bail!(
+            "{} does not exist: pair the nodes first with `motet nodes pair {} --link NODE=SPEC …`",
+            path.display(),
+            machine_path.display()
+        );
+    }
+    Ok(PairingFile::load(&path)?)
+}
+
+fn node_entry<'a>(file: &'a PairingFile, machine: &Path, node: &str) -> Result<&'a PairedNode> {
+    file.nodes.get(node).with_context(|| {
+        format!(
+            "{}: no paired node `{node}` (paired: {})",
+            pairing_path(machine).display(),
+            file.nodes.keys().cloned().collect::<Vec<_>>().join(", ")
+        )
+    })
+}
+
+/// `motet nodes status MACHINE`
+pub fn status(machine_path: &Path) -> Result<()> {
+    let file = paired(machine_path)?;
+    for (name, p) in &file.nodes {
+        let mut a = admin(&p.link)?;
+        match (a.info(p.address), a.status(p.address)) {
+            (Ok(i), Ok(s)) => println!(
+                "{name}: {} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}, up {:.1} s",
+                i.kind,
+                format_uid(i.uid),
+                i.firmware,
+                p.address,
+                p.link,
+                s.state,
+                if s.link_up { "up" } else { "down" },
+                if s.synced { "synced" } else { "not synced" },
+                s.uptime_us as f64 * 1e-6
+            ),
+            (Err(e), _) | (_, Err(e)) => println!("{name}: {e}"),
+        }
+    }
+    Ok(())
+}
+
+/// `motet nodes identify MACHINE NODE`
+pub fn identify(machine_path: &Path, node: &str, seconds: f64) -> Result<()> {
+    let file = paired(machine_path)?;
+    let p = node_entry(&file, machine_path, node)?;
+    admin(&p.link)?.identify(p.address, (seconds * 1000.0) as u32)?;
+    println!("{node}: blinking for {seconds} s");
+    Ok(())
+}
+
+/// `motet nodes flash MACHINE NODE IMAGE`
+pub fn flash(machine_path: &Path, node: &str, image: &Path) -> Result<()> {
+    let file = paired(machine_path)?;
+    let p = node_entry(&file, machine_path, node)?;
+    let bytes = std::fs::read(image).with_context(|| format!("cannot read {}", image.display()))?;
+    let mut a = admin(&p.link)?;
+    let bar = indicatif::ProgressBar::new(bytes.len() as u64);
+    let v = a
+        .flash(p.address, &bytes, &mut |done, _| {
+            bar.set_position(done as u64)
+        })
+        .with_context(|| format!("{node}: firmware {}", image.display()))?;
+    bar.finish_and_clear();
+    println!("{node}: firmware {v} verified and started");
+    Ok(())
+}
+
+/// `motet nodes image --kind K --version X.Y.Z PAYLOAD -o OUT`
+pub fn image(kind: &str, version: &str, payload: &Path, out: &Path) -> Result<()> {
+    let mut parts = version.split('.').map(|p| p.parse::<u16>());
+    let v = match (parts.next(), parts.next(), parts.next(), parts.next()) {
+        (Some(Ok(major)), Some(Ok(minor)), Some(Ok(patch)), None) => Version {
+            major,
+            minor,
+            patch,
+        },
+        _ => bail!("--version {version:?}: expected MAJOR.MINOR.PATCH"),
+    };
+    let data =
+        std::fs::read(payload).with_context(|| format!("cannot read {}", payload.display()))?;
+    let mut bytes = vec![0u8; motet_wire::image::IMAGE_HEADER_LEN + data.len()];
+    let n =
+        motet_wire::image::build(kind, v, &data, &mut bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    bytes.truncate(n);
+    std::fs::write(out, bytes).with_context(|| format!("cannot write {}", out.display()))?;
+    println!(
+        "wrote {} ({kind} {v}, {} payload bytes)",
+        out.display(),
+        data.len()
+    );
+    Ok(())
+}
