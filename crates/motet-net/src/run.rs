@@ -22,9 +22,6 @@ use motet_wire::service::ServiceRequest;
 use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
-/// Clock exchanges µs apart until every node's clock is measured.
-const SYNC_FAST_US: u64 = 2_000;
-
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NetConfig {

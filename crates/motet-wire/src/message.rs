@@ -125,7 +125,9 @@ pub enum HostMessage {
     /// number after the last pending segment; a mismatch is refused
     /// (`OutOfOrder`), as is a seal once the committed window's tail has
     /// started (`TailStarted`).
-    Seal { next_seq: u32 },
+    Seal {
+        next_seq: u32,
+    },
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
