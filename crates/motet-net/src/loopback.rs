@@ -4,6 +4,7 @@
 //! node crystals off by given ppm. Deterministic and faster than real time;
 //! the tests of the network and `motet bench net` use it.
 
+use crate::journal::JournalWriter;
 use crate::peer::Peer;
 use crate::run::{NetConfig, NetError, NetRun, Phase};
 use crate::sim_node::{sim_config, SimNode};
@@ -61,6 +62,19 @@ impl Loopback {
         clocks: &[NodeClock],
         cfg: NetConfig,
     ) -> Loopback {
+        Loopback::with_journal(machine, commands, start, links, clocks, cfg, None)
+    }
+
+    /// [`Loopback::new`] writing the run's journal.
+    pub fn with_journal(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)>,
+        clocks: &[NodeClock],
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+    ) -> Loopback {
         let mut peers = Vec::new();
         let mut nodes = Vec::new();
         for (k, (host_end, node_end)) in links.into_iter().enumerate() {
@@ -92,11 +106,37 @@ impl Loopback {
             });
         }
         Loopback {
-            run: NetRun::new(machine, commands, peers, start, cfg, None),
+            run: NetRun::new(machine, commands, peers, start, cfg, journal),
             nodes,
             now: 0,
             host_alive: true,
         }
+    }
+
+    /// Replaces the host (after it died or stopped) with a new run over new
+    /// links; the nodes keep their state, as node processes would.
+    pub fn restart_host(
+        &mut self,
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+    ) {
+        let mut peers = Vec::new();
+        for (k, n) in self.nodes.iter_mut().enumerate() {
+            let (a, b) = motet_link::pair(&format!("host{k}'"), &format!("node{k}'"));
+            n.node.transport = Box::new(b);
+            let address = 2 + k as u16;
+            let name = machine
+                .nodes
+                .get(k)
+                .map_or_else(|| format!("node{k}"), |s| s.name.clone());
+            // A new host session: a different initial sequence number.
+            peers.push(Peer::new(&name, address, Box::new(a), 0x2000 + k as u16));
+        }
+        self.run = NetRun::new(machine, commands, peers, start, cfg, journal);
+        self.host_alive = true;
     }
 
     /// One round of the host and every live node, then time moves on to the
@@ -112,10 +152,7 @@ impl Loopback {
         };
         for n in self.nodes.iter_mut().filter(|n| n.alive) {
             let local = n.local(self.now);
-            n.node.step(local).map_err(|source| NetError::Io {
-                node: "loopback".into(),
-                source,
-            })?;
+            n.node.step(local);
             if let Some(w) = n.node.endpoint.next_wakeup(local) {
                 next = next.min(n.host(w));
             }

@@ -274,11 +274,20 @@ impl NetRun {
         if self.started_at.is_none() {
             self.started_at = Some(now);
         }
+        let mut failed = None;
         for p in self.peers.iter_mut() {
-            p.receive(now).map_err(|source| NetError::Io {
-                node: p.name.clone(),
-                source,
-            })?;
+            if let Err(source) = p.receive(now) {
+                failed = Some((p.name.clone(), source));
+                break;
+            }
+        }
+        if let Some((node, source)) = failed {
+            // A node gone mid-job stops the others with it; before the job
+            // starts it is an error.
+            if matches!(self.phase, Phase::Starting) {
+                return Err(NetError::Io { node, source });
+            }
+            self.stop(&format!("node {node}: link error: {source}"), now);
         }
         self.take_replies(now)?;
         self.keep_time(now);
@@ -657,6 +666,11 @@ impl NetRun {
                 }
             })
             .collect()
+    }
+
+    /// The committed segments the host still keeps, with their indices.
+    pub fn committed(&self) -> impl Iterator<Item = (u32, &Segment)> {
+        self.committed.iter().map(|c| (c.index, &c.seg))
     }
 
     /// The last status each node sent.

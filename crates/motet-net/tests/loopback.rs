@@ -156,3 +156,149 @@ fn one_percent_of_every_fault_changes_no_step() {
         .sum();
     assert!(retransmits > 0, "the faults must have cost retransmissions");
 }
+
+/// Step position of every actuator with the machine at rest at `p`.
+fn steps_at(m: &Machine, p: &motet_trajectory::Point) -> Vec<i64> {
+    m.actuators
+        .iter()
+        .map(|a| {
+            let v = m.joints[a.joint].map.value(p, 0.0) * a.steps_per_unit;
+            // The half-step rule: halves round away from zero.
+            if v >= 0.0 {
+                (v + 0.5) as i64
+            } else {
+                (v - 0.5) as i64
+            }
+        })
+        .collect()
+}
+
+/// The job's end on every node after a stop: (committed window end of each
+/// node, stopped flags).
+fn node_windows(lb: &Loopback) -> Vec<(u32, bool)> {
+    lb.nodes
+        .iter()
+        .map(|n| {
+            let s = n.node.endpoint.node().status();
+            (s.committed, s.stopped)
+        })
+        .collect()
+}
+
+#[test]
+fn host_killed_mid_move_every_node_stops_together_on_the_path_and_resume_finishes() {
+    let (m, cmds) = load("examples/plotter.toml", "examples/jobs/drawing.svg");
+    let want_end = simulated(&m, &cmds);
+    let dir = std::env::temp_dir().join(format!("motet-loopback-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (case, kill_at) in [7_300_000u64, 15_000_000, 21_700_000]
+        .into_iter()
+        .enumerate()
+    {
+        let n = m.nodes.len();
+        let jpath = dir.join(format!("journal{case}"));
+        let j = motet_net::journal::JournalWriter::create(&jpath).unwrap();
+        let mut lb = Loopback::with_journal(
+            &m,
+            cmds.clone(),
+            m.start,
+            clean_links(n),
+            &clocks(n),
+            NetConfig::default(),
+            Some(j),
+        );
+        while lb.now < kill_at {
+            lb.step().unwrap();
+        }
+        assert_eq!(
+            lb.run.phase(),
+            &Phase::Streaming,
+            "kill at {kill_at}: the job must still be running"
+        );
+        // Moving when the host dies.
+        let moving = lb.nodes.iter().any(|n| n.node.endpoint.node().queued() > 0);
+        assert!(moving, "kill at {kill_at}");
+        let committed: Vec<(u32, motet_trajectory::Segment)> =
+            lb.run.committed().map(|(i, s)| (i, *s)).collect();
+        lb.host_alive = false;
+        lb.run_until_settled(60_000_000).unwrap();
+        let w = node_windows(&lb);
+        let end = w[0].0;
+        assert!(
+            w.iter().all(|&(c, stopped)| c == end && stopped),
+            "kill at {kill_at}: {w:?}"
+        );
+        let last = committed
+            .iter()
+            .find(|(i, _)| *i + 1 == end)
+            .expect("window end committed")
+            .1;
+        let rest = executed(&m, &lb)
+            .iter()
+            .map(|&(_, p)| p)
+            .collect::<Vec<_>>();
+        assert_eq!(
+            rest,
+            steps_at(&m, &last.end),
+            "kill at {kill_at}: at rest at the window's end point"
+        );
+
+        // `motet resume`: a new host finishes the job from there.
+        let journal = motet_net::journal::Journal::load(&jpath).unwrap();
+        let r = motet_net::resume::resume(&cmds, &journal, end, m.start).unwrap();
+        assert_eq!(r.from, last.end);
+        lb.restart_host(&m, r.commands, r.from, NetConfig::default(), None);
+        let phase = lb.run_until_settled(3_600_000_000).unwrap();
+        assert_eq!(phase, Phase::Done, "kill at {kill_at}: resumed run");
+        let final_pos: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
+        let want_pos: Vec<i64> = want_end.iter().map(|&(_, p)| p).collect();
+        assert_eq!(
+            final_pos, want_pos,
+            "kill at {kill_at}: the resumed job ends where the job ends"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_node_that_stops_answering_stops_the_others_with_it() {
+    let (m, cmds) = load(
+        "examples/gestalt-3axis.toml",
+        "examples/jobs/gestalt-3d.gcode",
+    );
+    let n = m.nodes.len();
+    let mut lb = Loopback::new(
+        &m,
+        cmds,
+        m.start,
+        clean_links(n),
+        &clocks(n),
+        NetConfig::default(),
+    );
+    while lb.now < 9_000_000 {
+        lb.step().unwrap();
+    }
+    assert_eq!(lb.run.phase(), &Phase::Streaming);
+    // The link to node 1 is cut: it neither hears nor answers, but keeps running.
+    let cut = std::mem::replace(&mut lb.nodes[1].node.transport, Box::new(pair("x", "y").0));
+    drop(cut);
+    let phase = lb.run_until_settled(60_000_000).unwrap();
+    let Phase::Stopped(info) = phase else {
+        panic!("expected a stop, got {phase:?}");
+    };
+    assert!(
+        info.reason.contains("y_node") || info.reason.contains(&m.nodes[1].name),
+        "{}",
+        info.reason
+    );
+    // Let every node finish its tail.
+    lb.host_alive = false;
+    lb.run_until_settled(10_000_000).unwrap();
+    let w = node_windows(&lb);
+    assert!(
+        w.iter().all(|&(c, s)| c == info.window_end && s),
+        "{w:?} vs {info:?}"
+    );
+    let rest: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
+    assert_eq!(rest, steps_at(&m, &info.point));
+}

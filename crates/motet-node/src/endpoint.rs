@@ -146,10 +146,15 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         if broadcast || !self.services.paired() {
             return;
         }
+        // A SYN without ACK opens a session: a host that restarted (or a new
+        // host) gets a new link, not a reset of the old one. A SYN repeated
+        // during a handshake still goes to the link that is connecting.
+        let opening = h.flags == Flags::SYN;
         let fresh = match &self.link {
             None => true,
             Some(l) => {
                 l.config().peer != h.src
+                    || (opening && !matches!(l.state(), State::Connecting))
                     || (matches!(l.state(), State::Failed(_)) && h.flags.contains(Flags::SYN))
             }
         };

@@ -150,7 +150,7 @@ fn run<S: Store>(
     let started = clock.now_us();
     loop {
         let now = clock.now_us();
-        node.step(now)?;
+        node.step(now);
         let blink = node.endpoint.services().blinking(now);
         let pairing = node.endpoint.services().pairing();
         if blink != blinking && !o.quiet {
