@@ -22,6 +22,9 @@ use motet_wire::service::ServiceRequest;
 use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
+/// How long after a segment's end a node may still hold it, µs.
+const RETIRE_SLACK_US: f64 = 20_000.0;
+
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NetConfig {
@@ -47,7 +50,7 @@ pub struct NetConfig {
 impl Default for NetConfig {
     fn default() -> Self {
         NetConfig {
-            lead_min_us: 50_000,
+            lead_min_us: 100_000,
             node_timeout_us: 1_500_000,
             status_interval_us: 2_000_000,
             sync_interval_us: 100_000,
@@ -142,6 +145,7 @@ pub struct NetRun {
     held: Option<Sourced>,
     /// Routed to the nodes but not sealed.
     pending: Vec<(Committed, usize)>,
+    pending_events: usize,
     committed: VecDeque<Committed>,
     next_index: u32,
     /// End time of the last committed segment, µs.
@@ -186,6 +190,7 @@ impl NetRun {
             start_point: start,
             held: None,
             pending: Vec::new(),
+            pending_events: 0,
             committed: VecDeque::new(),
             next_index: 0,
             committed_end: f64::NEG_INFINITY,
@@ -235,6 +240,7 @@ impl NetRun {
             p.drop_unsealed();
         }
         self.pending.clear();
+        self.pending_events = 0;
         let point = self
             .committed
             .back()
@@ -483,7 +489,9 @@ impl NetRun {
 
     /// Segments a node holds (committed and not yet run, and pending).
     fn queued_on_nodes(&self, now: u64) -> usize {
-        let t = now as f64;
+        // A node frees a place a little after the segment's end (its clock
+        // and polling lag the host's); count generously.
+        let t = now as f64 - RETIRE_SLACK_US;
         self.committed.iter().filter(|c| c.seg.t1() > t).count() + self.pending.len()
     }
 
@@ -494,7 +502,7 @@ impl NetRun {
             .map(|n| n.queue)
             .min()
             .unwrap_or(64)
-            .saturating_sub(1)
+            .saturating_sub(2)
             .max(2)
     }
 
@@ -513,7 +521,7 @@ impl NetRun {
                 break;
             }
             let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
-            if self.pending.is_empty() {
+            if self.pending.is_empty() && self.pending_events == 0 {
                 if !grew && self.planner_done && self.held.is_none() {
                     self.phase = Phase::Draining;
                 }
@@ -566,6 +574,8 @@ impl NetRun {
                             self.peers[k].send_motion(&m);
                         }
                     }
+                    // Held on the nodes like segments until the seal.
+                    self.pending_events += 1;
                 }
                 Planned::Pause { .. } => self.pauses += 1,
                 Planned::Aux(_) => {}
@@ -605,6 +615,7 @@ impl NetRun {
     /// Commits the pending window on every node.
     fn seal(&mut self) -> Result<(), NetError> {
         let pending = std::mem::take(&mut self.pending);
+        self.pending_events = 0;
         if let Some(j) = self.journal.as_mut() {
             for (c, command) in &pending {
                 j.segment(&JournalSegment {
@@ -622,7 +633,7 @@ impl NetRun {
         let segs: Vec<&Segment> = self.committed.iter().map(|c| &c.seg).collect();
         let (deadline, tail_pos) = crate::tail::deadline(segs.iter().copied());
         self.deadline = deadline;
-        self.tail_start = self.committed[0].index + tail_pos as u32;
+        self.tail_start = self.committed.front().map_or(0, |c| c.index) + tail_pos as u32;
         let end = self.next_index_committed();
         if let Some(j) = self.journal.as_mut() {
             j.seal(JournalSeal {

@@ -24,6 +24,9 @@ use motet_wire::link::{Config as LinkConfig, Link, State, WINDOW};
 use motet_wire::service::{port, NodeState, ServiceReply, HOST_ADDRESS};
 use motet_wire::{encode, MAX_MESSAGE};
 
+/// A jump back in host time larger than this is a new host's time base.
+const NEW_TIME_BASE_US: f64 = 1e6;
+
 /// Replies waiting for room (datagrams, or the link's window).
 const OUTBOX: usize = 8;
 
@@ -253,8 +256,11 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         let Some(t) = self.services.host_time(now as f64) else {
             return;
         };
-        // A new clock model may put host time a hair back; never run backwards.
-        if t > self.ran_until {
+        // A new clock model may put host time a hair back: never run
+        // backwards. A host that restarted has a new time base altogether:
+        // an idle node follows it.
+        let new_base = self.node.queued() == 0 && t < self.ran_until - NEW_TIME_BASE_US;
+        if t > self.ran_until || new_base {
             self.node.poll(t, board);
             self.ran_until = t;
         }

@@ -100,7 +100,7 @@ enum Cmd {
         time_scale: f64,
         /// With --nodes spawn|paired: least time the committed trajectory
         /// reaches ahead, ms (at least 2×RTT is used anyway).
-        #[arg(long, default_value_t = 50.0)]
+        #[arg(long, default_value_t = 100.0)]
         lead_ms: f64,
     },
     /// Continue a networked job that stopped, from where every node came to rest.

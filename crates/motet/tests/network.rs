@@ -1,0 +1,426 @@
+//! Networked runs end to end: node processes on UDP and pseudo-terminals,
+//! scanning, pairing, firmware upload, a host killed mid-move and `motet
+//! resume`. Run times are scaled (`--time-scale`) so jobs take seconds.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn motet(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("motet-net-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A simulated node process; killed when dropped.
+struct NodeProc {
+    child: Child,
+    link: String,
+}
+
+impl Drop for NodeProc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn start_node(extra: &[&str]) -> NodeProc {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "node",
+            "--sim",
+            "--announce",
+            "--quiet",
+            "--idle-exit",
+            "120",
+        ])
+        .args(extra)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let (link, _uid) =
+        motet_net::spawn::parse_announce(&line).unwrap_or_else(|| panic!("announce: {line:?}"));
+    NodeProc { child, link }
+}
+
+/// A copy of an example machine in `dir` (pairing writes beside it).
+fn machine_copy(dir: &Path, name: &str) -> PathBuf {
+    let to = dir.join(name);
+    std::fs::copy(root().join("examples").join(name), &to).unwrap();
+    to
+}
+
+const FAST: [&str; 4] = ["--time-scale", "5", "--lead-ms", "500"];
+
+#[test]
+fn spawned_nodes_run_a_job_to_the_end() {
+    let out = scratch("spawn");
+    let mut args = vec![
+        "run",
+        "examples/gestalt-3axis.toml",
+        "examples/jobs/gestalt-3d.gcode",
+        "--nodes",
+        "spawn",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let (ok, _, stderr) = motet(&args);
+    assert!(ok, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
+    assert_eq!(report["outcome"], "done");
+    assert_eq!(report["nodes"].as_array().unwrap().len(), 3);
+    for n in report["nodes"].as_array().unwrap() {
+        assert_eq!(n["underruns"], 0, "{n}");
+        assert!(n["bytes_out"].as_u64().unwrap() > 0);
+    }
+}
+
+#[test]
+fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
+    let dir = scratch("pair");
+    let machine = machine_copy(&dir, "plotter.toml");
+    for listen in ["udp:127.0.0.1:0", "pty"] {
+        let state = dir.join(format!("node-{}.state", listen.len()));
+        let node = start_node(&[
+            "--listen",
+            listen,
+            "--state",
+            state.to_str().unwrap(),
+            "--time-scale",
+            "5",
+        ]);
+        let (ok, stdout, stderr) = motet(&["nodes", "scan", "--link", &node.link]);
+        assert!(ok, "{stderr}");
+        assert!(
+            stdout.contains("stepper") && stdout.contains("unpaired"),
+            "{stdout}"
+        );
+
+        let ebb = format!("ebb={}", node.link);
+        let (ok, stdout, stderr) =
+            motet(&["nodes", "pair", machine.to_str().unwrap(), "--link", &ebb]);
+        assert!(ok, "{stderr}");
+        assert!(stdout.contains("is now address 2"), "{stdout}");
+        let pairing = dir.join("plotter.nodes.toml");
+        let text = std::fs::read_to_string(&pairing).unwrap();
+        assert!(
+            text.contains("[nodes.ebb]") && text.contains(&node.link),
+            "{text}"
+        );
+
+        let (ok, stdout, stderr) = motet(&["nodes", "status", machine.to_str().unwrap()]);
+        assert!(ok, "{stderr}");
+        assert!(
+            stdout.contains("ebb: stepper") && stdout.contains("Idle"),
+            "{stdout}"
+        );
+
+        let out = dir.join(format!("out-{}", listen.len()));
+        let mut args = vec![
+            "run",
+            machine.to_str().unwrap(),
+            "examples/jobs/drawing.svg",
+            "--nodes",
+            "paired",
+            "-q",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(FAST);
+        let (ok, _, stderr) = motet(&args);
+        assert!(ok, "{listen}: {stderr}");
+        let report = std::fs::read_to_string(out.join("net.json")).unwrap();
+        assert!(report.contains("\"outcome\": \"done\""), "{report}");
+
+        // The node remembers its address: a new process from the same state
+        // file needs no pairing.
+        drop(node);
+        if listen == "pty" {
+            break;
+        }
+        let again = start_node(&["--listen", listen, "--state", state.to_str().unwrap()]);
+        let (ok, stdout, _) = motet(&["nodes", "scan", "--link", &again.link]);
+        assert!(ok && stdout.contains("address 2"), "{stdout}");
+    }
+}
+
+#[test]
+fn button_pairing_takes_the_pressed_node() {
+    let dir = scratch("button");
+    let machine = machine_copy(&dir, "plotter.toml");
+    let node = start_node(&["--auto-press"]);
+    let ebb = format!("ebb={}", node.link);
+    let (ok, stdout, stderr) = motet(&[
+        "nodes",
+        "pair",
+        machine.to_str().unwrap(),
+        "--link",
+        &ebb,
+        "--button",
+        "--wait",
+        "10",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("press the button") && stdout.contains("is now address 2"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn firmware_upload_verifies_and_refuses_bad_images() {
+    let dir = scratch("flash");
+    let machine = machine_copy(&dir, "plotter.toml");
+    let node = start_node(&[]);
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "pair",
+        machine.to_str().unwrap(),
+        "--link",
+        &format!("ebb={}", node.link),
+    ]);
+    assert!(ok, "{stderr}");
+    let payload = dir.join("payload.bin");
+    std::fs::write(
+        &payload,
+        (0..5000u32)
+            .map(|i| (i * 7 % 251) as u8)
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let img = dir.join("fw.img");
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "image",
+        "--kind",
+        "stepper",
+        "--version",
+        "2.3.4",
+        payload.to_str().unwrap(),
+        "-o",
+        img.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+
+    // (image bytes changed how, expected error)
+    let good = std::fs::read(&img).unwrap();
+    let mut flipped = good.clone();
+    flipped[100] ^= 0x40;
+    let bad = dir.join("bad.img");
+    std::fs::write(&bad, &flipped).unwrap();
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "flash",
+        machine.to_str().unwrap(),
+        "ebb",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("CRC"), "{stderr}");
+    let other = dir.join("other.img");
+    let (ok, _, _) = motet(&[
+        "nodes",
+        "image",
+        "--kind",
+        "servo",
+        "--version",
+        "9.9.9",
+        payload.to_str().unwrap(),
+        "-o",
+        other.to_str().unwrap(),
+    ]);
+    assert!(ok);
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "flash",
+        machine.to_str().unwrap(),
+        "ebb",
+        other.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("another kind"), "{stderr}");
+    let (_, stdout, _) = motet(&["nodes", "status", machine.to_str().unwrap()]);
+    assert!(
+        !stdout.contains("2.3.4") && !stdout.contains("9.9.9"),
+        "{stdout}"
+    );
+
+    let (ok, stdout, stderr) = motet(&[
+        "nodes",
+        "flash",
+        machine.to_str().unwrap(),
+        "ebb",
+        img.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("firmware 2.3.4 verified and started"),
+        "{stdout}"
+    );
+    let (_, stdout, _) = motet(&["nodes", "status", machine.to_str().unwrap()]);
+    assert!(stdout.contains("firmware 2.3.4"), "{stdout}");
+}
+
+#[test]
+fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
+    let dir = scratch("kill");
+    let machine = machine_copy(&dir, "plotter.toml");
+    let node = start_node(&["--time-scale", "5"]);
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "pair",
+        machine.to_str().unwrap(),
+        "--link",
+        &format!("ebb={}", node.link),
+    ]);
+    assert!(ok, "{stderr}");
+    let out = dir.join("out");
+    let mut host = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "run",
+            machine.to_str().unwrap(),
+            "examples/jobs/drawing.svg",
+            "--nodes",
+            "paired",
+            "-q",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(FAST)
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it once the job is well under way (the journal has windows).
+    let started = Instant::now();
+    loop {
+        let seals = std::fs::read_to_string(out.join("journal"))
+            .map(|t| t.matches("seal").count())
+            .unwrap_or(0);
+        if seals > 15 {
+            break;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the run never got going"
+        );
+        assert!(
+            host.try_wait().unwrap().is_none(),
+            "the run ended before it was killed"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    host.kill().unwrap();
+    host.wait().unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let (ok, stdout, stderr) = motet(&["nodes", "status", machine.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("Stopped"),
+        "the node must have stopped on its tail: {stdout}"
+    );
+
+    let (ok, stdout, stderr) = motet(&["resume", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("resuming") && stdout.contains("done"),
+        "{stdout}"
+    );
+    let report = std::fs::read_to_string(out.join("net.json")).unwrap();
+    assert!(report.contains("\"outcome\": \"done\""), "{report}");
+}
+
+#[test]
+fn bad_network_input_is_a_clear_error() {
+    let dir = scratch("bad");
+    let machine = machine_copy(&dir, "plotter.toml");
+    let m = machine.to_str().unwrap();
+    // (arguments, expected part of the error)
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["run", m, "examples/jobs/drawing.svg", "--nodes", "paired"],
+            "plotter.nodes.toml does not exist",
+        ),
+        (
+            vec!["nodes", "pair", m, "--link", "pen=udp:127.0.0.1:9"],
+            "the machine has no node `pen`",
+        ),
+        (
+            vec!["nodes", "pair", m, "--link", "ebb"],
+            "expected NODE=SPEC",
+        ),
+        (
+            vec!["nodes", "scan", "--link", "carrier-pigeon:1"],
+            "carrier-pigeon",
+        ),
+        (vec!["nodes", "status", m], "does not exist"),
+        (
+            vec!["node", "--sim", "--listen", "tcp:1"],
+            "expected `udp:HOST:PORT` or `pty`",
+        ),
+        (vec!["resume", dir.to_str().unwrap()], "resume.toml"),
+    ];
+    for (args, want) in cases {
+        let (ok, _, stderr) = motet(&args);
+        assert!(!ok && stderr.contains(want), "{args:?}: {stderr}");
+    }
+    // A pairing file naming a device that is not there.
+    std::fs::write(
+        dir.join("plotter.nodes.toml"),
+        "[nodes.ebb]\nlink = \"udp:127.0.0.1:9\"\naddress = 2\nuid = \"1\"\nkind = \"stepper\"\nfirmware = \"0.1.0\"\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = motet(&["run", m, "examples/jobs/drawing.svg", "--nodes", "paired"]);
+    assert!(
+        !ok && stderr.contains("node ebb") && stderr.contains("no answer"),
+        "{stderr}"
+    );
+    // A node that is not the one paired.
+    let node = start_node(&[]);
+    let (ok, _, _) = motet(&["nodes", "pair", m, "--link", &format!("ebb={}", node.link)]);
+    assert!(ok);
+    let text = std::fs::read_to_string(dir.join("plotter.nodes.toml")).unwrap();
+    let uid_line = text
+        .lines()
+        .find(|l| l.starts_with("uid"))
+        .unwrap()
+        .to_string();
+    std::fs::write(
+        dir.join("plotter.nodes.toml"),
+        text.replace(&uid_line, "uid = \"0000000000000001\""),
+    )
+    .unwrap();
+    let (ok, _, stderr) = motet(&["run", m, "examples/jobs/drawing.svg", "--nodes", "paired"]);
+    assert!(
+        !ok && stderr.contains("but uid 0000000000000001 was paired"),
+        "{stderr}"
+    );
+}
