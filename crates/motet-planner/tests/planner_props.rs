@@ -32,6 +32,7 @@ fn limits(profile: ProfileKind, joints: Vec<JointLimits>) -> Limits {
             },
         ],
         lookahead: 10_000,
+        stop_horizon: 0,
     }
 }
 

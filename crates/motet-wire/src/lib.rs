@@ -11,11 +11,13 @@
 pub mod frame;
 pub mod link;
 pub mod message;
+pub mod stream;
 pub mod sync;
 
 pub use message::{
     AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,
 };
+pub use stream::{SegmentBatch, StreamConfig};
 
 /// Why bytes could not be turned into a message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

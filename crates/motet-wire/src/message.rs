@@ -1,5 +1,6 @@
 //! Message types.
 
+use crate::stream::{SegmentBatch, StreamConfig};
 use heapless::Vec;
 use motet_trajectory::{JointMap, Point, ProfileParams, MAX_AXES};
 use serde::{Deserialize, Serialize};
@@ -116,6 +117,12 @@ pub enum HostMessage {
     },
     /// Remove the running graph (and any graph being built).
     GraphClear,
+    /// The quanta [`HostMessage::Segments`] are rebuilt with. Only valid with
+    /// an empty segment queue.
+    ConfigureStream(StreamConfig),
+    /// Consecutive segments, compactly (see [`crate::stream`]): taken whole or
+    /// refused whole.
+    Segments(SegmentBatch),
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
