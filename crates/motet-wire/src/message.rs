@@ -317,6 +317,15 @@ mod tests {
                 value: -1234.0,
             },
             HostMessage::GraphClear,
+            HostMessage::ConfigureStream(StreamConfig {
+                quantum: 1e-3,
+                speed_quantum: 1e-2,
+                accel_quantum: 0.5,
+                path_mask: 0b111,
+            }),
+            HostMessage::Segments(SegmentBatch {
+                bytes: Vec::from_slice(&[3, 0x21, 7, 0x80, 1]).unwrap(),
+            }),
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {

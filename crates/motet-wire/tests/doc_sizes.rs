@@ -20,7 +20,17 @@ fn documented_sizes() {
         encode(&ev, &mut buf).unwrap(),
         &[5, 1, 0, 0, 0, 0, 0, 0xe0, 0x58, 0x40, 0, 0, 0x80, 0x3e]
     );
-    let host: [(HostMessage, usize); 5] = [
+    let host: [(HostMessage, usize); 7] = [
+        (
+            HostMessage::ConfigureStream(motet_wire::StreamConfig::default()),
+            26,
+        ),
+        (
+            HostMessage::Segments(motet_wire::SegmentBatch {
+                bytes: heapless::Vec::from_slice(&[0; motet_wire::stream::BATCH_BYTES]).unwrap(),
+            }),
+            192,
+        ),
         (HostMessage::Reset, 1),
         (HostMessage::Status, 1),
         (HostMessage::SetPosition { position: [1.0; 6] }, 49),
