@@ -31,7 +31,9 @@ struct Traffic {
 impl Traffic {
     fn add(&mut self, m: &HostMessage) -> Result<()> {
         let mut buf = [0u8; MAX_MESSAGE];
-        self.payload += encode(m, &mut buf).context("message too long")?.len() as u64;
+        self.payload += encode(m, &mut buf)
+            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .len() as u64;
         self.messages += 1;
         Ok(())
     }

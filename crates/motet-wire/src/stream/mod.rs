@@ -184,6 +184,8 @@ impl core::fmt::Display for StreamError {
     }
 }
 
+impl core::error::Error for StreamError {}
+
 /// `v` as a whole number of `q`, if it is one (and fits 2⁵³).
 pub(crate) fn whole(v: f64, q: f64) -> Option<i64> {
     let n = libm::round(v / q);
