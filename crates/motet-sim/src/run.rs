@@ -343,12 +343,18 @@ impl SimMachine {
     pub fn submit(&mut self, item: Planned) -> Result<(), SimError> {
         // The nodes run the quantized trajectory the batches carry: that is
         // the record every output is checked against.
-        let item = self.dist.quantize(&item);
+        let planned = item;
+        let item = self.dist.quantize(&planned);
         match &item {
             Planned::Segment(s) => {
                 self.stats.segments += 1;
                 self.plant.planned(*s);
-                self.account(s);
+                // Peak figures are the plan's: the quantized direction of a
+                // tiny move may differ from it by a position quantum over its
+                // length, which says nothing about the planner's limits.
+                if let Planned::Segment(p) = &planned {
+                    self.account(p);
+                }
             }
             Planned::Event(e) => {
                 self.stats.events += 1;

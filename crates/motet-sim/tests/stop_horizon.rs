@@ -42,6 +42,6 @@ fn ten_thousand_tiny_fast_moves_run_without_underruns() {
     // Stopping within 32 moves of 0.02 mm at 3000 mm/s² allows √(2·3000·0.64)
     // ≈ 62 mm/s, well under the feed.
     let speed = rep.axes[0].peak_velocity.hypot(rep.axes[1].peak_velocity);
-    assert!(speed < 2.0 * 62.0 && speed < 250.0, "{speed}");
+    assert!(speed < 2.0 * 62.0, "{speed}");
     assert!(rep.duration_s > 200.0 / 250.0 * 2.0, "{}", rep.duration_s);
 }

@@ -118,9 +118,9 @@ fn encode_one(
     }
     // What the node will rebuild the end as: unmoved axes keep their value.
     let mut end = st.tail;
-    for i in 0..MAX_AXES {
+    for (i, e) in end.iter_mut().enumerate() {
         if mask & (1 << i) != 0 {
-            end[i] = seg.end[i];
+            *e = seg.end[i];
         }
     }
     let start = st.valid && seg.t0 == st.t1 && p.v0 == st.v1;

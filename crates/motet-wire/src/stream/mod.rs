@@ -104,7 +104,7 @@ impl StreamConfig {
             return None;
         }
         let n = libm::round(distance_masked(start, end, self.path_mask) / self.quantum);
-        (n >= 1.0).then(|| n * self.quantum)
+        (n >= 1.0).then_some(n * self.quantum)
     }
 }
 

@@ -3,7 +3,7 @@
 use super::{index, StreamConfig};
 use motet_trajectory::point::distance_masked;
 use motet_trajectory::profile::{fastest, reachable_speed};
-use motet_trajectory::{Point, Profile, Segment, MAX_AXES};
+use motet_trajectory::{Point, Profile, Segment};
 
 /// Turns the planner's segments into the nearest segments a batch carries
 /// exactly, one machine-wide sequence: ends on the position grid, the length
@@ -68,11 +68,11 @@ impl Quantizer {
             }
         } else {
             let mut end = self.tail;
-            for i in 0..MAX_AXES {
+            for (i, e) in end.iter_mut().enumerate() {
                 let (from, to) = (index(self.tail[i], c.quantum), index(s.end[i], c.quantum));
                 if let (Some(from), Some(to)) = (from, to) {
                     if from != to {
-                        end[i] = to as f64 * c.quantum;
+                        *e = to as f64 * c.quantum;
                     }
                 }
             }
