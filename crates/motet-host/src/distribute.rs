@@ -7,7 +7,8 @@
 use crate::machine::Machine;
 use motet_planner::Planned;
 use motet_trajectory::{Point, MAX_AXES};
-use motet_wire::{AxisSpan, ChannelConfig, HostMessage, SegmentMsg, ToolConfig};
+use motet_wire::stream::{BatchEncoder, Quantizer, StreamError};
+use motet_wire::{AxisSpan, ChannelConfig, HostMessage, SegmentMsg, StreamConfig, ToolConfig};
 
 /// One node's subscriptions.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,10 +21,20 @@ pub struct Subscription {
     next_seq: u32,
 }
 
+/// A message for a node and the segments it carries (for queue room).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outgoing {
+    pub message: HostMessage,
+    pub segments: usize,
+}
+
 /// Routes the trajectory to nodes.
 #[derive(Clone, Debug)]
 pub struct Distributor {
     pub subscriptions: Vec<Subscription>,
+    stream: StreamConfig,
+    quantizer: Quantizer,
+    encoders: Vec<BatchEncoder>,
 }
 
 impl Distributor {
@@ -43,7 +54,120 @@ impl Distributor {
                 }
             })
             .collect();
-        Distributor { subscriptions }
+        let stream = StreamConfig {
+            path_mask: machine.limits().path_mask(),
+            ..StreamConfig::default()
+        };
+        let mut d = Distributor {
+            subscriptions,
+            stream,
+            quantizer: Quantizer::new(stream, machine.start),
+            encoders: vec![],
+        };
+        d.start_stream(machine, &machine.start);
+        d
+    }
+
+    /// Restarts the batched stream of every node for a machine at rest at
+    /// `start` (after the nodes got [`Distributor::stream_setup`]).
+    fn start_stream(&mut self, machine: &Machine, start: &Point) {
+        self.quantizer = Quantizer::new(self.stream, *start);
+        for sub in self.subscriptions.iter_mut() {
+            sub.next_seq = 0;
+        }
+        self.encoders = machine
+            .nodes
+            .iter()
+            .zip(&self.subscriptions)
+            .map(|(n, sub)| {
+                // A quarter of the node's queue: a node always holds three
+                // quarters while the next batch fills.
+                let most = (n.queue / 4).max(1);
+                BatchEncoder::new(self.stream, sub.axes, *start, 0, most)
+            })
+            .collect();
+    }
+
+    /// Messages that configure every node for batched segments
+    /// ([`Distributor::quantize`], [`Distributor::route_batched`]) on a
+    /// machine at rest at `start`: [`Distributor::setup`] and the stream's
+    /// quanta. Restarts the stream.
+    pub fn stream_setup(&mut self, machine: &Machine, start: &Point) -> Vec<Vec<HostMessage>> {
+        self.start_stream(machine, start);
+        (0..machine.nodes.len())
+            .map(|k| {
+                let mut m = self.setup(machine, k, start);
+                m.insert(m.len() - 1, HostMessage::ConfigureStream(self.stream));
+                m
+            })
+            .collect()
+    }
+
+    /// The planned item as the batched stream carries it: a segment
+    /// quantized (see [`Quantizer`]), other times moved onto the quantized
+    /// timeline. This is the trajectory the nodes run: record it.
+    pub fn quantize(&mut self, item: &Planned) -> Planned {
+        let q = &mut self.quantizer;
+        match *item {
+            Planned::Segment(s) => Planned::Segment(q.segment(&s)),
+            Planned::Event(mut e) => {
+                e.time = q.time(e.time);
+                Planned::Event(e)
+            }
+            Planned::Aux(mut a) => {
+                a.time = q.time(a.time);
+                Planned::Aux(a)
+            }
+            Planned::Pause { time, optional } => Planned::Pause {
+                time: q.time(time),
+                optional,
+            },
+        }
+    }
+
+    /// The messages node `node` gets for a quantized item, batching segments:
+    /// a batch goes out when full, before an event and before a pause or
+    /// auxiliary change (the host waits there); [`Distributor::flush`] sends
+    /// the rest.
+    pub fn route_batched(
+        &mut self,
+        node: usize,
+        item: &Planned,
+    ) -> Result<Vec<Outgoing>, StreamError> {
+        let mut out = vec![];
+        match item {
+            Planned::Segment(s) => {
+                if self.subscriptions[node].axes == 0 {
+                    return Ok(out);
+                }
+                let b = self.encoders[node].push(s)?;
+                let sub = &mut self.subscriptions[node];
+                sub.next_seq = sub.next_seq.wrapping_add(1);
+                if let Some(b) = b {
+                    out.push(Outgoing {
+                        segments: b.segments,
+                        message: HostMessage::Segments(b.batch),
+                    });
+                }
+            }
+            Planned::Event(_) => {
+                out.extend(self.flush(node));
+                out.extend(self.route(node, item).map(|message| Outgoing {
+                    message,
+                    segments: 0,
+                }));
+            }
+            Planned::Aux(_) | Planned::Pause { .. } => out.extend(self.flush(node)),
+        }
+        Ok(out)
+    }
+
+    /// The batch node `node` has waiting, if any.
+    pub fn flush(&mut self, node: usize) -> Option<Outgoing> {
+        self.encoders[node].flush().map(|b| Outgoing {
+            segments: b.segments,
+            message: HostMessage::Segments(b.batch),
+        })
     }
 
     /// Messages that configure node `node` for a machine at rest at `start`.

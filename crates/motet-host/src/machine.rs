@@ -93,6 +93,9 @@ pub struct Machine {
     pub start: Point,
     pub min_radius: f64,
     pub lookahead: usize,
+    /// Moves within which the machine can always come to rest (0: off); see
+    /// [`motet_planner::Limits::stop_horizon`].
+    pub stop_horizon: usize,
 }
 
 /// Turns byte offsets into line and column for error messages.
@@ -175,6 +178,7 @@ impl Machine {
                 })
                 .collect(),
             lookahead: self.lookahead,
+            stop_horizon: self.stop_horizon,
         }
     }
 
@@ -681,6 +685,20 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         return Err(src.err(span, "[motion] draw_feed must be positive"));
     }
 
+    // A node holding the horizon's segments can always be given a window it
+    // can stop inside; a longer horizon than the smallest queue cannot be.
+    let smallest_queue = nodes.iter().map(|n| n.queue).min().unwrap_or(64);
+    let horizon = *m.stop_horizon.get_ref();
+    if !(0..=smallest_queue as i64).contains(&horizon) {
+        return Err(src.err(
+            m.stop_horizon.span(),
+            format!(
+                "[motion] stop_horizon must be 0 (off) to {smallest_queue} (the smallest node queue), got {horizon}"
+            ),
+        ));
+    }
+    let stop_horizon = horizon as usize;
+
     Ok(Machine {
         name: raw.name,
         description: raw.description,
@@ -699,5 +717,6 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         start,
         min_radius: *m.min_radius.get_ref(),
         lookahead: m.lookahead.max(2),
+        stop_horizon,
     })
 }

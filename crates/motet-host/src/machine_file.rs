@@ -45,6 +45,9 @@ pub struct MotionFile {
     pub min_radius: Spanned<f64>,
     #[serde(default = "default_lookahead")]
     pub lookahead: usize,
+    /// Moves within which the machine can always come to rest (0: off).
+    #[serde(default = "default_stop_horizon")]
+    pub stop_horizon: Spanned<i64>,
 }
 
 impl Default for MotionFile {
@@ -58,6 +61,7 @@ impl Default for MotionFile {
             start: default_start(),
             min_radius: default_min_radius(),
             lookahead: default_lookahead(),
+            stop_horizon: default_stop_horizon(),
         }
     }
 }
@@ -82,6 +86,12 @@ fn default_min_radius() -> Spanned<f64> {
 }
 fn default_lookahead() -> usize {
     4096
+}
+/// Half the default node queue of 64: a node can always be given a window it
+/// can stop inside, with room to spare for the next.
+pub const DEFAULT_STOP_HORIZON: usize = 32;
+fn default_stop_horizon() -> Spanned<i64> {
+    Spanned::new(0..0, DEFAULT_STOP_HORIZON as i64)
 }
 
 #[derive(Debug, Deserialize)]

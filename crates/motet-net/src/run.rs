@@ -422,8 +422,8 @@ impl NetRun {
             return Ok(());
         }
         if !self.configured {
-            for k in 0..self.peers.len() {
-                let mut msgs = self.dist.setup(&self.machine, k, &self.start_point);
+            let setups = self.dist.stream_setup(&self.machine, &self.start_point);
+            for (k, mut msgs) in setups.into_iter().enumerate() {
                 msgs.push(HostMessage::Windowed);
                 for m in msgs {
                     self.peers[k].send_motion(&m);
@@ -551,11 +551,7 @@ impl NetRun {
                         seg,
                     };
                     self.next_index += 1;
-                    for k in 0..self.peers.len() {
-                        if let Some(m) = self.dist.route(k, &item.item) {
-                            self.peers[k].send_motion(&m);
-                        }
-                    }
+                    self.route(&item.item)?;
                     self.pending.push((c, item.command));
                     self.segments_sent += 1;
                     let (start, _) = crate::tail::deadline(
@@ -569,19 +565,36 @@ impl NetRun {
                     }
                 }
                 Planned::Event(_) => {
-                    for k in 0..self.peers.len() {
-                        if let Some(m) = self.dist.route(k, &item.item) {
-                            self.peers[k].send_motion(&m);
-                        }
-                    }
+                    self.route(&item.item)?;
                     // Held on the nodes like segments until the seal.
                     self.pending_events += 1;
                 }
-                Planned::Pause { .. } => self.pauses += 1,
-                Planned::Aux(_) => {}
+                Planned::Pause { .. } => {
+                    self.route(&item.item)?;
+                    self.pauses += 1;
+                }
+                Planned::Aux(_) => self.route(&item.item)?,
             }
         }
         Ok(grew)
+    }
+
+    /// Sends `item` (quantized) to every node that reads it; segments go out
+    /// in batches.
+    fn route(&mut self, item: &Planned) -> Result<(), NetError> {
+        for k in 0..self.peers.len() {
+            let out = self
+                .dist
+                .route_batched(k, item)
+                .map_err(|e| NetError::Node {
+                    node: self.peers[k].name.clone(),
+                    message: format!("segment stream: {e:?}"),
+                })?;
+            for o in out {
+                self.peers[k].send_motion(&o.message);
+            }
+        }
+        Ok(())
     }
 
     /// The next planned item, planning more commands as needed.
@@ -593,7 +606,9 @@ impl NetRun {
             return Ok(None);
         };
         loop {
-            if let Some(s) = planner.pop() {
+            if let Some(mut s) = planner.pop() {
+                // The nodes run the quantized trajectory: it is the record.
+                s.item = self.dist.quantize(&s.item);
                 return Ok(Some(s));
             }
             if self.next_command < self.commands.len() {
@@ -642,6 +657,9 @@ impl NetRun {
             })?;
         }
         for k in 0..self.peers.len() {
+            if let Some(o) = self.dist.flush(k) {
+                self.peers[k].send_motion(&o.message);
+            }
             if let Some(next_seq) = self.dist.next_seq(k) {
                 self.peers[k].send_motion(&HostMessage::Seal { next_seq });
             }

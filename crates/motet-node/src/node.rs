@@ -10,8 +10,10 @@ use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
 use motet_trajectory::{Contingency, JointMap, Point, Profile, Segment, MAX_AXES};
 use motet_wire::message::{GraphInputKind, GraphMode};
+use motet_wire::stream::{BatchReader, StreamState};
 use motet_wire::{
-    decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig,
+    decode, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentBatch, SegmentMsg,
+    StreamConfig, ToolConfig,
 };
 
 /// Most components of a graph a node hosts.
@@ -102,6 +104,9 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// When the committed window's contingency tail takes over, µs.
     tail_start: Option<f64>,
     stopped: bool,
+    stream: StreamConfig,
+    /// Context the next batched segment is decoded against.
+    stream_state: StreamState,
 }
 
 impl<const Q: usize, const T: usize> Default for Node<Q, T> {
@@ -141,6 +146,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             pending_events: 0,
             tail_start: None,
             stopped: false,
+            stream: StreamConfig {
+                quantum: 1e-4,
+                speed_quantum: 1e-3,
+                accel_quantum: 1e-3,
+                path_mask: 0,
+            },
+            stream_state: StreamState::at([0.0; MAX_AXES]),
         }
     }
 
@@ -162,8 +174,16 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             }
             HostMessage::ConfigureChannel(c) => self.configure_channel(c),
             HostMessage::ConfigureTool(t) => self.configure_tool(t),
-            HostMessage::SetPosition { position } => self.set_position(&position),
-            HostMessage::Segment(s) => self.push_segment(&s),
+            HostMessage::SetPosition { position } => self.set_position(&position).inspect(|_| {
+                // At rest: the next batched segment carries its start.
+                self.stream_state.valid = false;
+            }),
+            HostMessage::Segment(s) => self.push_segment(&s).inspect(|_| {
+                // A batch after a plain segment carries its start.
+                self.stream_state.valid = false;
+            }),
+            HostMessage::ConfigureStream(c) => self.configure_stream(c),
+            HostMessage::Segments(b) => self.push_batch(&b),
             HostMessage::Event { track, time, value } => self.push_event(track, time, value, 0.0),
             HostMessage::EventPerSpeed {
                 track,
@@ -603,6 +623,53 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         Ok(())
     }
 
+    fn configure_stream(&mut self, c: StreamConfig) -> Result<(), Refusal> {
+        if !c.is_valid() || !self.segments.is_empty() {
+            return Err(Refusal::BadConfig);
+        }
+        self.stream = c;
+        self.stream_state.valid = false;
+        Ok(())
+    }
+
+    /// Takes a whole batch or, refused, none of it: a first pass decodes and
+    /// checks every segment as [`Node::push_segment`] will, the second pushes.
+    fn push_batch(&mut self, b: &SegmentBatch) -> Result<(), Refusal> {
+        let start = StreamState {
+            tail: self.tail,
+            ..self.stream_state
+        };
+        let mut reader = BatchReader::new(self.stream, b).map_err(|_| Refusal::Malformed)?;
+        if reader.next_seq() != self.next_seq {
+            return Err(Refusal::OutOfOrder {
+                expected: self.next_seq,
+                got: reader.next_seq(),
+            });
+        }
+        let mut state = start;
+        let mut n = 0;
+        while let Some(item) = reader.next(&mut state) {
+            let (m, _) = item.map_err(|_| Refusal::Malformed)?;
+            if !segment_is_finite(&m) {
+                return Err(Refusal::Malformed);
+            }
+            n += 1;
+        }
+        if n == 0 {
+            return Err(Refusal::Malformed);
+        }
+        if n > Q - self.segments.len() {
+            return Err(Refusal::QueueFull);
+        }
+        let mut reader = BatchReader::new(self.stream, b).map_err(|_| Refusal::Malformed)?;
+        let mut state = start;
+        while let Some(Ok((m, _))) = reader.next(&mut state) {
+            self.push_segment(&m)?;
+        }
+        self.stream_state = state;
+        Ok(())
+    }
+
     pub fn status(&self) -> NodeStatus {
         NodeStatus {
             segment_space: Q - self.segments.len(),
@@ -828,6 +895,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             self.starved = true;
         }
     }
+}
+
+/// The checks [`Node::push_segment`] makes on a message's values.
+fn segment_is_finite(m: &SegmentMsg) -> bool {
+    let p = &m.profile;
+    m.axes
+        .iter()
+        .all(|s| (s.axis as usize) < MAX_AXES && s.from.is_finite() && s.to.is_finite())
+        && [p.length, p.v0, p.vc, p.v1, p.accel, p.jerk, p.dwell, m.t0]
+            .iter()
+            .all(|x| x.is_finite())
 }
 
 /// Whether a joint map only names axes a point has and has finite coefficients:

@@ -46,10 +46,18 @@ pub struct Limits {
     /// Most moves held for lookahead before the oldest is planned as if the queue
     /// ended there (safe, slower). Bounds memory on endless streams of tiny moves.
     pub lookahead: usize,
+    /// Stop horizon in moves (0: none). At every move boundary the speed stays
+    /// low enough to come to rest within the next this many moves, each at its
+    /// own acceleration: `v_i ≤ √(2 Σ_{j=i}^{i+n-1} a_j L_j)`. A node holding
+    /// at least this many segments can then always be given a window it can
+    /// stop inside, so tiny fast moves slow the machine down instead of
+    /// outrunning a node's queue.
+    pub stop_horizon: usize,
 }
 
 impl Limits {
-    pub(crate) fn path_mask(&self) -> u8 {
+    /// Bit i set: axis i counts toward path length.
+    pub fn path_mask(&self) -> u8 {
         let mut m = 0;
         for (i, a) in self.axes.iter().enumerate().take(MAX_AXES) {
             if a.path {

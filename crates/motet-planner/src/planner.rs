@@ -87,6 +87,11 @@ struct Pending {
     jerk: f64,
     /// Cap on the entry speed from the junction with the previous move.
     entry_cap: f64,
+    /// Cap on the entry speed from the stop horizon.
+    horizon_cap: f64,
+    /// Whether all the moves of the horizon are queued; otherwise the cap may
+    /// still rise when more moves arrive.
+    horizon_complete: bool,
     /// Entry speed from the latest backward pass.
     entry: f64,
     /// Whether `entry` is held down by the queue's end rather than by a cap;
@@ -296,10 +301,13 @@ impl Planner {
             accel,
             jerk,
             entry_cap,
+            horizon_cap: f64::INFINITY,
+            horizon_complete: true,
             entry: 0.0,
             end_limited: true,
             events,
         });
+        self.update_horizons();
         self.backward_pass();
         self.emit_final();
         if self.queue.len() > self.limits.lookahead.max(2) {
@@ -382,24 +390,55 @@ impl Planner {
         v2.sqrt().min(cap)
     }
 
+    /// Recomputes the stop-horizon caps of the moves whose horizon reaches the
+    /// newest move. Each sum runs in queue order over its own window, so the
+    /// cap is the same whenever it is computed.
+    fn update_horizons(&mut self) {
+        let h = self.limits.stop_horizon;
+        if h == 0 {
+            return;
+        }
+        let n = self.queue.len();
+        for k in n.saturating_sub(h)..n {
+            let last = (k + h).min(n);
+            let mut sum = 0.0;
+            for j in k..last {
+                let m = &self.queue[j];
+                sum += m.accel * m.length;
+            }
+            let m = &mut self.queue[k];
+            m.horizon_cap = (2.0 * sum).sqrt();
+            m.horizon_complete = k + h <= n;
+        }
+    }
+
     /// Recomputes entry speeds from the end of the queue (which ends at rest),
     /// stopping where nothing changes any more.
     fn backward_pass(&mut self) {
         let mut exit = 0.0;
         let mut exit_end_limited = true;
         let n = self.queue.len();
+        // Moves whose horizon cap the newest move changed are always revisited.
+        let revisit = self.limits.stop_horizon.max(1);
         for k in (0..n).rev() {
             let fixed_entry = k == 0;
             let m = &mut self.queue[k];
             let reach = reachable_speed(exit, m.length, m.accel, m.jerk);
+            // An incomplete horizon's cap may still rise, like a speed held
+            // down by the queue's end.
+            let (cap, cap_end_limited) = if m.horizon_cap < m.entry_cap {
+                (m.horizon_cap, !m.horizon_complete)
+            } else {
+                (m.entry_cap, false)
+            };
             let (entry, end_limited) = if fixed_entry {
                 (self.emitted_exit, false)
-            } else if m.entry_cap <= reach {
-                (m.entry_cap, false)
+            } else if cap <= reach {
+                (cap, cap_end_limited)
             } else {
                 (reach, exit_end_limited)
             };
-            if k != n - 1 && entry == m.entry && end_limited == m.end_limited {
+            if k + revisit < n && entry == m.entry && end_limited == m.end_limited {
                 break;
             }
             m.entry = entry;

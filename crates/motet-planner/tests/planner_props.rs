@@ -32,6 +32,7 @@ fn limits(profile: ProfileKind, joints: Vec<JointLimits>) -> Limits {
             },
         ],
         lookahead: 10_000,
+        stop_horizon: 0,
     }
 }
 
@@ -209,8 +210,9 @@ proptest! {
     }
 
     #[test]
-    fn streaming_equals_batch(moves in arb_moves(), lookahead in 2usize..20) {
+    fn streaming_equals_batch(moves in arb_moves(), lookahead in 2usize..20, horizon in prop_oneof![Just(0usize), 1usize..40]) {
         let mut l = limits(ProfileKind::Trapezoid, vec![]);
+        l.stop_horizon = horizon;
         let (cmds, _) = absolute(&moves);
         prop_assert_eq!(plan(&l, &cmds, false), plan(&l, &cmds, true));
         // Deterministic under a tight lookahead bound too.
@@ -258,6 +260,67 @@ proptest! {
         let segs = segments(&plan_from(&l, &cmds, false, [120.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
         check_continuity(&segs, &targets);
         check_limits(&l, &segs);
+    }
+}
+
+/// The speed at every boundary lets the machine stop within the next `n`
+/// segments, each at its own acceleration.
+fn check_horizon(segs: &[Segment], n: usize) {
+    for i in 1..segs.len() {
+        let v = segs[i].profile.v0();
+        let room: f64 = segs[i..(i + n).min(segs.len())]
+            .iter()
+            .map(|s| s.profile.params().accel * s.profile.length())
+            .sum();
+        assert!(
+            v * v <= 2.0 * room * (1.0 + 1e-9),
+            "boundary {i}: {v} cannot stop within {n} segments ({room})"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 100, .. ProptestConfig::default() })]
+
+    #[test]
+    fn stop_horizon_holds_for_any_moves(moves in arb_moves(), horizon in 1usize..40) {
+        let mut l = limits(ProfileKind::Trapezoid, vec![]);
+        l.stop_horizon = horizon;
+        let (cmds, targets) = absolute(&moves);
+        let segs = segments(&plan(&l, &cmds, true));
+        check_continuity(&segs, &targets);
+        check_limits(&l, &segs);
+        check_horizon(&segs, horizon);
+    }
+}
+
+#[test]
+fn tiny_fast_moves_slow_down_to_the_stop_horizon() {
+    // 10,000 moves of 0.02 mm along a gentle curve at 300 mm/s.
+    let cmds: Vec<Command> = (1..=10_000)
+        .map(|k| {
+            let a = k as f64 * 1e-4;
+            let r = 0.02 / 1e-4;
+            mv([r * a.sin(), r * (1.0 - a.cos()), 0.0, 0.0], 300.0)
+        })
+        .collect();
+    let mut l = limits(ProfileKind::Trapezoid, vec![]);
+    let free = segments(&plan(&l, &cmds, true));
+    for n in [32, 8] {
+        l.stop_horizon = n;
+        let segs = segments(&plan(&l, &cmds, true));
+        assert_eq!(segs.len(), cmds.len());
+        check_horizon(&segs, n);
+        // The horizon binds: without it the machine runs faster.
+        let peak = |s: &[Segment]| s.iter().map(|s| s.profile.vc()).fold(0.0, f64::max);
+        assert!(
+            peak(&segs) < peak(&free),
+            "{} vs {}",
+            peak(&segs),
+            peak(&free)
+        );
+        // And it slows down rather than stopping: no rest in the middle.
+        assert!(segs[1..segs.len() - 1].iter().all(|s| s.profile.v1() > 0.0));
     }
 }
 

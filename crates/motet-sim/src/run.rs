@@ -21,6 +21,8 @@ pub enum SimError {
     Plan { loc: SourceLoc, error: PlanError },
     #[error("node {node} refused a message: {reason:?}")]
     Refused { node: String, reason: Refusal },
+    #[error("a segment could not be batched: {0}")]
+    Stream(motet_wire::stream::StreamError),
 }
 
 /// What a run produced.
@@ -136,8 +138,9 @@ impl SimMachine {
                 ..Default::default()
             },
         };
-        for k in 0..sim.nodes.len() {
-            for msg in sim.dist.setup(machine, k, &machine.start) {
+        let setup = sim.dist.stream_setup(machine, &machine.start);
+        for (k, msgs) in setup.into_iter().enumerate() {
+            for msg in msgs {
                 sim.send(k, &msg)?;
             }
         }
@@ -180,14 +183,31 @@ impl SimMachine {
         std::mem::take(&mut self.plant.tool_changes)
     }
 
+    /// Sends every batch still being filled: before time passes for the
+    /// caller, so no node waits for segments the host holds.
+    fn flush_all(&mut self) {
+        for k in 0..self.nodes.len() {
+            if let Some(out) = self.dist.flush(k) {
+                self.make_room(k, out.segments);
+                // Room was made and the batch continues the node's stream:
+                // a refusal is a bug in the distributor, not bad input.
+                if let Err(e) = self.send(k, &out.message) {
+                    debug_assert!(false, "{e}");
+                }
+            }
+        }
+    }
+
     /// Runs the nodes until simulated time `t`.
     pub fn run_until(&mut self, t: f64) {
+        self.flush_all();
         let until = self.frame_after(t.max(self.now));
         self.poll_all(until);
     }
 
     /// Runs until every node has nothing left to do.
     pub fn run_to_rest(&mut self) {
+        self.flush_all();
         while let Some(d) = self
             .nodes
             .iter_mut()
@@ -293,13 +313,14 @@ impl SimMachine {
         self.now = until;
     }
 
-    /// Lets time pass until node `k` has room for another segment or event.
-    fn make_room(&mut self, k: usize, segment: bool) {
+    /// Lets time pass until node `k` has room for `segments` more segments
+    /// (0: for an event).
+    fn make_room(&mut self, k: usize, segments: usize) {
         let window = self.machine.nodes[k].queue.min(NODE_QUEUE);
         loop {
             let st = self.nodes[k].status();
-            let full = if segment {
-                NODE_QUEUE - st.segment_space >= window
+            let full = if segments > 0 {
+                NODE_QUEUE - st.segment_space + segments > window
             } else {
                 st.event_space == 0
             };
@@ -320,11 +341,20 @@ impl SimMachine {
     /// Sends one planned item to the nodes that subscribe to it, letting time
     /// pass when a node's queue is full.
     pub fn submit(&mut self, item: Planned) -> Result<(), SimError> {
+        // The nodes run the quantized trajectory the batches carry: that is
+        // the record every output is checked against.
+        let planned = item;
+        let item = self.dist.quantize(&planned);
         match &item {
             Planned::Segment(s) => {
                 self.stats.segments += 1;
                 self.plant.planned(*s);
-                self.account(s);
+                // Peak figures are the plan's: the quantized direction of a
+                // tiny move may differ from it by a position quantum over its
+                // length, which says nothing about the planner's limits.
+                if let Planned::Segment(p) = &planned {
+                    self.account(p);
+                }
             }
             Planned::Event(e) => {
                 self.stats.events += 1;
@@ -337,9 +367,13 @@ impl SimMachine {
             Planned::Pause { .. } => self.stats.pauses += 1,
         }
         for k in 0..self.nodes.len() {
-            if let Some(msg) = self.dist.route(k, &item) {
-                self.make_room(k, matches!(msg, HostMessage::Segment(_)));
-                self.send(k, &msg)?;
+            for out in self
+                .dist
+                .route_batched(k, &item)
+                .map_err(SimError::Stream)?
+            {
+                self.make_room(k, out.segments);
+                self.send(k, &out.message)?;
             }
         }
         Ok(())

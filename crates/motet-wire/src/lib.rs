@@ -13,6 +13,7 @@ pub mod image;
 pub mod link;
 pub mod message;
 pub mod service;
+pub mod stream;
 pub mod sync;
 
 pub use service::{ServiceError, ServiceReply, ServiceRequest};
@@ -20,6 +21,7 @@ pub use service::{ServiceError, ServiceReply, ServiceRequest};
 pub use message::{
     AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,
 };
+pub use stream::{SegmentBatch, StreamConfig};
 
 /// Why bytes could not be turned into a message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

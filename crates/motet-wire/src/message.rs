@@ -1,5 +1,6 @@
 //! Message types.
 
+use crate::stream::{SegmentBatch, StreamConfig};
 use heapless::Vec;
 use motet_trajectory::{JointMap, Point, ProfileParams, MAX_AXES};
 use serde::{Deserialize, Serialize};
@@ -128,6 +129,12 @@ pub enum HostMessage {
     Seal {
         next_seq: u32,
     },
+    /// The quanta [`HostMessage::Segments`] are rebuilt with. Only valid with
+    /// an empty segment queue.
+    ConfigureStream(StreamConfig),
+    /// Consecutive segments, compactly (see [`crate::stream`]): taken whole or
+    /// refused whole.
+    Segments(SegmentBatch),
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -336,6 +343,15 @@ mod tests {
             HostMessage::GraphClear,
             HostMessage::Windowed,
             HostMessage::Seal { next_seq: 300 },
+            HostMessage::ConfigureStream(StreamConfig {
+                quantum: 1e-3,
+                speed_quantum: 1e-2,
+                accel_quantum: 0.5,
+                path_mask: 0b111,
+            }),
+            HostMessage::Segments(SegmentBatch {
+                bytes: Vec::from_slice(&[3, 0x21, 7, 0x80, 1]).unwrap(),
+            }),
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {

@@ -20,7 +20,17 @@ fn documented_sizes() {
         encode(&ev, &mut buf).unwrap(),
         &[5, 1, 0, 0, 0, 0, 0, 0xe0, 0x58, 0x40, 0, 0, 0x80, 0x3e]
     );
-    let host: [(HostMessage, usize); 8] = [
+    let host = [
+        (
+            HostMessage::ConfigureStream(motet_wire::StreamConfig::default()),
+            26,
+        ),
+        (
+            HostMessage::Segments(motet_wire::SegmentBatch {
+                bytes: heapless::Vec::from_slice(&[0; motet_wire::stream::BATCH_BYTES]).unwrap(),
+            }),
+            192,
+        ),
         (HostMessage::Reset, 1),
         (HostMessage::Windowed, 1),
         (HostMessage::Seal { next_seq: 0 }, 2),

@@ -2,6 +2,7 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
+mod bench_wire;
 mod dance;
 mod netrun;
 mod node;
@@ -214,6 +215,8 @@ enum Cmd {
         #[arg(long)]
         no_sim: bool,
     },
+    /// Bytes on the wire per second of motion for a job (batched and plain segments).
+    BenchWire(bench_wire::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -339,5 +342,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             repeat,
             no_sim,
         } => bench::bench(&machine, &job, repeat, no_sim),
+        Cmd::BenchWire(args) => bench_wire::bench_wire(args),
     }
 }

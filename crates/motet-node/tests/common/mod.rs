@@ -114,6 +114,7 @@ pub fn limits(profile: ProfileKind) -> Limits {
             },
         ],
         lookahead: 24,
+        stop_horizon: 0,
     }
 }
 
