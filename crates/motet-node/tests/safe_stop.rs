@@ -60,7 +60,7 @@ fn windowed(plain: &[HostMessage], n: u32) -> Vec<HostMessage> {
             HostMessage::Reset => out.push(HostMessage::Windowed),
             HostMessage::Segment(_) => {
                 seq += 1;
-                if seq % n == 0 {
+                if seq.is_multiple_of(n) {
                     out.push(HostMessage::Seal { next_seq: seq });
                 }
             }

@@ -125,7 +125,8 @@ fn run_killed(
         // The committed window's tail must never start while the host
         // lives: whenever its start is within `HORIZON`, the host sends
         // further, past its horizon if need be, and seals.
-        while now < kill {
+        let mut progress = now < kill;
+        while progress {
             let deadline = match committed {
                 0 => f64::INFINITY,
                 n => {
@@ -138,7 +139,7 @@ fn run_killed(
                 }
             };
             let urgent = deadline < now + HORIZON;
-            let mut progress = false;
+            progress = false;
             while let Some(item) = planned.get(next) {
                 if let Planned::Segment(s) = item {
                     let ahead = s.t0 > now + HORIZON && !urgent;
@@ -182,9 +183,6 @@ fn run_killed(
                 }
                 committed = sent.len();
                 progress = true;
-            }
-            if !progress {
-                break;
             }
         }
         let idle = nodes
@@ -253,7 +251,7 @@ fn observe(
             let seg = &exec[j];
             let rate = (map.value(&seg.end, 0.0) - map.value(&seg.start, 0.0)).abs()
                 / seg.profile.length();
-            if !(rate > 1e-9) {
+            if rate.is_nan() || rate <= 1e-9 {
                 continue;
             }
             let v1 = 1e6 / (spu * (w[1] - w[0]));
