@@ -128,16 +128,10 @@ fn run_killed(
         let mut progress = now < kill;
         while progress {
             let deadline = match committed {
-                0 => f64::INFINITY,
-                n => {
-                    let c = Contingency::of(&sent[..n]).unwrap();
-                    if c.has_tail() {
-                        c.start_time
-                    } else {
-                        f64::INFINITY
-                    }
-                }
-            };
+                0 => None,
+                n => Contingency::of(&sent[..n]).unwrap().deadline(),
+            }
+            .unwrap_or(f64::INFINITY);
             let urgent = deadline < now + HORIZON;
             progress = false;
             while let Some(item) = planned.get(next) {
