@@ -457,13 +457,11 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             // The queue may have retired the window's head; the tail is found
             // from the end, so a tail still ahead of `now` is found the same.
             let c = Contingency::of(self.segments.iter()).map_err(|_| Refusal::TailStarted)?;
-            if c.deadline().is_some_and(|t| t < self.now) {
+            if c.start_time < self.now {
                 return Err(Refusal::TailStarted);
             }
             let first = self.segments.get(self.committed_len()).map(|s| s.t0);
-            // A window that ends at rest needs no tail: the machine waits at
-            // its end, on the path, for whatever is sealed next.
-            self.tail_start = c.deadline();
+            self.tail_start = Some(c.start_time);
             self.pending = 0;
             self.starved = false;
             if let Some(t0) = first {

@@ -131,11 +131,6 @@ impl Contingency {
         self.start < self.len
     }
 
-    /// When the next seal must have reached every node, µs: the tail's
-    /// start. `None` for a window ending at rest, which can wait for ever.
-    pub fn deadline(&self) -> Option<f64> {
-        self.has_tail().then_some(self.start_time)
-    }
 
     /// A walk over the tail: feed it segments `start..len` in order.
     pub fn walk(&self) -> TailWalk {

@@ -229,8 +229,8 @@ pub enum NodeMessage {
         /// Sequence number after the last committed segment: the machine
         /// stops at that segment's end if nothing more is sealed.
         committed: u32,
-        /// The committed window's contingency tail has started: the node
-        /// takes no segments until `SetPosition` or `Reset`.
+        /// The committed window's tail has started (or its end was reached):
+        /// the node takes no segments until `SetPosition` or `Reset`.
         stopped: bool,
     },
     /// A message was refused; nothing in the queues changed.
