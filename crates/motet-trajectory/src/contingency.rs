@@ -131,6 +131,7 @@ impl Contingency {
         self.start < self.len
     }
 
+
     /// A walk over the tail: feed it segments `start..len` in order.
     pub fn walk(&self) -> TailWalk {
         TailWalk {

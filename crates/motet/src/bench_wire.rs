@@ -56,7 +56,7 @@ impl Traffic {
 }
 
 /// The machine file's text with every `microstep = N` set to `m`.
-fn with_microsteps(text: &str, m: u32) -> String {
+pub(crate) fn with_microsteps(text: &str, m: u32) -> String {
     let key = "microstep";
     let mut out = String::with_capacity(text.len());
     let mut rest = text;

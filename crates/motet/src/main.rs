@@ -2,6 +2,7 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
+mod bench_net;
 mod bench_wire;
 mod dance;
 mod netrun;
@@ -217,6 +218,8 @@ enum Cmd {
     },
     /// Bytes on the wire per second of motion for a job (batched and plain segments).
     BenchWire(bench_wire::Args),
+    /// Stream a job through the whole network stack on a simulated clock: bytes on the wire per second of motion, clock error, under optional jitter and faults.
+    BenchNet(bench_net::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -343,5 +346,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             no_sim,
         } => bench::bench(&machine, &job, repeat, no_sim),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
+        Cmd::BenchNet(args) => bench_net::bench_net(args),
     }
 }

@@ -134,10 +134,13 @@ fn check(planned: &[Segment], what: &str) -> Contingency {
     c
 }
 
+/// (name, boundary speeds, lengths, accels, jerk)
+type Case<'a> = (&'a str, &'a [f64], &'a [f64], &'a [f64], f64);
+
 #[test]
 fn windows() {
     // (name, boundary speeds, lengths, accels, jerk)
-    let cases: &[(&str, &[f64], &[f64], &[f64], f64)] = &[
+    let cases: &[Case] = &[
         (
             "accelerating",
             &[0.0, 40.0, 60.0, 70.0],

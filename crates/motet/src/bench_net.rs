@@ -1,0 +1,210 @@
+//! `motet bench-net`: a job streamed through the whole network stack (links,
+//! clock sync, windows and seals, batches, acknowledgements) to simulated
+//! nodes on a simulated clock, measuring bytes on the wire per second of
+//! motion and the nodes' true clock error, optionally under injected jitter
+//! and faults.
+
+use anyhow::{bail, Context, Result};
+use motet_api::job::{parse_job, read_bytes};
+use motet_api::{JobKind, JobOptions};
+use motet_host::Machine;
+use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
+use motet_link::Transport;
+use motet_net::loopback::{Loopback, NodeClock};
+use motet_net::{NetConfig, Phase};
+use motet_wire::frame::{self, Flags, Header, MAX_FRAME};
+use motet_wire::service::{ServiceReply, ServiceRequest};
+use motet_wire::{encode, MAX_MESSAGE};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[arg(long, default_value = "examples/printer.toml")]
+    machine: PathBuf,
+    #[arg(long, default_value = "bench/data/prusaslicer-twisted-vase.gcode.gz")]
+    job: PathBuf,
+    /// Replace every actuator chain's microstep value.
+    #[arg(long)]
+    microsteps: Option<u32>,
+    /// Seconds of motion to measure [default: the whole job].
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Extra delay of every frame, uniform in 0..=J µs, both ways.
+    #[arg(long, default_value_t = 0)]
+    jitter_us: u64,
+    /// Rate of each fault (corrupt, drop, duplicate, delay, reorder) per frame.
+    #[arg(long, default_value_t = 0.0)]
+    faults: f64,
+}
+
+/// Wire size of one frame carrying `payload` bytes.
+fn frame_len<T: serde::Serialize>(m: &T) -> usize {
+    let mut buf = [0u8; MAX_MESSAGE];
+    let p = encode(m, &mut buf).map(|b| b.to_vec()).unwrap_or_default();
+    let h = Header {
+        dst: 2,
+        src: 1,
+        port: 7,
+        flags: Flags::NONE,
+        seq: 0,
+        ack: 0,
+    };
+    let mut out = [0u8; MAX_FRAME];
+    frame::encode(&h, &p, &mut out).unwrap_or(0)
+}
+
+pub fn bench_net(args: Args) -> Result<()> {
+    let text = std::fs::read_to_string(&args.machine)
+        .with_context(|| format!("reading {}", args.machine.display()))?;
+    let text = match args.microsteps {
+        Some(m) => crate::bench_wire::with_microsteps(&text, m),
+        None => text,
+    };
+    let machine = Machine::parse(&text, &args.machine)?;
+    let data = read_bytes(&args.job)?;
+    let job = parse_job(
+        &machine,
+        &args.job,
+        JobKind::of(&args.job)?,
+        &data,
+        &JobOptions { allow_unknown: true },
+    )?;
+    let steps: Vec<String> = machine
+        .actuators
+        .iter()
+        .map(|a| format!("{} {:.1}", a.name, a.steps_per_unit))
+        .collect();
+    println!("machine: {} (steps/unit: {})", args.machine.display(), steps.join(", "));
+    let n = machine.nodes.len();
+    let clock = SimClock::new();
+    let fault = |seed: u64| FaultConfig {
+        jitter_us: args.jitter_us,
+        ..FaultConfig::all(seed, args.faults)
+    };
+    let links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)> = (0..n)
+        .map(|k| {
+            let (a, b) = motet_link::pair(&format!("host{k}"), &format!("node{k}"));
+            let c = || FaultClock::Simulated(clock.clone());
+            (
+                Box::new(Faulty::with_clock(a, fault(2 * k as u64 + 1), c())) as Box<dyn Transport + Send>,
+                Box::new(Faulty::with_clock(b, fault(2 * k as u64 + 2), c())) as Box<dyn Transport + Send>,
+            )
+        })
+        .collect();
+    // Crystals off by up to ±200 ppm.
+    let clocks: Vec<NodeClock> = (0..n)
+        .map(|k| NodeClock {
+            ppm: [200.0, -200.0, 120.0, -80.0][k % 4],
+            offset_us: 987_654_321 * (k as u64 + 1),
+        })
+        .collect();
+    let wall = std::time::Instant::now();
+    let mut lb = Loopback::new(&machine, job.commands, machine.start, links, &clocks, NetConfig::default());
+    let mut streaming_at = None;
+    let mut errors: Vec<Vec<f64>> = vec![Vec::new(); n];
+    let mut next_sample = 0u64;
+    let limit = args.seconds.map(|s| (s * 1e6) as u64);
+    let phase = loop {
+        clock.set(lb.now);
+        lb.step()?;
+        let phase = lb.run.phase().clone();
+        if matches!(phase, Phase::Done | Phase::Stopped(_)) {
+            break phase;
+        }
+        if phase == Phase::Streaming && streaming_at.is_none() {
+            streaming_at = Some(lb.now);
+        }
+        if let Some(s) = streaming_at {
+            if lb.now >= next_sample {
+                next_sample = lb.now + 100_000;
+                for (k, node) in lb.nodes.iter().enumerate() {
+                    let local = node.offset_us as f64 + lb.now as f64 * (1.0 + node.ppm * 1e-6);
+                    if let Some(h) = node.node.endpoint.services().host_time(local) {
+                        errors[k].push(h - lb.now as f64);
+                    }
+                }
+            }
+            if limit.is_some_and(|l| lb.now > s + l) {
+                break phase;
+            }
+        }
+        if lb.now > 100 * 3_600_000_000 {
+            bail!("the run did not finish in 100 simulated hours");
+        }
+    };
+    let start = streaming_at.context("the run never started streaming")?;
+    let motion = (lb.now - start) as f64 * 1e-6;
+    println!(
+        "run: {} of motion streamed in {:.1} s wall ({:?})",
+        fmt_s(motion),
+        wall.elapsed().as_secs_f64(),
+        match &phase {
+            Phase::Done => "done".to_string(),
+            Phase::Stopped(s) => format!("stopped: {}", s.reason),
+            _ => "measured part".into(),
+        }
+    );
+    let ex = frame_len(&ServiceRequest::TimeGet { t1: u64::MAX / 3 })
+        + frame_len(&ServiceReply::Time {
+            t1: u64::MAX / 3,
+            t2: u64::MAX / 3,
+            t3: u64::MAX / 3,
+        });
+    let (mut out, mut inb, mut frames, mut sync) = (0u64, 0u64, 0u64, 0u64);
+    for p in lb.run.peers() {
+        let t = p.transport().stats();
+        out += t.bytes_out;
+        inb += t.bytes_in;
+        frames += t.frames_out + t.frames_in;
+        sync += p.exchanges.0 * ex as u64;
+    }
+    let total = out + inb;
+    println!(
+        "wire, all {} node(s) together: {:.3} KB/s ({:.0} B/s host→nodes, {:.0} B/s nodes→host, {:.1} frames/s)",
+        n,
+        total as f64 / motion / 1000.0,
+        out as f64 / motion,
+        inb as f64 / motion,
+        frames as f64 / motion
+    );
+    println!(
+        "  of which clock exchanges: {:.0} B/s ({} B each, every {} ms); without them {:.3} KB/s",
+        sync as f64 / motion,
+        ex,
+        NetConfig::default().sync_interval_us / 1000,
+        (total - sync.min(total)) as f64 / motion / 1000.0
+    );
+    println!(
+        "  {} windows sealed ({:.2}/s), {} segments ({:.1}/s), {} retransmits",
+        lb.run.windows,
+        lb.run.windows as f64 / motion,
+        lb.run.segments_sent,
+        lb.run.segments_sent as f64 / motion,
+        lb.run.peers().iter().map(|p| p.link().stats().retransmits).sum::<u64>()
+    );
+    for (k, e) in errors.iter().enumerate() {
+        if e.is_empty() {
+            continue;
+        }
+        let max = e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
+        println!(
+            "  node {} ({:+} ppm): clock error while streaming max {:.1} µs, rms {:.1} µs ({} samples, jitter {} µs)",
+            machine.nodes[k].name,
+            clocks[k].ppm,
+            max,
+            rms,
+            e.len(),
+            args.jitter_us
+        );
+    }
+    Ok(())
+}
+
+fn fmt_s(s: f64) -> String {
+    if s > 120.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{s:.1} s")
+    }
+}
