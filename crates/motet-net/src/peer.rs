@@ -12,12 +12,85 @@ use std::collections::VecDeque;
 /// The host's own address on every link.
 pub const HOST_ADDRESS: u16 = 1;
 
-/// The clock estimator's settings for exchanges every 100 ms: points of 16
-/// exchanges (1.6 s), so a node is synchronised 3.2 s after the first exchange.
+/// The fine clock estimator's settings: points of 16 exchanges.
 pub fn sync_config() -> SyncConfig {
     SyncConfig {
         bin: 16,
         ..SyncConfig::default()
+    }
+}
+
+/// Settings of the coarse estimator that runs first: short bins, so its
+/// points are hardly biased by the unknown drift, for a first skew.
+fn coarse_config() -> SyncConfig {
+    SyncConfig {
+        bin: 2,
+        change_threshold: 0.0,
+        ..SyncConfig::default()
+    }
+}
+
+/// A node's clock estimate: a coarse estimator until it has a skew, then a
+/// fine one started from that skew (see [`ClockSync::with_skew`]).
+#[derive(Clone, Debug)]
+pub struct NodeClock {
+    coarse: ClockSync,
+    fine: Option<ClockSync>,
+}
+
+impl Default for NodeClock {
+    fn default() -> Self {
+        NodeClock {
+            coarse: ClockSync::new(coarse_config()),
+            fine: None,
+        }
+    }
+}
+
+impl NodeClock {
+    pub fn add(&mut self, e: Exchange) {
+        match self.fine.as_mut() {
+            Some(f) => {
+                f.add(e);
+            }
+            None => {
+                self.coarse.add(e);
+                // A few coarse points: the skew is known to a few ppm.
+                if self.coarse.points() >= 8 {
+                    self.fine = Some(ClockSync::with_skew(
+                        sync_config(),
+                        self.coarse.model().skew,
+                    ));
+                }
+            }
+        }
+    }
+
+    fn current(&self) -> &ClockSync {
+        match &self.fine {
+            Some(f) if f.synced() => f,
+            _ => &self.coarse,
+        }
+    }
+
+    pub fn synced(&self) -> bool {
+        self.current().synced()
+    }
+
+    pub fn model(&self) -> motet_wire::sync::ClockModel {
+        self.current().model()
+    }
+
+    pub fn error_estimate(&self, host: f64) -> f64 {
+        self.current().error_estimate(host)
+    }
+
+    pub fn local_to_host(&self, local: f64) -> f64 {
+        self.current().local_to_host(local)
+    }
+
+    pub fn points(&self) -> u32 {
+        self.current().points()
     }
 }
 
@@ -42,7 +115,7 @@ pub struct Peer {
     pub address: u16,
     transport: Box<dyn Transport + Send>,
     link: Link,
-    pub sync: ClockSync,
+    pub sync: NodeClock,
     outbox: VecDeque<Outgoing>,
     /// Host time of the last frame from the node, µs.
     pub last_heard: Option<u64>,
@@ -70,7 +143,7 @@ impl Peer {
             address,
             transport,
             link,
-            sync: ClockSync::new(sync_config()),
+            sync: NodeClock::default(),
             outbox: VecDeque::new(),
             last_heard: None,
             wrong_address: 0,

@@ -79,6 +79,18 @@ pub fn resume(
             len: commands.len(),
         });
     }
+    Ok(resume_at(commands, from, to, command))
+}
+
+/// The commands that finish `commands` from command `command`, with the
+/// machine at rest at `from` and the job continuing at `to`.
+pub fn resume_at(
+    commands: &[Located<Command>],
+    from: Point,
+    to: Point,
+    command: usize,
+) -> Resumption {
+    let command = command.min(commands.len());
     let here = commands
         .get(command)
         .map(|c| c.loc)
@@ -109,12 +121,12 @@ pub fn resume(
     }
     out.extend(tools.into_iter().flatten());
     out.extend_from_slice(&commands[command..]);
-    Ok(Resumption {
+    Resumption {
         from,
         to,
         command,
         commands: out,
-    })
+    }
 }
 
 #[cfg(test)]

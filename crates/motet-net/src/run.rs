@@ -53,10 +53,10 @@ impl Default for NetConfig {
             lead_min_us: 100_000,
             node_timeout_us: 1_500_000,
             status_interval_us: 2_000_000,
-            sync_interval_us: 100_000,
-            model_interval_us: 1_000_000,
+            sync_interval_us: 400_000,
+            model_interval_us: 5_000_000,
             connect_timeout_us: 5_000_000,
-            window_us: 400_000,
+            window_us: 1_000_000,
         }
     }
 }

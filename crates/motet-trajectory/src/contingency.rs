@@ -131,7 +131,6 @@ impl Contingency {
         self.start < self.len
     }
 
-
     /// A walk over the tail: feed it segments `start..len` in order.
     pub fn walk(&self) -> TailWalk {
         TailWalk {

@@ -208,6 +208,17 @@ impl ClockSync {
         }
     }
 
+    /// An estimator that starts from a known skew (from a coarser estimate):
+    /// the first bins then place their observations with it instead of with
+    /// no drift at all, which would bias them by up to skew × bin span.
+    pub fn with_skew(cfg: SyncConfig, skew: f64) -> ClockSync {
+        let mut s = ClockSync::new(cfg);
+        if skew.is_finite() {
+            s.b = skew;
+        }
+        s
+    }
+
     /// Filtered points fitted so far.
     pub fn points(&self) -> u32 {
         self.points

@@ -35,6 +35,9 @@ pub struct Args {
     /// Rate of each fault (corrupt, drop, duplicate, delay, reorder) per frame.
     #[arg(long, default_value_t = 0.0)]
     faults: f64,
+    /// Clock exchanges with each node, ms apart [default: the run's default].
+    #[arg(long)]
+    sync_ms: Option<f64>,
 }
 
 /// Wire size of one frame carrying `payload` bytes.
@@ -67,14 +70,20 @@ pub fn bench_net(args: Args) -> Result<()> {
         &args.job,
         JobKind::of(&args.job)?,
         &data,
-        &JobOptions { allow_unknown: true },
+        &JobOptions {
+            allow_unknown: true,
+        },
     )?;
     let steps: Vec<String> = machine
         .actuators
         .iter()
         .map(|a| format!("{} {:.1}", a.name, a.steps_per_unit))
         .collect();
-    println!("machine: {} (steps/unit: {})", args.machine.display(), steps.join(", "));
+    println!(
+        "machine: {} (steps/unit: {})",
+        args.machine.display(),
+        steps.join(", ")
+    );
     let n = machine.nodes.len();
     let clock = SimClock::new();
     let fault = |seed: u64| FaultConfig {
@@ -86,8 +95,10 @@ pub fn bench_net(args: Args) -> Result<()> {
             let (a, b) = motet_link::pair(&format!("host{k}"), &format!("node{k}"));
             let c = || FaultClock::Simulated(clock.clone());
             (
-                Box::new(Faulty::with_clock(a, fault(2 * k as u64 + 1), c())) as Box<dyn Transport + Send>,
-                Box::new(Faulty::with_clock(b, fault(2 * k as u64 + 2), c())) as Box<dyn Transport + Send>,
+                Box::new(Faulty::with_clock(a, fault(2 * k as u64 + 1), c()))
+                    as Box<dyn Transport + Send>,
+                Box::new(Faulty::with_clock(b, fault(2 * k as u64 + 2), c()))
+                    as Box<dyn Transport + Send>,
             )
         })
         .collect();
@@ -99,7 +110,14 @@ pub fn bench_net(args: Args) -> Result<()> {
         })
         .collect();
     let wall = std::time::Instant::now();
-    let mut lb = Loopback::new(&machine, job.commands, machine.start, links, &clocks, NetConfig::default());
+    let mut cfg = NetConfig::default();
+    if let Some(ms) = args.sync_ms {
+        if !(ms.is_finite() && ms >= 1.0) {
+            bail!("--sync-ms must be at least 1");
+        }
+        cfg.sync_interval_us = (ms * 1000.0) as u64;
+    }
+    let mut lb = Loopback::new(&machine, job.commands, machine.start, links, &clocks, cfg);
     let mut streaming_at = None;
     let mut errors: Vec<Vec<f64>> = vec![Vec::new(); n];
     let mut next_sample = 0u64;
@@ -171,7 +189,7 @@ pub fn bench_net(args: Args) -> Result<()> {
         "  of which clock exchanges: {:.0} B/s ({} B each, every {} ms); without them {:.3} KB/s",
         sync as f64 / motion,
         ex,
-        NetConfig::default().sync_interval_us / 1000,
+        cfg.sync_interval_us / 1000,
         (total - sync.min(total)) as f64 / motion / 1000.0
     );
     println!(
@@ -180,7 +198,11 @@ pub fn bench_net(args: Args) -> Result<()> {
         lb.run.windows as f64 / motion,
         lb.run.segments_sent,
         lb.run.segments_sent as f64 / motion,
-        lb.run.peers().iter().map(|p| p.link().stats().retransmits).sum::<u64>()
+        lb.run
+            .peers()
+            .iter()
+            .map(|p| p.link().stats().retransmits)
+            .sum::<u64>()
     );
     for (k, e) in errors.iter().enumerate() {
         if e.is_empty() {
@@ -188,12 +210,16 @@ pub fn bench_net(args: Args) -> Result<()> {
         }
         let max = e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
+        // After the first minute (samples every 100 ms): the estimator settled.
+        let late = &e[e.len().min(600)..];
+        let late_max = late.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         println!(
-            "  node {} ({:+} ppm): clock error while streaming max {:.1} µs, rms {:.1} µs ({} samples, jitter {} µs)",
+            "  node {} ({:+} ppm): clock error while streaming max {:.1} µs, rms {:.1} µs; after the first minute max {:.1} µs ({} samples, jitter {} µs)",
             machine.nodes[k].name,
             clocks[k].ppm,
             max,
             rms,
+            late_max,
             e.len(),
             args.jitter_us
         );

@@ -39,6 +39,7 @@ pub struct NetArgs<'a> {
     pub mode: NodesMode,
     pub time_scale: f64,
     pub lead_ms: f64,
+    pub sync_ms: f64,
 }
 
 /// What `motet resume` needs: written when a networked run starts.
@@ -50,6 +51,8 @@ pub struct ResumeFile {
     pub allow_unknown: bool,
     pub time_scale: f64,
     pub lead_ms: f64,
+    #[serde(default = "default_sync_ms")]
+    pub sync_ms: f64,
     /// For a resumed run: the job command its journal's command 0.. after the
     /// prelude stand for, the prelude's length, and where the prelude went.
     #[serde(default)]
@@ -69,9 +72,15 @@ pub struct ResumeNode {
     pub address: u16,
 }
 
-fn cfg(lead_ms: f64, time_scale: f64) -> NetConfig {
+fn default_sync_ms() -> f64 {
+    NetConfig::default().sync_interval_us as f64 / 1000.0
+}
+
+fn cfg(r: &ResumeFile) -> NetConfig {
+    let (lead_ms, time_scale) = (r.lead_ms, r.time_scale);
     let mut c = NetConfig::default();
     c.lead_min_us = (lead_ms * 1000.0) as u64;
+    c.sync_interval_us = (r.sync_ms.max(1.0) * 1000.0) as u64;
     // Timeouts are in the run's own (possibly scaled) time.
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c.connect_timeout_us = (c.connect_timeout_us as f64 * time_scale.max(1.0)) as u64;
@@ -81,6 +90,12 @@ fn cfg(lead_ms: f64, time_scale: f64) -> NetConfig {
 pub fn run(a: NetArgs) -> Result<()> {
     if !(a.time_scale.is_finite() && a.time_scale > 0.0) {
         bail!("--time-scale must be a positive number");
+    }
+    if !(a.sync_ms.is_finite() && a.sync_ms >= 1.0) {
+        bail!("--sync-ms must be at least 1");
+    }
+    if !(a.lead_ms.is_finite() && a.lead_ms > 0.0) {
+        bail!("--lead-ms must be a positive number");
     }
     let machine = Machine::load(a.machine_path)?;
     let loaded = load_job(
@@ -129,6 +144,7 @@ pub fn run(a: NetArgs) -> Result<()> {
         allow_unknown: a.allow_unknown,
         time_scale: a.time_scale,
         lead_ms: a.lead_ms,
+        sync_ms: a.sync_ms,
         base_command: 0,
         prelude: 0,
         prelude_to: None,
@@ -175,7 +191,7 @@ fn drive(
         commands,
         peers,
         start,
-        cfg(resume_file.lead_ms, resume_file.time_scale),
+        cfg(&resume_file),
         Some(journal),
     );
     let bar = if quiet || !std::io::stderr().is_terminal() {
@@ -358,6 +374,7 @@ pub fn resume_cmd(out: &Path, quiet: bool) -> Result<()> {
     }
     let window_end = window_end.unwrap_or(0);
     // A resumed run's journal counts its own commands: map them to the job's.
+    let raw: Vec<usize> = journal.segments.iter().map(|s| s.command).collect();
     if rf.base_command > 0 || rf.prelude > 0 {
         for s in journal.segments.iter_mut() {
             s.command = if s.command < rf.prelude {
@@ -367,7 +384,21 @@ pub fn resume_cmd(out: &Path, quiet: bool) -> Result<()> {
             };
         }
     }
-    let r = resume(&loaded.commands, &journal, window_end, machine.start)?;
+    // Stopped while going back for an earlier stop: go back to the same place.
+    let in_prelude = journal
+        .seal_ending(window_end)
+        .and_then(|s| raw.get(s.tail as usize).copied())
+        .is_some_and(|c| c < rf.prelude);
+    let mut r = resume(&loaded.commands, &journal, window_end, machine.start)?;
+    if in_prelude {
+        if let Some(to) = rf
+            .prelude_to
+            .as_deref()
+            .and_then(|v| <[f64; 6]>::try_from(v).ok())
+        {
+            r = motet_net::resume::resume_at(&loaded.commands, r.from, to, rf.base_command);
+        }
+    }
     if !quiet {
         println!(
             "resuming {}: the machine rests at {:?}; back to {:?}, then on from command {} of {}",
