@@ -25,6 +25,12 @@ pub enum AdminError {
         address: u16,
         tries: u32,
     },
+    #[error("{link}: a request to node {address} was answered from address {from}: another node is on this link, or the node's address changed; pair again")]
+    WrongAddress {
+        link: String,
+        address: u16,
+        from: u16,
+    },
     #[error("{link}: node {address:#06x} refused: {error}")]
     Refused {
         link: String,
@@ -140,11 +146,16 @@ impl Admin {
 
     /// Sends `req` to `dst` until a reply on its port comes from `dst`.
     pub fn request(&mut self, dst: u16, req: &ServiceRequest) -> Result<ServiceReply, AdminError> {
+        let mut stranger = None;
         for _ in 0..self.tries {
             self.send(dst, req)?;
             let until = Instant::now() + self.timeout;
             while let Some((src, port, reply)) = self.receive(until)? {
-                if port != req.port() || (dst != BROADCAST && src != dst) {
+                if port != req.port() {
+                    continue;
+                }
+                if dst != BROADCAST && src != dst {
+                    stranger = Some(src);
                     continue;
                 }
                 if let ServiceReply::Error(e) = reply {
@@ -157,10 +168,17 @@ impl Admin {
                 return Ok(reply);
             }
         }
-        Err(AdminError::NoAnswer {
-            link: self.link.clone(),
-            address: dst,
-            tries: self.tries,
+        Err(match stranger {
+            Some(from) => AdminError::WrongAddress {
+                link: self.link.clone(),
+                address: dst,
+                from,
+            },
+            None => AdminError::NoAnswer {
+                link: self.link.clone(),
+                address: dst,
+                tries: self.tries,
+            },
         })
     }
 
@@ -354,4 +372,90 @@ pub fn free_address(taken: &[u16]) -> u16 {
         .find(|a| !taken.contains(a))
         .filter(|a| is_node_address(*a))
         .unwrap_or(2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motet_wire::service::{NodeState, Status};
+
+    /// A fake node on the far end of `t`: answers every request with `reply`
+    /// from address `from`, until the test ends.
+    fn fake_node(mut t: motet_link::MemTransport, from: u16, reply: ServiceReply) {
+        std::thread::spawn(move || {
+            while let Ok(got) = t.recv(Some(Duration::from_secs(5))) {
+                let Some(bytes) = got else { break };
+                let mut raw = [0u8; MAX_RAW];
+                let Ok(f) = frame::decode(&bytes, &mut raw) else {
+                    continue;
+                };
+                let mut buf = [0u8; MAX_MESSAGE];
+                let payload = encode(&reply, &mut buf).unwrap();
+                let h = Header {
+                    dst: HOST_ADDRESS,
+                    src: from,
+                    port: f.header.port,
+                    flags: Flags::NONE,
+                    seq: 0,
+                    ack: 0,
+                };
+                let mut out = [0u8; MAX_FRAME];
+                let n = frame::encode(&h, payload, &mut out).unwrap();
+                if t.send(&out[..n]).is_err() {
+                    break;
+                }
+            }
+        });
+    }
+
+    fn admin_with(from: u16, reply: ServiceReply) -> Admin {
+        let (a, b) = motet_link::pair("host", "node");
+        fake_node(b, from, reply);
+        let mut admin = Admin::new(Box::new(a), "mem");
+        admin.timeout = Duration::from_millis(50);
+        admin.tries = 2;
+        admin
+    }
+
+    #[test]
+    fn wrong_answers_are_named() {
+        let status = ServiceReply::Status(Status {
+            state: NodeState::Idle,
+            address: 7,
+            paired: true,
+            link_up: false,
+            synced: false,
+            uptime_us: 1,
+        });
+        // A node answering from another address than the one asked.
+        let e = admin_with(7, status.clone())
+            .status(2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("answered from address 7"), "{e}");
+        // The right address but the wrong kind of answer.
+        let e = admin_with(2, status).info(2).unwrap_err().to_string();
+        assert!(e.contains("answered Status"), "{e}");
+        // SetAddress answered by another node than the uid named.
+        let e = admin_with(
+            0,
+            ServiceReply::Paired {
+                uid: 99,
+                address: 2,
+            },
+        )
+        .set_address(5, 2)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("uid 0000000000000063"), "{e}");
+        // A refusal is passed on with its reason.
+        let e = admin_with(
+            2,
+            ServiceReply::Error(motet_wire::service::ServiceError::NotVerified),
+        )
+        .identify(2, 10)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("refused"), "{e}");
+    }
 }

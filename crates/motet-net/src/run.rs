@@ -147,6 +147,9 @@ pub struct NetRun {
     pending: Vec<(Committed, usize)>,
     pending_events: usize,
     committed: VecDeque<Committed>,
+    /// Every committed segment as run (tails included after a stop), for
+    /// "where was the machine at time t".
+    history: Vec<Segment>,
     next_index: u32,
     /// End time of the last committed segment, µs.
     committed_end: f64,
@@ -192,6 +195,7 @@ impl NetRun {
             pending: Vec::new(),
             pending_events: 0,
             committed: VecDeque::new(),
+            history: Vec::new(),
             next_index: 0,
             committed_end: f64::NEG_INFINITY,
             deadline: f64::NEG_INFINITY,
@@ -246,6 +250,15 @@ impl NetRun {
             .back()
             .map(|c| c.seg.end)
             .unwrap_or(self.start_point);
+        // From here the nodes run the tail: so does the record.
+        let n = self.committed.len().min(self.history.len());
+        let from = self.history.len() - n;
+        if let Ok(c) = motet_trajectory::contingency::Contingency::of(self.history[from..].iter()) {
+            let mut walk = c.walk();
+            for s in self.history[from + c.start..].iter_mut() {
+                *s = walk.next(s);
+            }
+        }
         let rest_time = crate::tail::rest_time(self.committed.iter().map(|c| &c.seg), now as f64)
             .max(self.committed_end.min(now as f64));
         self.phase = Phase::Stopping(StopInfo {
@@ -643,6 +656,7 @@ impl NetRun {
         }
         for (c, _) in &pending {
             self.committed.push_back(*c);
+            self.history.push(c.seg);
             self.committed_end = c.seg.t1();
         }
         let segs: Vec<&Segment> = self.committed.iter().map(|c| &c.seg).collect();
@@ -695,6 +709,18 @@ impl NetRun {
                 }
             })
             .collect()
+    }
+
+    /// Where the machine was (or will be, within the committed window) at
+    /// host time `t`, µs: on the committed trajectory, with the tail after a
+    /// stop, at rest between segments and after the last.
+    pub fn position_at(&self, t: f64) -> Point {
+        let i = self.history.partition_point(|s| s.t0 <= t);
+        match i.checked_sub(1).map(|i| &self.history[i]) {
+            None => self.start_point,
+            Some(s) if t < s.t1() => s.position_at(t),
+            Some(s) => s.end,
+        }
     }
 
     /// The committed segments the host still keeps, with their indices.

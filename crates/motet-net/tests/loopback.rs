@@ -302,3 +302,48 @@ fn a_node_that_stops_answering_stops_the_others_with_it() {
     let rest: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
     assert_eq!(rest, steps_at(&m, &info.point));
 }
+
+/// A node's step position of channel `ch` at host time `t`, from its trace.
+fn traced_at(lb: &Loopback, node: usize, ch: u8, t: f64) -> i64 {
+    let trace = lb.nodes[node].node.board.trace.as_ref().unwrap();
+    trace
+        .iter()
+        .take_while(|s| s.0 <= t)
+        .filter(|s| s.1 == ch)
+        .map(|s| if s.2 { 1 } else { -1 })
+        .sum()
+}
+
+#[test]
+fn the_host_knows_where_the_machine_was_at_any_time() {
+    let (m, cmds) = load(
+        "examples/gestalt-3axis.toml",
+        "examples/jobs/gestalt-3d.gcode",
+    );
+    let n = m.nodes.len();
+    let start = steps_at(&m, &m.start);
+    let mut lb = Loopback::new(
+        &m,
+        cmds,
+        m.start,
+        clean_links(n),
+        &[NodeClock::default(); 3],
+        NetConfig::default(),
+    );
+    assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
+    let end = lb.run.committed_end();
+    for k in 1..40 {
+        let t = end * k as f64 / 40.0;
+        let want = steps_at(&m, &lb.run.position_at(t));
+        for (node, spec) in m.nodes.iter().enumerate() {
+            for (ch, &a) in spec.actuators.iter().enumerate() {
+                let got = start[a] + traced_at(&lb, node, ch as u8, t);
+                assert!(
+                    (got - want[a]).abs() <= 1,
+                    "t={t} actuator {a}: steps {got}, history says {}",
+                    want[a]
+                );
+            }
+        }
+    }
+}
