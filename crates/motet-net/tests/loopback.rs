@@ -291,6 +291,8 @@ fn a_node_that_stops_answering_stops_the_others_with_it() {
         "{}",
         info.reason
     );
+    // The host's record follows the tail to the same rest.
+    assert_eq!(lb.run.position_at(info.rest_time + 1e6), info.point);
     // Let every node finish its tail.
     lb.host_alive = false;
     lb.run_until_settled(10_000_000).unwrap();
