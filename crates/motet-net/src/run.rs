@@ -23,7 +23,7 @@ use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
 /// How long after a segment's end a node may still hold it, µs.
-const RETIRE_SLACK_US: f64 = 20_000.0;
+const RETIRE_SLACK_US: f64 = 5_000.0;
 
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,9 +140,9 @@ pub struct NetRun {
     next_command: usize,
     planner: Option<SourcedPlanner>,
     planner_done: bool,
+    /// The planner has given everything: the job is all routed.
+    exhausted: bool,
     start_point: Point,
-    /// Items taken from the planner but not routed yet (capacity full).
-    held: Option<Sourced>,
     /// Routed to the nodes but not sealed.
     pending: Vec<(Committed, usize)>,
     pending_events: usize,
@@ -190,8 +190,8 @@ impl NetRun {
             next_command: 0,
             planner: None,
             planner_done: false,
+            exhausted: false,
             start_point: start,
-            held: None,
             pending: Vec::new(),
             pending_events: 0,
             committed: VecDeque::new(),
@@ -535,7 +535,7 @@ impl NetRun {
             }
             let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
             if self.pending.is_empty() && self.pending_events == 0 {
-                if !grew && self.planner_done && self.held.is_none() {
+                if !grew && self.exhausted {
                     self.phase = Phase::Draining;
                 }
                 break;
@@ -612,9 +612,6 @@ impl NetRun {
 
     /// The next planned item, planning more commands as needed.
     fn next_item(&mut self) -> Result<Option<Sourced>, NetError> {
-        if let Some(h) = self.held.take() {
-            return Ok(Some(h));
-        }
         let Some(planner) = self.planner.as_mut() else {
             return Ok(None);
         };
@@ -635,6 +632,7 @@ impl NetRun {
                 planner.finish();
                 self.planner_done = true;
             } else {
+                self.exhausted = true;
                 return Ok(None);
             }
         }

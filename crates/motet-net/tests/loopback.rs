@@ -349,3 +349,42 @@ fn the_host_knows_where_the_machine_was_at_any_time() {
         }
     }
 }
+
+/// Ten thousand moves of 0.02 mm asked for at 250 mm/s: a 64-segment queue
+/// holds 1.3 mm, far less than the machine needs to stop from that speed.
+/// The planner slows down (its stop horizon) so that every sealed window can
+/// stop within the queue: the networked run finishes with no stop, no
+/// underrun, and the simulator's steps.
+#[test]
+fn tiny_fast_moves_slow_down_instead_of_stopping_the_network() {
+    let m = Machine::load(&root().join("examples/printer.toml")).unwrap();
+    let r = 0.02 / 1e-4;
+    let cmds: Vec<Located<Command>> = (1..=10_000)
+        .map(|k| {
+            let a = k as f64 * 1e-4;
+            Located {
+                loc: motet_planner::SourceLoc { line: k, column: 0 },
+                item: Command::Move(motet_planner::Move {
+                    target: [r * a.sin(), r * (1.0 - a.cos()), 0.0, 0.0, 0.0, 0.0],
+                    feed: 250.0,
+                    kind: motet_planner::MoveKind::Feed,
+                }),
+            }
+        })
+        .collect();
+    let want = simulated(&m, &cmds);
+    let n = m.nodes.len();
+    let mut lb = Loopback::new(
+        &m,
+        cmds,
+        m.start,
+        clean_links(n),
+        &clocks(n),
+        NetConfig::default(),
+    );
+    assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
+    assert_eq!(executed(&m, &lb), want);
+    assert_eq!(lb.nodes[0].node.endpoint.node().status().underruns, 0);
+    // Every window held at most the queue.
+    assert!(lb.run.segments_sent as f64 / lb.run.windows as f64 <= 64.0);
+}
