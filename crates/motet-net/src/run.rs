@@ -23,7 +23,7 @@ use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
 /// How long after a segment's end a node may still hold it, µs.
-const RETIRE_SLACK_US: f64 = 5_000.0;
+const RETIRE_SLACK_US: f64 = 50_000.0;
 
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -163,6 +163,7 @@ pub struct NetRun {
     model_sent: Vec<Option<u64>>,
     next_sync: u64,
     next_status: u64,
+    room_asked_at: Option<u64>,
     pub windows: u64,
     pub segments_sent: u64,
     pub pauses: u64,
@@ -207,6 +208,7 @@ impl NetRun {
             model_sent: vec![None; n],
             next_sync: 0,
             next_status: 0,
+            room_asked_at: None,
             windows: 0,
             segments_sent: 0,
             pauses: 0,
@@ -484,6 +486,26 @@ impl NetRun {
         self.ask_status(now);
     }
 
+    /// Asks every node that takes segments for its status, at most once per
+    /// round trip.
+    fn ask_room(&mut self, now: u64) {
+        let rtt = self
+            .peers
+            .iter()
+            .map(|p| p.link().stats().srtt_us)
+            .max()
+            .unwrap_or(0);
+        if self.room_asked_at.is_some_and(|t| now < t + rtt.max(1_000)) {
+            return;
+        }
+        self.room_asked_at = Some(now);
+        for k in 0..self.peers.len() {
+            if self.dist.next_seq(k).is_some() {
+                self.peers[k].send_motion(&HostMessage::Status);
+            }
+        }
+    }
+
     fn ask_status(&mut self, now: u64) {
         if now >= self.next_status {
             for p in self.peers.iter_mut() {
@@ -502,10 +524,36 @@ impl NetRun {
 
     /// Segments a node holds (committed and not yet run, and pending).
     fn queued_on_nodes(&self, now: u64) -> usize {
-        // A node frees a place a little after the segment's end (its clock
-        // and polling lag the host's); count generously.
+        // A place frees when the node retires a segment, a little after its
+        // end on the host's clock (the node's clock and polling lag). The
+        // node's own count (its status, sent with every seal's
+        // acknowledgement) is exact but dated; the host's clock is current
+        // but a guess. A segment is taken as retired when either says so,
+        // the clock only well after the segment's end.
         let t = now as f64 - RETIRE_SLACK_US;
-        self.committed.iter().filter(|c| c.seg.t1() > t).count() + self.pending.len()
+        let sent = self.next_index;
+        let by_time = self
+            .committed
+            .iter()
+            .find(|c| c.seg.t1() > t)
+            .map_or(sent - self.pending.len() as u32, |c| c.index);
+        let by_status = (0..self.peers.len())
+            .filter(|&k| self.dist.next_seq(k).is_some())
+            .filter_map(|k| match self.status[k] {
+                Some(NodeMessage::Status {
+                    segment_space,
+                    next_seq,
+                    ..
+                }) => {
+                    let held =
+                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
+                    Some(next_seq.saturating_sub(held))
+                }
+                _ => None,
+            })
+            .min();
+        let retired = by_status.map_or(by_time, |s| s.max(by_time)).min(sent);
+        (sent - retired) as usize
     }
 
     fn capacity(&self) -> usize {
@@ -551,6 +599,8 @@ impl NetRun {
         let mut grew = false;
         loop {
             if self.queued_on_nodes(now) >= self.capacity() {
+                // Full as far as the host knows: ask the nodes how full.
+                self.ask_room(now);
                 break;
             }
             let Some(item) = self.next_item()? else {

@@ -266,7 +266,14 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                     Err(Refusal::NotAtRest)
                 }
             }
-            HostMessage::Seal { next_seq } => self.seal(next_seq),
+            HostMessage::Seal { next_seq } => {
+                // The host learns how full the queue is with every window,
+                // in the frame that acknowledges the seal anyway.
+                return match self.seal(next_seq) {
+                    Ok(()) => Some(self.status_message()),
+                    Err(reason) => Some(NodeMessage::Refused { reason }),
+                };
+            }
         };
         result.err().map(|reason| NodeMessage::Refused { reason })
     }
