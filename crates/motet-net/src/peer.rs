@@ -32,43 +32,77 @@ fn coarse_config() -> SyncConfig {
 
 /// A node's clock estimate: a coarse estimator until it has a skew, then a
 /// fine one started from that skew (see [`ClockSync::with_skew`]).
+///
+/// On a jittery link the coarse skew can be far off, and a fine estimator
+/// seeded with it stays biased for a long time; so while the fine estimate's
+/// skew moves away from its seed, a new fine estimator is started from the
+/// better skew, and takes over once it holds.
 #[derive(Clone, Debug)]
 pub struct NodeClock {
     coarse: ClockSync,
-    fine: Option<ClockSync>,
+    /// The fine estimator, its seed skew and the host time it started.
+    fine: Option<(ClockSync, f64, u64)>,
+    next: Option<(ClockSync, f64, u64)>,
+    first: Option<u64>,
+    reseeds: u32,
 }
+
+/// A fine estimate whose skew differs from its seed by more than this is
+/// started again from its own skew.
+const RESEED_SKEW: f64 = 2e-6;
+/// Host time an estimator needs before its skew is worth seeding with, µs:
+/// a skew from a shorter span is mostly the link's jitter.
+const SEED_SPAN_US: u64 = 5_000_000;
+/// Most restarts of the fine estimator.
+const MAX_RESEEDS: u32 = 3;
 
 impl Default for NodeClock {
     fn default() -> Self {
         NodeClock {
             coarse: ClockSync::new(coarse_config()),
             fine: None,
+            next: None,
+            first: None,
+            reseeds: 0,
         }
     }
 }
 
 impl NodeClock {
     pub fn add(&mut self, e: Exchange) {
-        match self.fine.as_mut() {
-            Some(f) => {
-                f.add(e);
-            }
-            None => {
-                self.coarse.add(e);
-                // A few coarse points: the skew is known to a few ppm.
-                if self.coarse.points() >= 8 {
-                    self.fine = Some(ClockSync::with_skew(
-                        sync_config(),
-                        self.coarse.model().skew,
-                    ));
-                }
+        let now = e.t4;
+        let first = *self.first.get_or_insert(e.t1);
+        self.coarse.add(e);
+        if let Some((f, _, _)) = self.fine.as_mut() {
+            f.add(e);
+        }
+        if let Some((n, _, _)) = self.next.as_mut() {
+            n.add(e);
+        }
+        if self.fine.is_none() && self.coarse.points() >= 8 && now >= first + SEED_SPAN_US {
+            let skew = self.coarse.model().skew;
+            self.fine = Some((ClockSync::with_skew(sync_config(), skew), skew, now));
+        }
+        if self.next.as_ref().is_some_and(|(n, _, _)| n.synced()) {
+            self.fine = self.next.take();
+        }
+        if let Some((f, seed, since)) = &self.fine {
+            let skew = f.model().skew;
+            if self.next.is_none()
+                && self.reseeds < MAX_RESEEDS
+                && f.synced()
+                && now >= since + 2 * SEED_SPAN_US
+                && (skew - seed).abs() > RESEED_SKEW
+            {
+                self.reseeds += 1;
+                self.next = Some((ClockSync::with_skew(sync_config(), skew), skew, now));
             }
         }
     }
 
     fn current(&self) -> &ClockSync {
         match &self.fine {
-            Some(f) if f.synced() => f,
+            Some((f, _, _)) if f.synced() => f,
             _ => &self.coarse,
         }
     }

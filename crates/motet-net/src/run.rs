@@ -52,7 +52,7 @@ impl Default for NetConfig {
         NetConfig {
             lead_min_us: 100_000,
             node_timeout_us: 1_500_000,
-            status_interval_us: 2_000_000,
+            status_interval_us: 5_000_000,
             sync_interval_us: 400_000,
             model_interval_us: 5_000_000,
             connect_timeout_us: 5_000_000,
