@@ -76,10 +76,19 @@ fn machine_copy(dir: &Path, name: &str) -> PathBuf {
     to
 }
 
-const FAST: [&str; 4] = ["--time-scale", "5", "--lead-ms", "500"];
+const FAST: [&str; 4] = ["--time-scale", "5", "--lead-ms", "1000"];
+
+/// Networked runs keep real time: one at a time, so that the processes of
+/// one test do not starve those of another on a small machine.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 #[test]
 fn spawned_nodes_run_a_job_to_the_end() {
+    let _serial = serial();
     let out = scratch("spawn");
     let mut args = vec![
         "run",
@@ -106,6 +115,7 @@ fn spawned_nodes_run_a_job_to_the_end() {
 
 #[test]
 fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
+    let _serial = serial();
     let dir = scratch("pair");
     let machine = machine_copy(&dir, "plotter.toml");
     for listen in ["udp:127.0.0.1:0", "pty"] {
@@ -175,6 +185,7 @@ fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
 
 #[test]
 fn button_pairing_takes_the_pressed_node() {
+    let _serial = serial();
     let dir = scratch("button");
     let machine = machine_copy(&dir, "plotter.toml");
     let node = start_node(&["--auto-press"]);
@@ -198,6 +209,7 @@ fn button_pairing_takes_the_pressed_node() {
 
 #[test]
 fn firmware_upload_verifies_and_refuses_bad_images() {
+    let _serial = serial();
     let dir = scratch("flash");
     let machine = machine_copy(&dir, "plotter.toml");
     let node = start_node(&[]);
@@ -290,6 +302,7 @@ fn firmware_upload_verifies_and_refuses_bad_images() {
 
 #[test]
 fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
+    let _serial = serial();
     let dir = scratch("kill");
     let machine = machine_copy(&dir, "plotter.toml");
     let node = start_node(&["--time-scale", "5"]);
@@ -360,6 +373,7 @@ fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
 
 #[test]
 fn bad_network_input_is_a_clear_error() {
+    let _serial = serial();
     let dir = scratch("bad");
     let machine = machine_copy(&dir, "plotter.toml");
     let m = machine.to_str().unwrap();
