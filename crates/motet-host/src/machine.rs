@@ -179,6 +179,7 @@ impl Machine {
                 .collect(),
             lookahead: self.lookahead,
             stop_horizon: self.stop_horizon,
+            min_move_s: 0.0,
         }
     }
 

@@ -454,7 +454,14 @@ impl NetRun {
         if ready {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
-            let planner = Planner::new(self.machine.limits(), self.start_point, t0);
+            // The stop horizon keeps a window's tail inside the node's queue;
+            // this keeps the queue's segments long enough that the next seal,
+            // a lead ahead, arrives before the tail would start, however
+            // tiny the moves.
+            let mut limits = self.machine.limits();
+            let usable = self.capacity().saturating_sub(limits.stop_horizon).max(1);
+            limits.min_move_s = lead as f64 * 1e-6 / usable as f64;
+            let planner = Planner::new(limits, self.start_point, t0);
             self.planner = Some(SourcedPlanner::new(planner));
             self.phase = Phase::Streaming;
             self.fill(now)?;

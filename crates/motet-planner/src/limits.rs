@@ -53,6 +53,11 @@ pub struct Limits {
     /// stop inside, so tiny fast moves slow the machine down instead of
     /// outrunning a node's queue.
     pub stop_horizon: usize,
+    /// Shortest time a move may take, seconds (0: none): a move's speed is
+    /// capped at its length over this. A networked run sets it so that the
+    /// segments a node can hold always last long enough for a seal to reach
+    /// it, however short the moves.
+    pub min_move_s: f64,
 }
 
 impl Limits {

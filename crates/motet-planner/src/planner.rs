@@ -359,6 +359,9 @@ impl Planner {
                 }
             }
         }
+        if self.limits.min_move_s > 0.0 {
+            v = v.min(length / self.limits.min_move_s);
+        }
         let jerk = match self.limits.profile {
             ProfileKind::Trapezoid => 0.0,
             ProfileKind::SCurve if j.is_finite() => j,

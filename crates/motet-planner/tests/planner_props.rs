@@ -33,6 +33,7 @@ fn limits(profile: ProfileKind, joints: Vec<JointLimits>) -> Limits {
         ],
         lookahead: 10_000,
         stop_horizon: 0,
+        min_move_s: 0.0,
     }
 }
 
@@ -322,6 +323,37 @@ fn tiny_fast_moves_slow_down_to_the_stop_horizon() {
         // And it slows down rather than stopping: no rest in the middle.
         assert!(segs[1..segs.len() - 1].iter().all(|s| s.profile.v1() > 0.0));
     }
+}
+
+#[test]
+fn moves_last_at_least_the_shortest_move_time() {
+    // Moves of 0.02 to 2 mm at 300 mm/s; cruising, each must take 5 ms.
+    let cmds: Vec<Command> = (1..=2_000)
+        .map(|k| {
+            let x = (1..=k).map(|i| 0.02 * (1 + i % 100) as f64).sum::<f64>();
+            mv([x, 0.0, 0.0, 0.0], 300.0)
+        })
+        .collect();
+    let mut l = limits(ProfileKind::Trapezoid, vec![]);
+    l.min_move_s = 0.005;
+    for streamed in [true, false] {
+        let segs = segments(&plan(&l, &cmds, streamed));
+        assert_eq!(segs.len(), cmds.len());
+        for s in &segs {
+            let cap = s.profile.length() / l.min_move_s;
+            assert!(
+                s.profile.vc() <= cap * (1.0 + 1e-9),
+                "{} > {cap}",
+                s.profile.vc()
+            );
+            assert!(s.profile.duration() >= l.min_move_s * (1.0 - 1e-9));
+        }
+    }
+    // Streamed and whole-job plans agree with the cap too.
+    assert_eq!(
+        segments(&plan(&l, &cmds, true)),
+        segments(&plan(&l, &cmds, false))
+    );
 }
 
 #[test]

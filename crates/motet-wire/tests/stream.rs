@@ -28,6 +28,7 @@ fn limits(profile: ProfileKind) -> Limits {
         tools: vec![],
         lookahead: 64,
         stop_horizon: 0,
+        min_move_s: 0.0,
     }
 }
 

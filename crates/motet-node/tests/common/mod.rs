@@ -115,6 +115,7 @@ pub fn limits(profile: ProfileKind) -> Limits {
         ],
         lookahead: 24,
         stop_horizon: 0,
+        min_move_s: 0.0,
     }
 }
 
