@@ -48,6 +48,10 @@ pub struct Loopback {
     pub now: u64,
     /// A dead host is no longer polled (its process was killed).
     pub host_alive: bool,
+    /// Longest step of simulated time, µs. Frames a fault wrapper holds are
+    /// released at the first step after their time, so jittered links need
+    /// short steps to keep their delays what the wrapper drew.
+    pub max_step_us: u64,
 }
 
 impl Loopback {
@@ -110,6 +114,7 @@ impl Loopback {
             nodes,
             now: 0,
             host_alive: true,
+            max_step_us: 1_000,
         }
     }
 
@@ -140,7 +145,7 @@ impl Loopback {
     }
 
     /// One round of the host and every live node, then time moves on to the
-    /// next thing any of them has to do (at least 10 µs, at most 1 ms).
+    /// next thing any of them has to do (at least 10 µs, at most [`Loopback::max_step_us`]).
     pub fn step(&mut self) -> Result<(), NetError> {
         if self.host_alive {
             self.run.poll(self.now)?;
@@ -163,7 +168,7 @@ impl Loopback {
             self.run.poll(self.now)?;
             next = next.min(self.run.next_wakeup(self.now));
         }
-        self.now = next.clamp(self.now + 10, self.now + 1_000);
+        self.now = next.clamp(self.now + 10, self.now + self.max_step_us);
         Ok(())
     }
 

@@ -52,7 +52,10 @@ pub struct NodeClock {
 const RESEED_SKEW: f64 = 2e-6;
 /// Host time an estimator needs before its skew is worth seeding with, µs:
 /// a skew from a shorter span is mostly the link's jitter.
-const SEED_SPAN_US: u64 = 5_000_000;
+const SEED_SPAN_US: u64 = 2_000_000;
+/// Points a fine estimate needs before it is trusted to move by (or to
+/// replace the one in use).
+const SETTLED_POINTS: u32 = 4;
 /// Most restarts of the fine estimator.
 const MAX_RESEEDS: u32 = 3;
 
@@ -83,7 +86,11 @@ impl NodeClock {
             let skew = self.coarse.model().skew;
             self.fine = Some((ClockSync::with_skew(sync_config(), skew), skew, now));
         }
-        if self.next.as_ref().is_some_and(|(n, _, _)| n.synced()) {
+        if self
+            .next
+            .as_ref()
+            .is_some_and(|(n, _, _)| n.points() >= SETTLED_POINTS)
+        {
             self.fine = self.next.take();
         }
         if let Some((f, seed, since)) = &self.fine {
@@ -100,9 +107,16 @@ impl NodeClock {
         }
     }
 
+    /// The fine estimate holds: the clock is known well enough to move by.
+    pub fn settled(&self) -> bool {
+        self.fine
+            .as_ref()
+            .is_some_and(|(f, _, _)| f.points() >= SETTLED_POINTS)
+    }
+
     fn current(&self) -> &ClockSync {
         match &self.fine {
-            Some((f, _, _)) if f.synced() => f,
+            Some((f, _, _)) if f.points() >= SETTLED_POINTS => f,
             _ => &self.coarse,
         }
     }

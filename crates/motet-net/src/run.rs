@@ -22,6 +22,9 @@ use motet_wire::service::ServiceRequest;
 use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
+/// Clock exchanges µs apart until every node's clock is settled.
+const SYNC_START_US: u64 = 20_000;
+
 /// How long after a segment's end a node may still hold it, µs.
 const RETIRE_SLACK_US: f64 = 50_000.0;
 
@@ -55,7 +58,7 @@ impl Default for NetConfig {
             status_interval_us: 5_000_000,
             sync_interval_us: 400_000,
             model_interval_us: 5_000_000,
-            connect_timeout_us: 5_000_000,
+            connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
         }
     }
@@ -161,6 +164,8 @@ pub struct NetRun {
     started_at: Option<u64>,
     configured: bool,
     model_sent: Vec<Option<u64>>,
+    /// A model from the settled estimate went to the node.
+    settled_sent: Vec<bool>,
     next_sync: u64,
     next_status: u64,
     room_asked_at: Option<u64>,
@@ -206,6 +211,7 @@ impl NetRun {
             started_at: None,
             configured: false,
             model_sent: vec![None; n],
+            settled_sent: vec![false; n],
             next_sync: 0,
             next_status: 0,
             room_asked_at: None,
@@ -387,14 +393,26 @@ impl NetRun {
                 // A lost datagram is only a missing sample.
                 let _ = p.send_time_get(now);
             }
-            // Evenly spaced: the estimator's filter assumes it.
-            self.next_sync = now + self.cfg.sync_interval_us;
+            // Quick exchanges until every node's clock is settled, so a job
+            // starts within seconds; then few, as they are most of the
+            // traffic of a slow job. The fine estimator starts from a
+            // measured skew, so the change of spacing does not bias it.
+            let settled = self.peers.iter().all(|p| p.sync.settled());
+            self.next_sync = now
+                + if settled {
+                    self.cfg.sync_interval_us
+                } else {
+                    self.cfg.sync_interval_us.min(SYNC_START_US)
+                };
         }
         for (k, p) in self.peers.iter_mut().enumerate() {
             if !p.sync.synced() {
                 continue;
             }
-            let due = self.model_sent[k].is_none_or(|t| now >= t + self.cfg.model_interval_us);
+            // The settled model goes out at once; later ones every interval.
+            let first_settled = p.sync.settled() && !self.settled_sent[k];
+            let due = first_settled
+                || self.model_sent[k].is_none_or(|t| now >= t + self.cfg.model_interval_us);
             if due && matches!(p.link_state(), State::Established { .. }) {
                 let m = p.sync.model();
                 p.send_service(&ServiceRequest::TimeSet {
@@ -402,6 +420,7 @@ impl NetRun {
                     skew: m.skew,
                 });
                 self.model_sent[k] = Some(now);
+                self.settled_sent[k] |= p.sync.settled();
             }
         }
     }
@@ -450,7 +469,7 @@ impl NetRun {
             .peers
             .iter()
             .enumerate()
-            .all(|(k, p)| p.sync.synced() && self.model_sent[k].is_some() && p.backlog() == 0);
+            .all(|(k, p)| self.settled_sent[k] && p.backlog() == 0);
         if ready {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;

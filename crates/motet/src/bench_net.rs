@@ -118,6 +118,9 @@ pub fn bench_net(args: Args) -> Result<()> {
         cfg.sync_interval_us = (ms * 1000.0) as u64;
     }
     let mut lb = Loopback::new(&machine, job.commands, machine.start, links, &clocks, cfg);
+    if args.jitter_us > 0 || args.faults > 0.0 {
+        lb.max_step_us = 50;
+    }
     let mut streaming_at = None;
     let mut errors: Vec<Vec<f64>> = vec![Vec::new(); n];
     let mut next_sample = 0u64;
