@@ -68,3 +68,59 @@ pub fn check(spec: &NodeSpec, info: &Info) -> Result<&'static Driver, String> {
     }
     Ok(d)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motet_wire::service::{Info, Kind, Version};
+
+    fn info(kind: &str, channels: u8, tools: u8, queue: u16) -> Info {
+        Info {
+            kind: Kind::try_from(kind).unwrap(),
+            firmware: Version::default(),
+            uid: 1,
+            address: 2,
+            protocol_min: 1,
+            protocol_max: 1,
+            queue_capacity: queue,
+            channels,
+            tools,
+        }
+    }
+
+    #[test]
+    fn nodes_are_checked_against_their_machine_node() {
+        let spec = NodeSpec {
+            name: "mainboard".into(),
+            actuators: vec![0, 1, 2, 3],
+            tools: vec![0],
+            queue: 64,
+            frame_us: 40.0,
+        };
+        // (node, expected error part; None: accepted)
+        let cases = [
+            (info("stepper", 8, 4, 64), None),
+            (info("sim", 4, 1, 64), None),
+            (info("toaster", 8, 4, 64), Some("no driver on this host")),
+            (
+                info("stepper", 3, 4, 64),
+                Some("4 actuators but it has 3 channels"),
+            ),
+            (
+                info("stepper", 8, 0, 64),
+                Some("1 tools but it has 0 outputs"),
+            ),
+            (
+                info("stepper", 8, 4, 16),
+                Some("queue of 64 but the node holds 16"),
+            ),
+        ];
+        for (i, want) in cases {
+            match (check(&spec, &i), want) {
+                (Ok(_), None) => {}
+                (Err(e), Some(w)) => assert!(e.contains(w), "{}: {e}", i.kind),
+                (got, want) => panic!("{}: {got:?}, expected {want:?}", i.kind),
+            }
+        }
+    }
+}
