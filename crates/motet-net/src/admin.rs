@@ -4,12 +4,12 @@
 //! request here is safe to repeat (a page written twice writes the same bytes).
 
 use motet_link::Transport;
-use motet_wire::frame::{self, Flags, Header, BROADCAST, MAX_FRAME, MAX_RAW};
+use motet_wire::decode;
+use motet_wire::frame::{self, Flags, BROADCAST, MAX_RAW};
 use motet_wire::image;
 use motet_wire::service::{
     is_node_address, Info, ServiceReply, ServiceRequest, Version, HOST_ADDRESS, PAGE_SIZE,
 };
-use motet_wire::{decode, encode, MAX_MESSAGE};
 use std::time::{Duration, Instant};
 
 #[derive(Debug, thiserror::Error)]
@@ -104,19 +104,7 @@ impl Admin {
     }
 
     fn send(&mut self, dst: u16, req: &ServiceRequest) -> Result<(), AdminError> {
-        let mut buf = [0u8; MAX_MESSAGE];
-        let payload = encode(req, &mut buf).expect("service requests fit MAX_MESSAGE");
-        let header = Header {
-            dst,
-            src: HOST_ADDRESS,
-            port: req.port(),
-            flags: Flags::NONE,
-            seq: 0,
-            ack: 0,
-        };
-        let mut out = [0u8; MAX_FRAME];
-        let n = frame::encode(&header, payload, &mut out).expect("one message fits a frame");
-        let r = self.transport.send(&out[..n]);
+        let r = self.transport.send(&crate::peer::datagram(dst, req));
         r.map_err(|e| self.io(e))
     }
 
@@ -377,7 +365,9 @@ pub fn free_address(taken: &[u16]) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use motet_wire::frame::{Header, MAX_FRAME};
     use motet_wire::service::{NodeState, Status};
+    use motet_wire::{encode, MAX_MESSAGE};
 
     /// A fake node on the far end of `t`: answers every request with `reply`
     /// from address `from`, until the test ends.

@@ -142,6 +142,24 @@ impl NodeClock {
     }
 }
 
+/// A service request from the host to `dst` as a datagram: a frame without
+/// link flags, neither acknowledged nor repeated by the link.
+pub fn datagram(dst: u16, req: &ServiceRequest) -> Vec<u8> {
+    let mut buf = [0u8; MAX_MESSAGE];
+    let payload = encode(req, &mut buf).expect("service requests fit MAX_MESSAGE");
+    let header = Header {
+        dst,
+        src: HOST_ADDRESS,
+        port: req.port(),
+        flags: Flags::NONE,
+        seq: 0,
+        ack: 0,
+    };
+    let mut out = [0u8; MAX_FRAME];
+    let n = frame::encode(&header, payload, &mut out).expect("one message fits a frame");
+    out[..n].to_vec()
+}
+
 /// Something a node sent that the run acts on.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Incoming {
@@ -266,20 +284,7 @@ impl Peer {
 
     /// Sends a service request as a datagram to `dst` (broadcast for scans).
     pub fn datagram_to(&mut self, dst: u16, req: &ServiceRequest) -> std::io::Result<()> {
-        let mut buf = [0u8; MAX_MESSAGE];
-        let payload = encode(req, &mut buf).expect("service requests fit MAX_MESSAGE");
-        let header = Header {
-            dst,
-            src: HOST_ADDRESS,
-            port: req.port(),
-            flags: Flags::NONE,
-            seq: 0,
-            ack: 0,
-        };
-        let mut out = [0u8; MAX_FRAME];
-        let n = frame::encode(&header, payload, &mut out)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        self.transport.send(&out[..n])
+        self.transport.send(&datagram(dst, req))
     }
 
     fn datagram(&mut self, req: &ServiceRequest) -> std::io::Result<()> {
