@@ -417,7 +417,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         if !valid || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
         }
-        let ch = Channel::new(c);
+        // At rest where the node is: a new or changed channel takes its step
+        // count from the current point instead of stepping there.
+        let mut ch = Channel::new(c);
+        ch.set_position(&self.tail);
         match self
             .channels
             .iter_mut()
