@@ -380,13 +380,7 @@ impl Peer {
         if self.link.unacked() == 0 {
             self.seal_sent = false;
         }
-        let stats = *self.link.stats();
-        self.transport_stats_absorb(&stats);
         Ok(())
-    }
-
-    fn transport_stats_absorb(&mut self, s: &motet_wire::link::Stats) {
-        self_absorb(self.transport.as_mut(), s);
     }
 
     /// When the link wants to be polled again.
@@ -396,8 +390,4 @@ impl Peer {
         }
         self.link.next_timeout()
     }
-}
-
-fn self_absorb(t: &mut dyn Transport, s: &motet_wire::link::Stats) {
-    t.stats_mut().absorb(s);
 }

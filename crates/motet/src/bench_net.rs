@@ -40,7 +40,7 @@ pub struct Args {
     sync_ms: Option<f64>,
 }
 
-/// Wire size of one frame carrying `payload` bytes.
+/// Wire size of a datagram carrying `m`.
 fn frame_len<T: serde::Serialize>(m: &T) -> usize {
     let mut buf = [0u8; MAX_MESSAGE];
     let p = encode(m, &mut buf).map(|b| b.to_vec()).unwrap_or_default();
@@ -165,7 +165,7 @@ pub fn bench_net(args: Args) -> Result<()> {
             _ => "measured part".into(),
         }
     );
-    let ex = frame_len(&ServiceRequest::TimeGet { t1: u64::MAX / 3 })
+    let ex = motet_net::peer::datagram(2, &ServiceRequest::TimeGet { t1: u64::MAX / 3 }).len()
         + frame_len(&ServiceReply::Time {
             t1: u64::MAX / 3,
             t2: u64::MAX / 3,

@@ -247,7 +247,7 @@ fn drive(
             "sync_error_us": f.sync_error_us,
             "skew_ppm": f.skew_ppm,
             "underruns": f.underruns,
-            "positions": positions(run.node_status(k)),
+            "window": window(run.node_status(k)),
         })).collect::<Vec<_>>(),
     });
     std::fs::write(
@@ -300,7 +300,8 @@ fn drive(
     }
 }
 
-fn positions(m: Option<&NodeMessage>) -> serde_json::Value {
+/// The node's committed window end and whether it stopped on its tail.
+fn window(m: Option<&NodeMessage>) -> serde_json::Value {
     match m {
         Some(NodeMessage::Status {
             committed, stopped, ..
