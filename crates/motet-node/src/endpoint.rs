@@ -194,6 +194,8 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
                 if let Some(reply) = self.node.handle(&payload) {
                     self.push(None, port::MOTION, &reply);
                 }
+                // A service request in the same batch sees what this did.
+                self.report_state();
             } else {
                 let handled = self.services.handle(p, &payload, false, now);
                 self.after(handled, None, p);
@@ -264,10 +266,16 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             self.node.poll(t, board);
             self.ran_until = t;
         }
-        let state = if self.node.stopped() {
-            NodeState::Stopped
-        } else if self.node.queued() > 0 {
+        self.report_state();
+    }
+
+    /// Tells the services what the motion node is doing. A node braking on
+    /// its tail is still moving: `Running` until it is at rest.
+    fn report_state(&mut self) {
+        let state = if self.node.moving() {
             NodeState::Running
+        } else if self.node.stopped() {
+            NodeState::Stopped
         } else {
             NodeState::Idle
         };

@@ -72,6 +72,8 @@ pub struct NodeStatus {
     pub committed: u32,
     /// The node stopped on its committed window's tail (or at its end).
     pub stopped: bool,
+    /// The run of the windowed mode (0: none).
+    pub run: u32,
 }
 
 /// A node with a segment queue of `Q` places and a recording tape of `T`
@@ -104,6 +106,9 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// When the committed window's contingency tail takes over, µs.
     tail_start: Option<f64>,
     stopped: bool,
+    /// The run this node's trajectory belongs to (`Windowed`); 0: none, so
+    /// the node's position is not one a host can resume from.
+    run: u32,
     stream: StreamConfig,
     /// Context the next batched segment is decoded against.
     stream_state: StreamState,
@@ -146,6 +151,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             pending_events: 0,
             tail_start: None,
             stopped: false,
+            run: 0,
             stream: StreamConfig {
                 quantum: 1e-4,
                 speed_quantum: 1e-3,
@@ -168,6 +174,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             }
         };
         let result = match msg {
+            // A node with committed motion keeps it: a reset would lose
+            // its position mid-move (a second host, or a stray message).
+            HostMessage::Reset if self.moving() => Err(Refusal::NotAtRest),
             HostMessage::Reset => {
                 *self = Self::new();
                 Ok(())
@@ -199,6 +208,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 self.push_event(track, time, value, feed)
             }
             HostMessage::Status => return Some(self.status_message()),
+            HostMessage::Where => return Some(self.position()),
             HostMessage::GraphBegin { frame_us } => {
                 if !(frame_us.is_finite() && frame_us >= 1.0) {
                     Err(Refusal::BadGraph)
@@ -258,9 +268,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 self.building = None;
                 Ok(())
             }
-            HostMessage::Windowed => {
+            HostMessage::Windowed { run } => {
                 if self.segments.is_empty() {
                     self.windowed = true;
+                    self.run = run;
                     Ok(())
                 } else {
                     Err(Refusal::NotAtRest)
@@ -688,6 +699,18 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             underruns: self.underruns,
             committed: self.next_seq.wrapping_sub(self.pending as u32),
             stopped: self.stopped,
+            run: self.run,
+        }
+    }
+
+    /// Where the node is on its run (the answer to `Where`).
+    pub fn position(&self) -> NodeMessage {
+        NodeMessage::Position {
+            run: self.run,
+            committed: self.status().committed,
+            stopped: self.stopped,
+            queued: self.segments.len() as u16,
+            at: self.tail,
         }
     }
 
@@ -700,6 +723,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             underruns: s.underruns,
             committed: s.committed,
             stopped: s.stopped,
+            run: s.run,
         }
     }
 
@@ -712,6 +736,12 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// committed and the tail has not started.
     pub fn tail_start(&self) -> Option<f64> {
         self.tail_start
+    }
+
+    /// The node has motion queued that it has not finished: it is moving or
+    /// will move (on its tail, if it stopped).
+    pub fn moving(&self) -> bool {
+        !self.segments.is_empty()
     }
 
     /// Segments queued (including the one executing).

@@ -316,7 +316,24 @@ impl<S: Store, F: Flash> Services<S, F> {
         h
     }
 
+    /// The motion node has committed motion: anything that would lose its
+    /// position (a reset, the bootloader, a new address and with it a new
+    /// link) must wait until it is at rest.
+    fn moving(&self) -> bool {
+        self.upload.is_none() && self.app_state == NodeState::Running
+    }
+
     fn dispatch(&mut self, req: &ServiceRequest, now: u64) -> Handled {
+        let disruptive = match *req {
+            ServiceRequest::Reset | ServiceRequest::FirmwareBegin { .. } => true,
+            ServiceRequest::SetAddress { uid, address } => {
+                uid == self.uid() && address != self.address()
+            }
+            _ => false,
+        };
+        if disruptive && self.moving() {
+            return Handled::error(ServiceError::Busy);
+        }
         match *req {
             ServiceRequest::Status => Handled::reply(ServiceReply::Status(self.status(now))),
             ServiceRequest::Identify { ms } => {
@@ -432,6 +449,9 @@ impl<S: Store, F: Flash> Services<S, F> {
         }
         if (size as usize) < IMAGE_HEADER_LEN {
             return Handled::error(ServiceError::BadImage(ImageError::Truncated));
+        }
+        if size as usize == IMAGE_HEADER_LEN {
+            return Handled::error(ServiceError::BadImage(ImageError::EmptyPayload));
         }
         let capacity = self.flash.capacity();
         if size > capacity {

@@ -323,6 +323,7 @@ fn status_reply<const Q: usize>(node: &mut Node<Q>) -> NodeStatus {
             underruns,
             committed,
             stopped,
+            run,
         }) => NodeStatus {
             segment_space: segment_space as usize,
             event_space: event_space as usize,
@@ -330,6 +331,7 @@ fn status_reply<const Q: usize>(node: &mut Node<Q>) -> NodeStatus {
             underruns,
             committed,
             stopped,
+            run,
         },
         other => panic!("no status: {other:?}"),
     }
@@ -347,6 +349,7 @@ fn status_tracks_queue<const Q: usize>() {
             underruns: 0,
             committed: 0,
             stopped: false,
+            run: 0,
         }
     );
     let mut seen = 0;
@@ -370,6 +373,7 @@ fn status_tracks_queue<const Q: usize>() {
             underruns: 0,
             committed: segs,
             stopped: false,
+            run: 0,
         }
     );
     // A Status request changes nothing either.

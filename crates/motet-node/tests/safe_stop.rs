@@ -57,7 +57,7 @@ fn windowed(plain: &[HostMessage], n: u32) -> Vec<HostMessage> {
     for m in plain {
         out.push(m.clone());
         match m {
-            HostMessage::Reset => out.push(HostMessage::Windowed),
+            HostMessage::Reset => out.push(HostMessage::Windowed { run: 1 }),
             HostMessage::Segment(_) => {
                 seq += 1;
                 if seq.is_multiple_of(n) {
@@ -264,6 +264,19 @@ fn killed_host_stops_every_channel_at_the_window_end() {
                 );
                 assert_eq!(r.status.segment_space, 16, "{what}");
                 assert_eq!(c.stop, segs[committed - 1].end, "{what}");
+                // Asked where it is, the node names the run, the window
+                // and the point it rests at.
+                assert_eq!(
+                    send(&mut node, &HostMessage::Where),
+                    Some(NodeMessage::Position {
+                        run: 1,
+                        committed: committed as u32,
+                        stopped: true,
+                        queued: 0,
+                        at: c.stop,
+                    }),
+                    "{what}"
+                );
                 check_run(&machine, &exec, &segs, &c.stop, &r, &what);
                 // Tools went to 0 at the tail's start and did nothing after.
                 let tools = tool_outputs(&r);
@@ -462,11 +475,47 @@ fn seal_outside_windowed_mode_and_windowed_while_moving_are_refused() {
         })
     );
     assert_eq!(
-        send(&mut node, &HostMessage::Windowed),
+        send(&mut node, &HostMessage::Windowed { run: 1 }),
         Some(NodeMessage::Refused {
             reason: Refusal::NotAtRest
         })
     );
     // Not windowed: the queue runs without seals.
     assert!(node.next_deadline().is_some());
+}
+
+#[test]
+fn a_moving_node_refuses_reset_and_forgets_its_run_only_at_rest() {
+    let machine = cartesian();
+    let (plain, _) = plain_and_segments(&machine, ProfileKind::Trapezoid);
+    let full = windowed(&plain, 2);
+    // The first window sealed: the node has committed motion.
+    let first_seal = full
+        .iter()
+        .position(|m| matches!(m, HostMessage::Seal { .. }))
+        .unwrap();
+    let mut node = Node::<16>::new();
+    for m in &full[..=first_seal] {
+        send(&mut node, m);
+    }
+    let queued = |node: &mut Node<16>| match send(node, &HostMessage::Where) {
+        Some(NodeMessage::Position { run, queued, .. }) => (run, queued),
+        other => panic!("no position: {other:?}"),
+    };
+    assert_eq!(queued(&mut node), (1, 2));
+    assert_eq!(
+        send(&mut node, &HostMessage::Reset),
+        Some(NodeMessage::Refused {
+            reason: Refusal::NotAtRest
+        })
+    );
+    // Nothing changed: the window still runs to its end.
+    assert_eq!(queued(&mut node), (1, 2));
+    let mut board = Recorder::default();
+    node.poll(f64::MAX / 4.0, &mut board);
+    assert_eq!(queued(&mut node), (1, 0));
+    assert!(!board.out.is_empty(), "the committed window ran");
+    // At rest, a reset is taken and the run is gone with it.
+    assert_eq!(send(&mut node, &HostMessage::Reset), None);
+    assert_eq!(queued(&mut node), (0, 0));
 }

@@ -147,12 +147,19 @@ enum Start {
     Uploading,
     /// Paired, a V2 image uploaded and verified.
     Verified,
+    /// Paired, the motion node has committed segments.
+    Moving,
 }
 
 fn start(st: Start) -> Svc {
     match st {
         Start::Unpaired => unpaired(UID),
         Start::Paired => paired(UID, ADDR),
+        Start::Moving => {
+            let mut s = paired(UID, ADDR);
+            s.set_state(NodeState::Running);
+            s
+        }
         Start::Uploading | Start::Verified => {
             let mut s = paired(UID, ADDR);
             let img = firmware_image("stepper", V2, 300);
@@ -818,6 +825,80 @@ fn requests_against_states() {
         ),
         raw(Paired, port::RESET, &bytes(&R::Reset), bc, None)
             .with(A::Reset, |s| s.status.uptime_us = 0),
+        // A node with committed motion keeps its position: whatever would
+        // lose it (reset, bootloader, a new address) waits until it is at rest.
+        row(
+            Moving,
+            R::Status,
+            uni,
+            status(NodeState::Running, ADDR, true),
+            A::None,
+            same,
+        ),
+        row(
+            Moving,
+            R::Reset,
+            uni,
+            err(ServiceError::Busy),
+            A::None,
+            same,
+        ),
+        row(
+            Moving,
+            begin(&img, V2),
+            uni,
+            err(ServiceError::Busy),
+            A::None,
+            same,
+        ),
+        row(
+            Moving,
+            R::SetAddress {
+                uid: UID,
+                address: ADDR + 1,
+            },
+            uni,
+            err(ServiceError::Busy),
+            A::None,
+            same,
+        ),
+        // The same address again changes nothing: answered.
+        row(
+            Moving,
+            R::SetAddress {
+                uid: UID,
+                address: ADDR,
+            },
+            uni,
+            Some(ServiceReply::Paired {
+                uid: UID,
+                address: ADDR,
+            }),
+            A::None,
+            same,
+        ),
+        row(
+            Moving,
+            R::Identify { ms: 500 },
+            uni,
+            Some(ServiceReply::Ack),
+            A::None,
+            |s| s.blinking = true,
+        ),
+        // No payload: nothing to install.
+        row(
+            Paired,
+            R::FirmwareBegin {
+                size: IMAGE_HEADER_LEN as u32,
+                crc32c: 0,
+                kind: kind("stepper"),
+                version: V2,
+            },
+            uni,
+            err(ServiceError::BadImage(ImageError::EmptyPayload)),
+            A::None,
+            same,
+        ),
     ];
     for (i, r) in rows.into_iter().enumerate() {
         let mut s = start(r.start);
@@ -1296,7 +1377,8 @@ fn arb_start() -> impl Strategy<Value = Start> {
         Just(Start::Unpaired),
         Just(Start::Paired),
         Just(Start::Uploading),
-        Just(Start::Verified)
+        Just(Start::Verified),
+        Just(Start::Moving)
     ]
 }
 

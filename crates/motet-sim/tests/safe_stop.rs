@@ -110,7 +110,7 @@ fn run_killed(
     let mut dist = Distributor::new(machine);
     for (k, node) in nodes.iter_mut().enumerate() {
         let mut setup = dist.setup(machine, k, &machine.start);
-        setup.insert(1, HostMessage::Windowed);
+        setup.insert(1, HostMessage::Windowed { run: 1 });
         for m in &setup {
             send(node, m);
         }

@@ -48,6 +48,8 @@ pub enum ImageError {
     },
     /// The output buffer cannot hold the image.
     BufferTooSmall,
+    /// The header announces no payload: there is no firmware to run.
+    EmptyPayload,
 }
 
 impl core::fmt::Display for ImageError {
@@ -65,6 +67,7 @@ impl core::fmt::Display for ImageError {
                 "firmware payload CRC-32C {actual:#010x}, header says {expected:#010x}"
             ),
             ImageError::BufferTooSmall => f.write_str("buffer too small for the firmware image"),
+            ImageError::EmptyPayload => f.write_str("firmware image with an empty payload"),
         }
     }
 }
@@ -87,7 +90,8 @@ fn u32_at(b: &[u8], i: usize) -> u32 {
 }
 
 impl ImageHeader {
-    /// Parses the header at the start of `bytes` (the payload is not checked).
+    /// Parses the header at the start of `bytes` (the payload is not checked;
+    /// a header announcing none is refused).
     pub fn parse(bytes: &[u8]) -> Result<ImageHeader, ImageError> {
         if bytes.len() < IMAGE_HEADER_LEN {
             return Err(ImageError::Truncated);
@@ -118,7 +122,10 @@ impl ImageHeader {
                 minor: u16_at(bytes, 24),
                 patch: u16_at(bytes, 26),
             },
-            payload_len: u32_at(bytes, 28),
+            payload_len: match u32_at(bytes, 28) {
+                0 => return Err(ImageError::EmptyPayload),
+                n => n,
+            },
             payload_crc: u32_at(bytes, 32),
         })
     }
@@ -186,6 +193,9 @@ pub fn build(
 ) -> Result<usize, ImageError> {
     let mut k = Kind::new();
     k.push_str(kind).map_err(|_| ImageError::BadKind)?;
+    if payload.is_empty() {
+        return Err(ImageError::EmptyPayload);
+    }
     let payload_len = u32::try_from(payload.len()).map_err(|_| ImageError::BufferTooSmall)?;
     let mut crc = Crc32c::new();
     crc.update(payload);
@@ -288,9 +298,19 @@ mod tests {
             Err(ImageError::BadKind)
         );
         assert_eq!(
-            build("seventeen-chars!!", V, b"", &mut [0u8; 64]),
+            build("seventeen-chars!!", V, b"x", &mut [0u8; 64]),
             Err(ImageError::BadKind)
         );
+        // No payload: nothing to run, refused when built and when parsed.
+        assert_eq!(
+            build("stepper", V, b"", &mut [0u8; 64]),
+            Err(ImageError::EmptyPayload)
+        );
+        let mut empty = image("stepper", b"x");
+        empty.truncate(IMAGE_HEADER_LEN);
+        empty[28..32].copy_from_slice(&0u32.to_le_bytes());
+        empty[32..36].copy_from_slice(&crc32c(b"").to_le_bytes());
+        assert_eq!(parse(&empty), Err(ImageError::EmptyPayload));
     }
 
     proptest! {
@@ -304,7 +324,7 @@ mod tests {
         fn good_images_parse(
             kind in "[a-z0-9_-]{1,16}",
             major in any::<u16>(), minor in any::<u16>(), patch in any::<u16>(),
-            payload in proptest::collection::vec(any::<u8>(), 0..600),
+            payload in proptest::collection::vec(any::<u8>(), 1..600),
         ) {
             let version = Version { major, minor, patch };
             let mut out = vec![0u8; IMAGE_HEADER_LEN + payload.len()];

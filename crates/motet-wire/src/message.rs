@@ -117,11 +117,15 @@ pub enum HostMessage {
     },
     /// Remove the running graph (and any graph being built).
     GraphClear,
-    /// Windowed mode (until `Reset`): segments and events are held pending
-    /// until a [`HostMessage::Seal`] commits them, and the committed window
-    /// always ends at rest through its contingency tail. Only valid with an
-    /// empty segment queue.
-    Windowed,
+    /// Windowed mode (until `Reset`) for the run `run`: segments and events
+    /// are held pending until a [`HostMessage::Seal`] commits them, and the
+    /// committed window always ends at rest through its contingency tail.
+    /// The node reports `run` until it is reset or restarted, so that a host
+    /// resuming the run knows the node still holds its position. Only valid
+    /// with an empty segment queue.
+    Windowed {
+        run: u32,
+    },
     /// Commit every pending segment and event. `next_seq` is the sequence
     /// number after the last pending segment; a mismatch is refused
     /// (`OutOfOrder`), as is a seal once the committed window's tail has
@@ -135,6 +139,8 @@ pub enum HostMessage {
     /// Consecutive segments, compactly (see [`crate::stream`]): taken whole or
     /// refused whole.
     Segments(SegmentBatch),
+    /// Ask for a [`NodeMessage::Position`].
+    Where,
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -239,9 +245,26 @@ pub enum NodeMessage {
         /// The committed window's tail has started (or its end was reached):
         /// the node takes no segments until `SetPosition` or `Reset`.
         stopped: bool,
+        /// The run of [`HostMessage::Windowed`]; 0 when the node has none
+        /// (never windowed, reset, or restarted).
+        run: u32,
     },
     /// A message was refused; nothing in the queues changed.
     Refused { reason: Refusal },
+    /// Where the node is on its run's trajectory (answers
+    /// [`HostMessage::Where`]).
+    Position {
+        /// As in `Status`: 0 when the node holds no run (its position is then
+        /// unknown to it).
+        run: u32,
+        committed: u32,
+        stopped: bool,
+        /// Segments still queued: nonzero while the node moves.
+        queued: u16,
+        /// Where the queued trajectory ends (at rest, once `queued` is 0), on
+        /// the axes the node reads; other axes are as the host last set them.
+        at: Point,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -341,7 +364,7 @@ mod tests {
                 value: -1234.0,
             },
             HostMessage::GraphClear,
-            HostMessage::Windowed,
+            HostMessage::Windowed { run: 0xdead_beef },
             HostMessage::Seal { next_seq: 300 },
             HostMessage::ConfigureStream(StreamConfig {
                 quantum: 1e-3,
@@ -352,6 +375,7 @@ mod tests {
             HostMessage::Segments(SegmentBatch {
                 bytes: Vec::from_slice(&[3, 0x21, 7, 0x80, 1]).unwrap(),
             }),
+            HostMessage::Where,
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {
@@ -367,6 +391,14 @@ mod tests {
                 underruns: 1,
                 committed: 990,
                 stopped: true,
+                run: 7,
+            },
+            NodeMessage::Position {
+                run: u32::MAX,
+                committed: 990,
+                stopped: false,
+                queued: 3,
+                at: [1.5, -2.0, 0.0, 1e300, -0.0, 7.0],
             },
             NodeMessage::Refused {
                 reason: Refusal::Stopped,

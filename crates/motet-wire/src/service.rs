@@ -334,6 +334,10 @@ pub enum ServiceError {
     Storage,
     /// A clock model that is not finite or whose |skew| ≥ [`MAX_SKEW`].
     BadClock,
+    /// Refused while the node has committed motion (segments queued): a
+    /// reset, a firmware upload or an address change would lose its
+    /// position mid-job. Wait for the job to finish or stop.
+    Busy,
 }
 
 impl core::fmt::Display for ServiceError {
@@ -371,6 +375,9 @@ impl core::fmt::Display for ServiceError {
             ServiceError::NotVerified => f.write_str("firmware not verified"),
             ServiceError::Storage => f.write_str("storage failed"),
             ServiceError::BadClock => f.write_str("bad clock model"),
+            ServiceError::Busy => f.write_str(
+                "the node is moving (it has committed motion); wait for its job to finish or stop",
+            ),
         }
     }
 }

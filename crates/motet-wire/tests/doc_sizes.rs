@@ -32,7 +32,9 @@ fn documented_sizes() {
             192,
         ),
         (HostMessage::Reset, 1),
-        (HostMessage::Windowed, 1),
+        (HostMessage::Windowed { run: 0 }, 2),
+        (HostMessage::Windowed { run: u32::MAX }, 6),
+        (HostMessage::Where, 1),
         (HostMessage::Seal { next_seq: 0 }, 2),
         (HostMessage::Seal { next_seq: u32::MAX }, 6),
         (HostMessage::Status, 1),
@@ -67,8 +69,9 @@ fn documented_sizes() {
                 underruns: 0,
                 committed: 0,
                 stopped: false,
+                run: 0,
             },
-            7,
+            8,
         ),
         (
             NodeMessage::Status {
@@ -78,8 +81,19 @@ fn documented_sizes() {
                 underruns: u32::MAX,
                 committed: u32::MAX,
                 stopped: true,
+                run: u32::MAX,
             },
-            23,
+            28,
+        ),
+        (
+            NodeMessage::Position {
+                run: u32::MAX,
+                committed: u32::MAX,
+                stopped: true,
+                queued: u16::MAX,
+                at: [0.0; 6],
+            },
+            63,
         ),
         (
             NodeMessage::Refused {
