@@ -56,6 +56,12 @@ pub enum AdminError {
     NoButton { link: String, seconds: f64 },
     #[error("firmware image: {0}")]
     Image(String),
+    #[error("{link}: node {address:#06x} is moving (it has committed motion): {what} would lose its position; wait for its job to finish or stop")]
+    Busy {
+        link: String,
+        address: u16,
+        what: &'static str,
+    },
     #[error("{link}: firmware read-back differs at byte {offset}")]
     ReadBack { link: String, offset: u32 },
 }
@@ -283,9 +289,22 @@ impl Admin {
         })
     }
 
+    /// Refuses, before asking the node, what would lose a moving node's
+    /// position (the node refuses it too: this names it first).
+    pub fn at_rest(&mut self, address: u16, what: &'static str) -> Result<(), AdminError> {
+        if self.status(address)?.state == motet_wire::service::NodeState::Running {
+            return Err(AdminError::Busy {
+                link: self.link.clone(),
+                address,
+                what,
+            });
+        }
+        Ok(())
+    }
+
     /// Uploads a firmware image to the node at `address`: pages, read-back,
     /// verify, start. Returns the version the node then runs. `progress`
-    /// gets bytes written and the total.
+    /// gets bytes written and the total. Refused while the node moves.
     pub fn flash(
         &mut self,
         address: u16,
@@ -294,6 +313,7 @@ impl Admin {
     ) -> Result<Version, AdminError> {
         let img = image::parse(image_bytes).map_err(|e| AdminError::Image(e.to_string()))?;
         let header = img.header.clone();
+        self.at_rest(address, "a firmware upload")?;
         let begin = ServiceRequest::FirmwareBegin {
             size: image_bytes.len() as u32,
             crc32c: frame::crc32c(image_bytes),

@@ -9,17 +9,20 @@
 
 pub mod admin;
 pub mod clock;
+pub mod digest;
 pub mod journal;
 pub mod loopback;
 pub mod pairing_file;
 pub mod peer;
+pub mod plan_feed;
 pub mod registry;
 pub mod resume;
 pub mod run;
+pub mod run_record;
 pub mod session;
 pub mod sim_node;
 pub mod source;
 pub mod spawn;
 pub mod tail;
 
-pub use run::{NetConfig, NetError, NetRun, Phase, StopInfo};
+pub use run::{LostNode, NetConfig, NetError, NetRun, Phase, RunIdentity, StopInfo};

@@ -144,6 +144,43 @@ impl Loopback {
         self.host_alive = true;
     }
 
+    /// Node `k` restarts (power cycled, or its process killed and started
+    /// again from its store): same identity, nothing else kept.
+    pub fn restart_node(&mut self, k: usize) {
+        let n = &mut self.nodes[k];
+        let store = n.node.endpoint.services().store().clone();
+        let cfg = sim_config("stepper", store.record.map_or(0, |r| r.uid)).expect("a short kind");
+        let transport = std::mem::replace(
+            &mut n.node.transport,
+            Box::new(motet_link::pair("gone", "gone").0),
+        );
+        let local = n.local(self.now);
+        let mut node = SimNode::new(cfg, store, transport, local);
+        node.board = std::mem::take(&mut n.node.board);
+        n.node = node;
+        n.alive = true;
+    }
+
+    /// What every node would answer to `Where`, as `motet resume` sees it.
+    pub fn seen(&self) -> Vec<crate::resume::NodeSeen> {
+        self.nodes
+            .iter()
+            .map(|n| {
+                if !n.alive {
+                    return crate::resume::NodeSeen::Silent;
+                }
+                let info = n.node.endpoint.services().info();
+                crate::resume::NodeSeen::Answered {
+                    uid: info.uid,
+                    firmware: info.firmware,
+                    position: crate::resume::NodePosition::from_message(
+                        &n.node.endpoint.node().position(),
+                    ),
+                }
+            })
+            .collect()
+    }
+
     /// One round of the host and every live node, then time moves on to the
     /// next thing any of them has to do (at least 10 µs, at most [`Loopback::max_step_us`]).
     pub fn step(&mut self) -> Result<(), NetError> {

@@ -11,14 +11,16 @@
 //! runs its tail from the same boundary and all come to rest together on the
 //! path, where the journal says.
 
-use crate::journal::{JournalSeal, JournalSegment, JournalWriter};
+use crate::digest::Digest;
+use crate::journal::{JournalHeader, JournalSeal, JournalSegment, JournalStop, JournalWriter};
 use crate::peer::{Incoming, Peer};
-use crate::source::{Sourced, SourcedPlanner};
+use crate::plan_feed::{run_limits, PlanFeed};
+use crate::source::Sourced;
 use motet_host::{Distributor, Machine};
-use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
+use motet_planner::{Command, Located, PlanError, Planned, SourceLoc};
 use motet_trajectory::{Point, Segment};
 use motet_wire::link::State;
-use motet_wire::service::ServiceRequest;
+use motet_wire::service::{ServiceRequest, MAX_SKEW};
 use motet_wire::{HostMessage, NodeMessage};
 use std::collections::VecDeque;
 
@@ -27,6 +29,9 @@ const SYNC_START_US: u64 = 20_000;
 
 /// How long after a segment's end a node may still hold it, µs.
 const RETIRE_SLACK_US: f64 = 50_000.0;
+
+/// Stopping nodes are asked where they are µs apart.
+const WHERE_INTERVAL_US: u64 = 100_000;
 
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,6 +65,38 @@ impl Default for NetConfig {
             model_interval_us: 5_000_000,
             connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
+        }
+    }
+}
+
+/// What identifies a run: a number the nodes keep while they hold its
+/// trajectory, and the files it was made from. The journal starts with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunIdentity {
+    /// Never 0 (a node with no run reports 0).
+    pub run: u32,
+    pub machine: Digest,
+    pub job: Digest,
+}
+
+impl RunIdentity {
+    /// A new run of these files, with a number unlikely to repeat.
+    pub fn new(machine: Digest, job: Digest) -> RunIdentity {
+        let t = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let mixed = Digest::of(&[&t.to_le_bytes()[..], &std::process::id().to_le_bytes()].concat());
+        let run = u32::from_le_bytes([mixed.0[0], mixed.0[1], mixed.0[2], mixed.0[3]]).max(1);
+        RunIdentity { run, machine, job }
+    }
+}
+
+impl Default for RunIdentity {
+    fn default() -> Self {
+        RunIdentity {
+            run: 1,
+            machine: Digest::default(),
+            job: Digest::default(),
         }
     }
 }
@@ -100,15 +137,38 @@ pub enum Phase {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StopInfo {
     pub reason: String,
-    /// Segments before this index were committed; the machine rests at the
-    /// end of the one before it.
+    /// Segments before this index were committed; every node that kept
+    /// running rests at the end of the one before it.
     pub window_end: u32,
     /// First segment the contingency tail slowed down.
     pub tail_start: u32,
-    /// Where every axis came to rest.
+    /// Segments every node had reported finished.
+    pub done: u32,
+    /// Where the nodes that kept running come to rest.
     pub point: Point,
     /// Host time at which the machine is at rest, µs.
     pub rest_time: f64,
+    /// Machine nodes (indices) that stopped answering: where they are is
+    /// not known, only that they got no further than the committed window.
+    pub lost: Vec<LostNode>,
+    /// Machine nodes that reported themselves at rest, each with the end
+    /// of its committed window (`window_end`, unless it missed the last seal).
+    pub confirmed: Vec<(usize, u32)>,
+}
+
+/// A node the host lost during a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LostNode {
+    pub node: usize,
+    pub name: String,
+    pub why: String,
+}
+
+impl StopInfo {
+    /// Whether every node is known to rest at `point`.
+    pub fn all_at_rest(&self) -> bool {
+        self.lost.is_empty() && self.confirmed.iter().all(|&(_, e)| e == self.window_end)
+    }
 }
 
 /// A sealed segment the host keeps until the machine is past it.
@@ -137,14 +197,12 @@ pub struct PeerFigures {
 pub struct NetRun {
     machine: Machine,
     cfg: NetConfig,
+    identity: RunIdentity,
     peers: Vec<Peer>,
     dist: Distributor,
+    /// The job, until streaming starts and the feed takes it.
     commands: Vec<Located<Command>>,
-    next_command: usize,
-    planner: Option<SourcedPlanner>,
-    planner_done: bool,
-    /// The planner has given everything: the job is all routed.
-    exhausted: bool,
+    feed: Option<PlanFeed>,
     start_point: Point,
     /// Routed to the nodes but not sealed.
     pending: Vec<(Committed, usize)>,
@@ -160,6 +218,10 @@ pub struct NetRun {
     deadline: f64,
     tail_start: u32,
     journal: Option<JournalWriter>,
+    /// Segments every node has reported finished, as last journaled.
+    done: u32,
+    /// Nodes lost, in the order the host noticed.
+    lost: Vec<LostNode>,
     phase: Phase,
     started_at: Option<u64>,
     configured: bool,
@@ -168,6 +230,8 @@ pub struct NetRun {
     settled_sent: Vec<bool>,
     next_sync: u64,
     next_status: u64,
+    /// When to ask the stopping nodes where they are next.
+    next_where: u64,
     room_asked_at: Option<u64>,
     pub windows: u64,
     pub segments_sent: u64,
@@ -190,13 +254,11 @@ impl NetRun {
         NetRun {
             machine: machine.clone(),
             cfg,
+            identity: RunIdentity::default(),
             peers,
             dist: Distributor::new(machine),
             commands,
-            next_command: 0,
-            planner: None,
-            planner_done: false,
-            exhausted: false,
+            feed: None,
             start_point: start,
             pending: Vec::new(),
             pending_events: 0,
@@ -207,6 +269,8 @@ impl NetRun {
             deadline: f64::NEG_INFINITY,
             tail_start: 0,
             journal,
+            done: 0,
+            lost: Vec::new(),
             phase: Phase::Starting,
             started_at: None,
             configured: false,
@@ -214,12 +278,29 @@ impl NetRun {
             settled_sent: vec![false; n],
             next_sync: 0,
             next_status: 0,
+            next_where: 0,
             room_asked_at: None,
             windows: 0,
             segments_sent: 0,
             pauses: 0,
             status: vec![None; n],
         }
+    }
+
+    /// The run's identity (its number goes to the nodes, its files'
+    /// digests into the journal). Before the first poll.
+    pub fn with_identity(mut self, identity: RunIdentity) -> NetRun {
+        self.set_identity(identity);
+        self
+    }
+
+    /// [`NetRun::with_identity`] in place.
+    pub fn set_identity(&mut self, identity: RunIdentity) {
+        self.identity = identity;
+    }
+
+    pub fn identity(&self) -> &RunIdentity {
+        &self.identity
     }
 
     pub fn phase(&self) -> &Phase {
@@ -232,7 +313,9 @@ impl NetRun {
 
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
-        (self.next_command, self.commands.len())
+        self.feed
+            .as_ref()
+            .map_or((0, self.commands.len()), |f| f.progress())
     }
 
     /// When the committed trajectory ends, µs.
@@ -269,13 +352,59 @@ impl NetRun {
         }
         let rest_time = crate::tail::rest_time(self.committed.iter().map(|c| &c.seg), now as f64)
             .max(self.committed_end.min(now as f64));
+        self.update_done();
         self.phase = Phase::Stopping(StopInfo {
             reason: reason.to_string(),
             window_end: self.next_index_committed(),
             tail_start: self.tail_start,
+            done: self.done,
             point,
             rest_time,
+            lost: self.lost.clone(),
+            confirmed: Vec::new(),
         });
+        self.next_where = now;
+    }
+
+    /// Node `k` stopped answering or its link failed: the run stops, and
+    /// where that node is, nobody knows.
+    fn lose(&mut self, k: usize, why: String, now: u64) {
+        if self.lost.iter().any(|l| l.node == k) {
+            return;
+        }
+        let name = self.peers[k].name.clone();
+        self.lost.push(LostNode {
+            node: k,
+            name: name.clone(),
+            why: why.clone(),
+        });
+        self.stop(&format!("node {name}: {why}"), now);
+        if let Phase::Stopping(info) = &mut self.phase {
+            info.lost = self.lost.clone();
+            info.confirmed.retain(|&(c, _)| c != k);
+        }
+    }
+
+    /// Segments every node that takes segments has reported finished, as
+    /// far as their last statuses tell (never less than before).
+    fn update_done(&mut self) {
+        let reported = (0..self.peers.len())
+            .filter(|&k| self.dist.next_seq(k).is_some())
+            .map(|k| match self.status[k] {
+                Some(NodeMessage::Status {
+                    segment_space,
+                    next_seq,
+                    ..
+                }) => {
+                    let held =
+                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
+                    next_seq.saturating_sub(held)
+                }
+                _ => 0,
+            })
+            .min()
+            .unwrap_or(0);
+        self.done = self.done.max(reported.min(self.next_index_committed()));
     }
 
     fn next_index_committed(&self) -> u32 {
@@ -302,19 +431,25 @@ impl NetRun {
             self.started_at = Some(now);
         }
         let mut failed = None;
-        for p in self.peers.iter_mut() {
+        for (k, p) in self.peers.iter_mut().enumerate() {
+            if self.lost.iter().any(|l| l.node == k) {
+                continue;
+            }
             if let Err(source) = p.receive(now) {
-                failed = Some((p.name.clone(), source));
+                failed = Some((k, source));
                 break;
             }
         }
-        if let Some((node, source)) = failed {
+        if let Some((k, source)) = failed {
             // A node gone mid-job stops the others with it; before the job
             // starts it is an error.
             if matches!(self.phase, Phase::Starting) {
+                let node = self.peers[k].name.clone();
                 return Err(NetError::Io { node, source });
             }
-            self.stop(&format!("node {node}: link error: {source}"), now);
+            if !matches!(self.phase, Phase::Done | Phase::Stopped(_)) {
+                self.lose(k, format!("link error: {source}"), now);
+            }
         }
         self.take_replies(now)?;
         self.keep_time(now);
@@ -333,21 +468,23 @@ impl NetRun {
                     self.phase = Phase::Done;
                 }
             }
-            Phase::Stopping(info) => {
-                self.ask_status(now);
-                if now as f64 > info.rest_time + 20_000.0 {
-                    self.phase = Phase::Stopped(info);
-                }
-            }
+            Phase::Stopping(_) => self.settle(now)?,
             Phase::Done | Phase::Stopped(_) => {}
         }
-        for p in self.peers.iter_mut() {
-            if let Err(source) = p.flush(now) {
-                let node = p.name.clone();
-                if matches!(self.phase, Phase::Streaming) {
-                    self.stop(&format!("node {node}: link error: {source}"), now);
-                } else if matches!(self.phase, Phase::Starting) {
-                    return Err(NetError::Io { node, source });
+        for k in 0..self.peers.len() {
+            if self.lost.iter().any(|l| l.node == k) {
+                continue;
+            }
+            if let Err(source) = self.peers[k].flush(now) {
+                match self.phase {
+                    Phase::Starting => {
+                        let node = self.peers[k].name.clone();
+                        return Err(NetError::Io { node, source });
+                    }
+                    Phase::Streaming | Phase::Draining | Phase::Stopping(_) => {
+                        self.lose(k, format!("link error: {source}"), now)
+                    }
+                    Phase::Done | Phase::Stopped(_) => {}
                 }
                 break;
             }
@@ -379,6 +516,19 @@ impl NetRun {
                         self.stop(&format!("node {node} {message}"), now);
                     }
                     Incoming::Motion(m @ NodeMessage::Status { .. }) => self.status[k] = Some(m),
+                    Incoming::Motion(NodeMessage::Position {
+                        run,
+                        committed,
+                        queued,
+                        ..
+                    }) => {
+                        let ours = run == self.identity.run;
+                        if let Phase::Stopping(info) = &mut self.phase {
+                            if ours && queued == 0 && !info.confirmed.iter().any(|c| c.0 == k) {
+                                info.confirmed.push((k, committed));
+                            }
+                        }
+                    }
                     Incoming::Service(_) => {}
                 }
             }
@@ -455,10 +605,29 @@ impl NetRun {
         if !all_up {
             return Ok(());
         }
+        // A node whose clock runs at another rate than any crystal would
+        // was started with another --time-scale (or is broken): its
+        // trajectory would run at the wrong speed.
+        for p in &self.peers {
+            let skew = p.sync.model().skew;
+            if p.sync.settled() && skew.abs() >= MAX_SKEW {
+                return Err(NetError::Node {
+                    node: p.name.clone(),
+                    message: format!(
+                        "its clock runs {:.2}× as fast as the host's ({:+.0} ppm; a crystal is off by at most {:.0}): were the host and the node started with the same --time-scale?",
+                        1.0 + skew,
+                        skew * 1e6,
+                        MAX_SKEW * 1e6
+                    ),
+                });
+            }
+        }
         if !self.configured {
             let setups = self.dist.stream_setup(&self.machine, &self.start_point);
             for (k, mut msgs) in setups.into_iter().enumerate() {
-                msgs.push(HostMessage::Windowed);
+                msgs.push(HostMessage::Windowed {
+                    run: self.identity.run,
+                });
                 for m in msgs {
                     self.peers[k].send_motion(&m);
                 }
@@ -477,11 +646,22 @@ impl NetRun {
             // this keeps the queue's segments long enough that the next seal,
             // a lead ahead, arrives before the tail would start, however
             // tiny the moves.
-            let mut limits = self.machine.limits();
-            let usable = self.capacity().saturating_sub(limits.stop_horizon).max(1);
-            limits.min_move_s = lead as f64 * 1e-6 / usable as f64;
-            let planner = Planner::new(limits, self.start_point, t0);
-            self.planner = Some(SourcedPlanner::new(planner));
+            let horizon = self.machine.limits().stop_horizon;
+            let usable = self.capacity().saturating_sub(horizon).max(1);
+            let min_move_s = lead as f64 * 1e-6 / usable as f64;
+            if let Some(j) = self.journal.as_mut() {
+                j.header(&JournalHeader {
+                    run: self.identity.run,
+                    machine: self.identity.machine,
+                    job: self.identity.job,
+                    t0,
+                    min_move_s,
+                    start: self.start_point,
+                })?;
+            }
+            let commands = std::mem::take(&mut self.commands);
+            let limits = run_limits(&self.machine, min_move_s);
+            self.feed = Some(PlanFeed::new(limits, self.start_point, t0, commands));
             self.phase = Phase::Streaming;
             self.fill(now)?;
         }
@@ -490,26 +670,80 @@ impl NetRun {
 
     /// Node loss: silence longer than the timeout, or a failed link.
     fn watch(&mut self, now: u64) {
-        let mut reason = None;
-        for p in &self.peers {
+        let mut lost = None;
+        for (k, p) in self.peers.iter().enumerate() {
+            if self.lost.iter().any(|l| l.node == k) {
+                continue;
+            }
             if let State::Failed(e) = p.link_state() {
-                reason = Some(format!("node {}: link failed ({e:?})", p.name));
+                lost = Some((k, format!("link failed ({e:?})")));
                 break;
             }
             let silent = now.saturating_sub(p.last_heard.unwrap_or(now));
             if silent > self.cfg.node_timeout_us {
-                reason = Some(format!(
-                    "node {} stopped answering ({} ms without a frame)",
-                    p.name,
-                    silent / 1000
+                lost = Some((
+                    k,
+                    format!("stopped answering ({} ms without a frame)", silent / 1000),
                 ));
                 break;
             }
         }
-        if let Some(r) = reason {
-            self.stop(&r, now);
+        if let Some((k, why)) = lost {
+            self.lose(k, why, now);
         }
         self.ask_status(now);
+    }
+
+    /// While the nodes run their tails: ask each where it is until it says
+    /// it is at rest on this run; one that does not say so in time is lost.
+    fn settle(&mut self, now: u64) -> Result<(), NetError> {
+        self.watch(now);
+        let Phase::Stopping(info) = self.phase.clone() else {
+            return Ok(());
+        };
+        let open: Vec<usize> = (0..self.peers.len())
+            .filter(|k| {
+                !info.confirmed.iter().any(|c| c.0 == *k) && !info.lost.iter().any(|l| l.node == *k)
+            })
+            .collect();
+        if open.is_empty() {
+            return self.stopped(info, now);
+        }
+        if now as f64 > info.rest_time + self.cfg.node_timeout_us as f64 {
+            for k in open {
+                self.lose(k, "did not report itself at rest".into(), now);
+            }
+            let Phase::Stopping(info) = self.phase.clone() else {
+                return Ok(());
+            };
+            return self.stopped(info, now);
+        }
+        // Asked from the start: the answers also show the node is alive.
+        if now >= self.next_where {
+            for k in open {
+                if matches!(self.peers[k].link_state(), State::Established { .. }) {
+                    self.peers[k].send_motion(&HostMessage::Where);
+                }
+            }
+            self.next_where = now + WHERE_INTERVAL_US;
+        }
+        Ok(())
+    }
+
+    fn stopped(&mut self, info: StopInfo, now: u64) -> Result<(), NetError> {
+        if let Some(j) = self.journal.as_mut() {
+            j.stop(&JournalStop {
+                seal: JournalSeal {
+                    end: info.window_end,
+                    tail: info.tail_start,
+                    done: info.done,
+                    time: now,
+                },
+                lost: info.lost.iter().map(|l| l.node).collect(),
+            })?;
+        }
+        self.phase = Phase::Stopped(info);
+        Ok(())
     }
 
     /// Asks every node that takes segments for its status, at most once per
@@ -609,12 +843,12 @@ impl NetRun {
             }
             let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
             if self.pending.is_empty() && self.pending_events == 0 {
-                if !grew && self.exhausted {
+                if !grew && self.feed.as_ref().is_some_and(|f| f.exhausted()) {
                     self.phase = Phase::Draining;
                 }
                 break;
             }
-            self.seal()?;
+            self.seal(now)?;
         }
         Ok(())
     }
@@ -688,34 +922,15 @@ impl NetRun {
 
     /// The next planned item, planning more commands as needed.
     fn next_item(&mut self) -> Result<Option<Sourced>, NetError> {
-        let Some(planner) = self.planner.as_mut() else {
+        let Some(feed) = self.feed.as_mut() else {
             return Ok(None);
         };
-        loop {
-            if let Some(mut s) = planner.pop() {
-                // The nodes run the quantized trajectory: it is the record.
-                s.item = self.dist.quantize(&s.item);
-                return Ok(Some(s));
-            }
-            if self.next_command < self.commands.len() {
-                let i = self.next_command;
-                let c = &self.commands[i];
-                planner
-                    .push(i, &c.item)
-                    .map_err(|error| NetError::Plan { loc: c.loc, error })?;
-                self.next_command += 1;
-            } else if !self.planner_done {
-                planner.finish();
-                self.planner_done = true;
-            } else {
-                self.exhausted = true;
-                return Ok(None);
-            }
-        }
+        feed.next(&mut self.dist)
+            .map_err(|(loc, error)| NetError::Plan { loc, error })
     }
 
     /// Commits the pending window on every node.
-    fn seal(&mut self) -> Result<(), NetError> {
+    fn seal(&mut self, now: u64) -> Result<(), NetError> {
         let pending = std::mem::take(&mut self.pending);
         self.pending_events = 0;
         if let Some(j) = self.journal.as_mut() {
@@ -723,6 +938,8 @@ impl NetRun {
                 j.segment(&JournalSegment {
                     index: c.index,
                     command: *command,
+                    t0: c.seg.t0,
+                    t1: c.seg.t1(),
                     start: c.seg.start,
                     end: c.seg.end,
                 })?;
@@ -738,10 +955,13 @@ impl NetRun {
         self.deadline = deadline;
         self.tail_start = self.committed.front().map_or(0, |c| c.index) + tail_pos as u32;
         let end = self.next_index_committed();
+        self.update_done();
         if let Some(j) = self.journal.as_mut() {
             j.seal(JournalSeal {
                 end,
                 tail: self.tail_start,
+                done: self.done,
+                time: now,
             })?;
         }
         for k in 0..self.peers.len() {

@@ -7,10 +7,12 @@ use crate::clock::Clock;
 use crate::pairing_file::{format_uid, parse_uid, PairingFile};
 use crate::peer::{Incoming, Peer};
 use crate::registry;
+use crate::resume::NodePosition;
 use crate::spawn::{spawn_sim_node, SpawnError, SpawnedNode};
 use motet_host::Machine;
 use motet_wire::link::State;
-use motet_wire::{HostMessage, NodeMessage};
+use motet_wire::service::Info;
+use motet_wire::HostMessage;
 use std::path::Path;
 use std::time::Duration;
 
@@ -41,6 +43,8 @@ pub struct NodeAddr {
 pub struct Session {
     pub peers: Vec<Peer>,
     pub nodes: Vec<NodeAddr>,
+    /// What each node said it is when the session began.
+    pub infos: Vec<Info>,
     /// Node processes this session started; they stop with it.
     pub spawned: Vec<SpawnedNode>,
 }
@@ -70,6 +74,7 @@ impl Session {
         let mut s = Session {
             peers: Vec::new(),
             nodes: Vec::new(),
+            infos: Vec::new(),
             spawned: Vec::new(),
         };
         for (k, spec) in machine.nodes.iter().enumerate() {
@@ -95,6 +100,7 @@ impl Session {
                 link: node.link.clone(),
                 address,
             });
+            s.infos.push(info);
             s.peers
                 .push(Peer::new(&spec.name, address, a.into_transport(), isn(k)));
             s.spawned.push(node);
@@ -141,6 +147,7 @@ impl Session {
         let mut s = Session {
             peers: Vec::new(),
             nodes: nodes.to_vec(),
+            infos: Vec::new(),
             spawned: Vec::new(),
         };
         for (k, (spec, n)) in machine.nodes.iter().zip(nodes).enumerate() {
@@ -167,6 +174,7 @@ impl Session {
                 node: spec.name.clone(),
                 message,
             })?;
+            s.infos.push(info);
             s.peers
                 .push(Peer::new(&spec.name, n.address, a.into_transport(), isn(k)));
         }
@@ -174,24 +182,29 @@ impl Session {
     }
 }
 
-/// Connects every peer's link and asks each node's motion status: the
-/// committed window end and whether it stopped. `None` for a node that did
-/// not answer within `timeout`.
-pub fn probe(peers: &mut [Peer], clock: &dyn Clock, timeout: Duration) -> Vec<Option<NodeMessage>> {
+/// Connects every peer's link and asks each node where it is on its run
+/// (`Where`). `None` for a node that did not answer within `timeout`.
+pub fn locate(
+    peers: &mut [Peer],
+    clock: &dyn Clock,
+    timeout: Duration,
+) -> Vec<Option<NodePosition>> {
     let start = clock.now_us();
-    let mut got: Vec<Option<NodeMessage>> = vec![None; peers.len()];
+    let mut got: Vec<Option<NodePosition>> = vec![None; peers.len()];
     let mut asked = vec![false; peers.len()];
     while clock.now_us() < start + timeout.as_micros() as u64 {
         let now = clock.now_us();
         for (k, p) in peers.iter_mut().enumerate() {
             let _ = p.receive(now);
             while let Some(m) = p.take() {
-                if let Incoming::Motion(m @ NodeMessage::Status { .. }) = m {
-                    got[k] = Some(m);
+                if let Incoming::Motion(m) = m {
+                    if let Some(pos) = NodePosition::from_message(&m) {
+                        got[k] = Some(pos);
+                    }
                 }
             }
             if !asked[k] && matches!(p.link_state(), State::Established { .. }) {
-                p.send_motion(&HostMessage::Status);
+                p.send_motion(&HostMessage::Where);
                 asked[k] = true;
             }
             let _ = p.flush(now);

@@ -1,0 +1,106 @@
+//! The trajectory of a networked run as the nodes get it: the job's commands
+//! planned one at a time and quantized as the segment stream carries them,
+//! each item tagged with the command it came from.
+//!
+//! A run and `motet resume` go through this one path. The planner is pure
+//! and deterministic, so the same commands, machine, start point, start time
+//! and shortest move time give the same segments bit for bit: resuming
+//! re-plans the stopped run and compares the result with its journal.
+
+use crate::journal::JournalHeader;
+use crate::source::{Sourced, SourcedPlanner};
+use motet_host::{Distributor, Machine};
+use motet_planner::{Command, Limits, Located, PlanError, Planned, Planner, SourceLoc};
+use motet_trajectory::{Point, Segment};
+
+/// The machine's limits as a run plans with them.
+pub fn run_limits(machine: &Machine, min_move_s: f64) -> Limits {
+    let mut l = machine.limits();
+    l.min_move_s = min_move_s;
+    l
+}
+
+/// Commands fed to the planner as its output is taken.
+pub struct PlanFeed {
+    commands: Vec<Located<Command>>,
+    next_command: usize,
+    planner: SourcedPlanner,
+    finished: bool,
+    exhausted: bool,
+}
+
+impl PlanFeed {
+    /// A trajectory from rest at `start` at host time `t0` (µs).
+    pub fn new(limits: Limits, start: Point, t0: f64, commands: Vec<Located<Command>>) -> PlanFeed {
+        PlanFeed {
+            commands,
+            next_command: 0,
+            planner: SourcedPlanner::new(Planner::new(limits, start, t0)),
+            finished: false,
+            exhausted: false,
+        }
+    }
+
+    /// Commands planned so far and in all.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.next_command, self.commands.len())
+    }
+
+    /// The planner has given everything.
+    pub fn exhausted(&self) -> bool {
+        self.exhausted
+    }
+
+    /// The next item, quantized by `dist` as the nodes will run it.
+    pub fn next(
+        &mut self,
+        dist: &mut Distributor,
+    ) -> Result<Option<Sourced>, (SourceLoc, PlanError)> {
+        loop {
+            if let Some(mut s) = self.planner.pop() {
+                // The nodes run the quantized trajectory: it is the record.
+                s.item = dist.quantize(&s.item);
+                return Ok(Some(s));
+            }
+            if let Some(c) = self.commands.get(self.next_command) {
+                self.planner
+                    .push(self.next_command, &c.item)
+                    .map_err(|e| (c.loc, e))?;
+                self.next_command += 1;
+            } else if !self.finished {
+                self.planner.finish();
+                self.finished = true;
+            } else {
+                self.exhausted = true;
+                return Ok(None);
+            }
+        }
+    }
+}
+
+/// A run's first `count` segments (fewer if the job has fewer), each with
+/// its command, planned again from what its journal header records.
+pub fn replan(
+    machine: &Machine,
+    commands: Vec<Located<Command>>,
+    header: &JournalHeader,
+    count: usize,
+) -> Result<Vec<(usize, Segment)>, (SourceLoc, PlanError)> {
+    let mut dist = Distributor::new(machine);
+    // As a run does when it configures the nodes: the stream starts here.
+    dist.stream_setup(machine, &header.start);
+    let limits = run_limits(machine, header.min_move_s);
+    let mut feed = PlanFeed::new(limits, header.start, header.t0, commands);
+    let mut out = Vec::new();
+    while out.len() < count {
+        match feed.next(&mut dist)? {
+            Some(Sourced {
+                item: Planned::Segment(s),
+                command,
+            }) => out.push((command, s)),
+            Some(_) => {}
+            None => break,
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,174 @@
+//! `resume.toml`: what a networked run was started with, written when it
+//! starts, so that `motet resume` finds the files, the nodes and the options
+//! again and can check that nothing changed.
+
+use crate::digest::Digest;
+use motet_planner::{Command, Located};
+use motet_trajectory::{Point, MAX_AXES};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The `resume.toml` format this crate writes and reads.
+pub const RECORD_FORMAT: u32 = 2;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("cannot read {path}: {source} (is {dir} the output folder of a networked run?)")]
+    Read {
+        path: String,
+        dir: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// A networked run as `resume.toml` records it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunRecord {
+    pub format: u32,
+    /// The run's number (hex), as the journal and the nodes know it.
+    pub run: String,
+    /// Absolute paths, so that resuming works from any folder.
+    pub machine: PathBuf,
+    pub machine_sha256: Digest,
+    pub job: PathBuf,
+    pub job_sha256: Digest,
+    pub allow_unknown: bool,
+    pub time_scale: f64,
+    pub lead_ms: f64,
+    pub sync_ms: f64,
+    /// For a run that resumed another: how its commands follow from the job's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub continues: Option<Continuation>,
+    pub nodes: Vec<RunNode>,
+}
+
+/// A resumed run's commands: travel from `from` to `to` and the tools
+/// restored (`prelude` commands), then the job from command `command` on.
+/// It began with the nodes at rest at `from` on the run `after_run`, at the
+/// end of its window `after_window`: a node that still says so has not
+/// moved since.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Continuation {
+    pub command: usize,
+    pub prelude: usize,
+    pub from: Vec<f64>,
+    pub to: Vec<f64>,
+    pub after_run: String,
+    pub after_window: u32,
+}
+
+/// A node of the run: where it was reached, and which device it was.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunNode {
+    pub name: String,
+    pub link: String,
+    pub address: u16,
+    /// Unique id (16 hex digits) and firmware version the node reported.
+    pub uid: String,
+    pub firmware: String,
+}
+
+impl RunRecord {
+    /// Reads `DIR/resume.toml`.
+    pub fn load(dir: &Path) -> Result<RunRecord, RecordError> {
+        let path = dir.join("resume.toml");
+        let p = path.display().to_string();
+        let text = std::fs::read_to_string(&path).map_err(|source| RecordError::Read {
+            path: p.clone(),
+            dir: dir.display().to_string(),
+            source,
+        })?;
+        let r: RunRecord = toml::from_str(&text).map_err(|e| RecordError::Parse {
+            path: p.clone(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        if r.format != RECORD_FORMAT {
+            return Err(RecordError::Parse {
+                path: p,
+                message: format!(
+                    "format {}: this motet resumes runs of format {RECORD_FORMAT}",
+                    r.format
+                ),
+            });
+        }
+        r.run_number().map_err(|message| RecordError::Parse {
+            path: p.clone(),
+            message,
+        })?;
+        if let Some(c) = &r.continues {
+            if c.from.len() != MAX_AXES || c.to.len() != MAX_AXES {
+                return Err(RecordError::Parse {
+                    path: p,
+                    message: format!("`continues`: `from` and `to` need {MAX_AXES} coordinates"),
+                });
+            }
+        }
+        Ok(r)
+    }
+
+    pub fn save(&self, dir: &Path) -> Result<(), RecordError> {
+        let path = dir.join("resume.toml");
+        let text = toml::to_string_pretty(self).map_err(|e| RecordError::Parse {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        std::fs::write(&path, text).map_err(|source| RecordError::Write {
+            path: path.display().to_string(),
+            source,
+        })
+    }
+
+    /// The run's number.
+    pub fn run_number(&self) -> Result<u32, String> {
+        u32::from_str_radix(&self.run, 16)
+            .ok()
+            .filter(|&r| r != 0)
+            .ok_or_else(|| format!("run `{}` is not a run number (hex, not 0)", self.run))
+    }
+
+    /// The commands the run was given, from the job's.
+    pub fn run_commands(&self, job: &[Located<Command>]) -> Vec<Located<Command>> {
+        match &self.continues {
+            None => job.to_vec(),
+            Some(c) => {
+                crate::resume::resume_at(job, point(&c.from), point(&c.to), c.command).commands
+            }
+        }
+    }
+
+    /// Where the run started: where a resumed run found the machine, or
+    /// the machine file's start.
+    pub fn start(&self, machine_start: Point) -> Point {
+        self.continues
+            .as_ref()
+            .map_or(machine_start, |c| point(&c.from))
+    }
+
+    /// The job command a command of the run stands for, and, for one in a
+    /// resumed run's prelude (the travel back), where the job continues.
+    pub fn job_command(&self, run_command: usize) -> (usize, Option<Point>) {
+        match &self.continues {
+            None => (run_command, None),
+            Some(c) if run_command < c.prelude => (c.command, Some(point(&c.to))),
+            Some(c) => (c.command + run_command - c.prelude, None),
+        }
+    }
+}
+
+fn point(v: &[f64]) -> Point {
+    let mut p = [0.0; MAX_AXES];
+    for (d, s) in p.iter_mut().zip(v) {
+        *d = *s;
+    }
+    p
+}

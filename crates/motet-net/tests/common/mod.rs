@@ -1,0 +1,113 @@
+//! What the network tests share: example machines and jobs, links, clocks,
+//! and the steps the machine took.
+#![allow(dead_code)]
+
+use motet_host::Machine;
+use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
+use motet_link::{pair, Transport};
+use motet_net::loopback::{Loopback, NodeClock};
+use motet_planner::{Command, Located};
+use std::path::Path;
+
+pub fn root() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+pub fn load(machine: &str, job: &str) -> (Machine, Vec<Located<Command>>) {
+    let m = Machine::load(&root().join(machine)).unwrap();
+    let j = motet_api::load_job(&m, &root().join(job), &motet_api::JobOptions::default()).unwrap();
+    (m, j.commands)
+}
+
+/// (steps, net position) per actuator from the in-process simulator.
+pub fn simulated(m: &Machine, cmds: &[Located<Command>]) -> Vec<(u64, i64)> {
+    let r = motet_sim::simulate(m, "job", cmds, &mut |_, _| {}).unwrap();
+    r.report
+        .actuators
+        .iter()
+        .map(|a| (a.steps, a.position))
+        .collect()
+}
+
+/// (steps, net position) per actuator from the loopback nodes' boards.
+pub fn executed(m: &Machine, lb: &Loopback) -> Vec<(u64, i64)> {
+    let mut out = vec![(0, 0); m.actuators.len()];
+    for (k, spec) in m.nodes.iter().enumerate() {
+        let b = &lb.nodes[k].node.board;
+        for (ch, &a) in spec.actuators.iter().enumerate() {
+            out[a] = (b.steps[ch], b.position[ch]);
+        }
+    }
+    out
+}
+
+pub type Links = Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)>;
+
+pub fn clean_links(n: usize) -> Links {
+    (0..n)
+        .map(|k| {
+            let (a, b) = pair(&format!("host{k}"), &format!("node{k}"));
+            (
+                Box::new(a) as Box<dyn Transport + Send>,
+                Box::new(b) as Box<dyn Transport + Send>,
+            )
+        })
+        .collect()
+}
+
+pub fn faulty_links(n: usize, clock: &SimClock, p: f64, seed: u64) -> Links {
+    (0..n)
+        .map(|k| {
+            let (a, b) = pair(&format!("host{k}"), &format!("node{k}"));
+            let cfg = |s| FaultConfig::all(seed * 100 + s, p);
+            let a = Faulty::with_clock(a, cfg(2 * k as u64), FaultClock::Simulated(clock.clone()));
+            let b = Faulty::with_clock(
+                b,
+                cfg(2 * k as u64 + 1),
+                FaultClock::Simulated(clock.clone()),
+            );
+            (
+                Box::new(a) as Box<dyn Transport + Send>,
+                Box::new(b) as Box<dyn Transport + Send>,
+            )
+        })
+        .collect()
+}
+
+pub fn clocks(n: usize) -> Vec<NodeClock> {
+    // Crystals off by up to ±200 ppm, clocks started anywhere.
+    (0..n)
+        .map(|k| NodeClock {
+            ppm: if k % 2 == 0 { 200.0 } else { -150.0 },
+            offset_us: 123_456_789 * (k as u64 + 1),
+        })
+        .collect()
+}
+
+/// Step position of every actuator with the machine at rest at `p`.
+pub fn steps_at(m: &Machine, p: &motet_trajectory::Point) -> Vec<i64> {
+    m.actuators
+        .iter()
+        .map(|a| {
+            let v = m.joints[a.joint].map.value(p, 0.0) * a.steps_per_unit;
+            // The half-step rule: halves round away from zero.
+            if v >= 0.0 {
+                (v + 0.5) as i64
+            } else {
+                (v - 0.5) as i64
+            }
+        })
+        .collect()
+}
+
+/// The job's end on every node after a stop: (committed window end of each
+/// node, stopped flags).
+pub fn node_windows(lb: &Loopback) -> Vec<(u32, bool)> {
+    lb.nodes
+        .iter()
+        .map(|n| {
+            let s = n.node.endpoint.node().status();
+            (s.committed, s.stopped)
+        })
+        .collect()
+}
