@@ -110,10 +110,22 @@ enum Cmd {
         #[arg(long, default_value_t = 400.0)]
         sync_ms: f64,
     },
-    /// Continue a networked job that stopped, from where every node came to rest.
+    /// Continue a networked job that stopped, from where every node came to
+    /// rest, after checking that the files, the journal and the nodes are the run's.
     Resume {
         /// The stopped run's output folder (it holds resume.toml and the journal).
         out: PathBuf,
+        /// Where the machine is, for nodes that lost their position (restarted
+        /// or reset): AXIS=VALUE,… for the axes they drive, e.g. x=10,y=20.5.
+        /// Measure it or home the machine first: the job continues from there.
+        #[arg(long, value_name = "AXIS=VALUE,…")]
+        assume_position: Option<String>,
+        /// The machine file, if it moved since the run (it must be the same file).
+        #[arg(long)]
+        machine: Option<PathBuf>,
+        /// The job file, if it moved since the run (it must be the same file).
+        #[arg(long)]
+        job: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -263,7 +275,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 sync_ms,
             }),
         },
-        Cmd::Resume { out, quiet } => netrun::resume_cmd(&out, quiet),
+        Cmd::Resume {
+            out,
+            assume_position,
+            machine,
+            job,
+            quiet,
+        } => netrun::resume_cmd(netrun::ResumeArgs {
+            out: &out,
+            quiet,
+            assume_position: assume_position.as_deref(),
+            machine: machine.as_deref(),
+            job: job.as_deref(),
+        }),
         Cmd::Node {
             sim: _,
             kind,

@@ -3,18 +3,21 @@
 
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use motet_api::{job_name, load_job, JobOptions};
+use motet_api::job::{parse_job, read_bytes, Job, JobKind};
+use motet_api::{job_name, JobOptions};
 use motet_host::Machine;
+use motet_net::admin::AdminError;
 use motet_net::clock::{Clock, WallClock};
+use motet_net::digest::Digest;
 use motet_net::journal::{Journal, JournalWriter};
-use motet_net::pairing_file::{pairing_path, PairingFile};
-use motet_net::resume::resume;
-use motet_net::session::{probe, NodeAddr, Session};
-use motet_net::{NetConfig, NetRun, Phase};
+use motet_net::pairing_file::{format_uid, pairing_path, PairingFile};
+use motet_net::resume::{parse_assumed, prove, Evidence, NodeSeen, ResumeError};
+use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
+use motet_net::session::{locate, NodeAddr, Session, SessionError};
+use motet_net::{NetConfig, NetRun, Phase, RunIdentity, StopInfo};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
 use motet_wire::NodeMessage;
-use serde::{Deserialize, Serialize};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -42,41 +45,7 @@ pub struct NetArgs<'a> {
     pub sync_ms: f64,
 }
 
-/// What `motet resume` needs: written when a networked run starts.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ResumeFile {
-    pub machine: PathBuf,
-    pub job: PathBuf,
-    pub allow_unknown: bool,
-    pub time_scale: f64,
-    pub lead_ms: f64,
-    #[serde(default = "default_sync_ms")]
-    pub sync_ms: f64,
-    /// For a resumed run: the job command its journal's command 0.. after the
-    /// prelude stand for, the prelude's length, and where the prelude went.
-    #[serde(default)]
-    pub base_command: usize,
-    #[serde(default)]
-    pub prelude: usize,
-    #[serde(default)]
-    pub prelude_to: Option<Vec<f64>>,
-    pub nodes: Vec<ResumeNode>,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ResumeNode {
-    pub name: String,
-    pub link: String,
-    pub address: u16,
-}
-
-fn default_sync_ms() -> f64 {
-    NetConfig::default().sync_interval_us as f64 / 1000.0
-}
-
-fn cfg(r: &ResumeFile) -> NetConfig {
+fn cfg(r: &RunRecord) -> NetConfig {
     let (lead_ms, time_scale) = (r.lead_ms, r.time_scale);
     let mut c = NetConfig::default();
     c.lead_min_us = (lead_ms * 1000.0) as u64;
@@ -85,6 +54,60 @@ fn cfg(r: &ResumeFile) -> NetConfig {
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c.connect_timeout_us = (c.connect_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c
+}
+
+/// The machine file and the job, each read once: what they say, where they
+/// are (absolute, so a resume works from any folder) and their SHA-256.
+struct Files {
+    machine_path: PathBuf,
+    machine: Machine,
+    machine_sha256: Digest,
+    job_path: PathBuf,
+    job: Job,
+    job_sha256: Digest,
+}
+
+fn absolute(p: &Path) -> Result<PathBuf> {
+    std::fs::canonicalize(p).with_context(|| format!("cannot find {}", p.display()))
+}
+
+fn read_files(machine_path: &Path, job_path: &Path, allow_unknown: bool) -> Result<Files> {
+    let machine_path = absolute(machine_path)?;
+    let text = std::fs::read_to_string(&machine_path)
+        .with_context(|| format!("cannot read machine file {}", machine_path.display()))?;
+    let machine = Machine::parse(&text, &machine_path)?;
+    let job_path = absolute(job_path)?;
+    let bytes = read_bytes(&job_path)?;
+    let job = parse_job(
+        &machine,
+        &job_path,
+        JobKind::of(&job_path)?,
+        &bytes,
+        &JobOptions { allow_unknown },
+    )?;
+    Ok(Files {
+        machine_sha256: Digest::of(text.as_bytes()),
+        machine_path,
+        machine,
+        job_path,
+        job,
+        job_sha256: Digest::of(&bytes),
+    })
+}
+
+fn record_nodes(session: &Session) -> Vec<RunNode> {
+    session
+        .nodes
+        .iter()
+        .zip(&session.infos)
+        .map(|(n, i)| RunNode {
+            name: n.name.clone(),
+            link: n.link.clone(),
+            address: n.address,
+            uid: format_uid(i.uid),
+            firmware: i.firmware.to_string(),
+        })
+        .collect()
 }
 
 pub fn run(a: NetArgs) -> Result<()> {
@@ -97,16 +120,10 @@ pub fn run(a: NetArgs) -> Result<()> {
     if !(a.lead_ms.is_finite() && a.lead_ms > 0.0) {
         bail!("--lead-ms must be a positive number");
     }
-    let machine = Machine::load(a.machine_path)?;
-    let loaded = load_job(
-        &machine,
-        a.job_path,
-        &JobOptions {
-            allow_unknown: a.allow_unknown,
-        },
-    )?;
+    let files = read_files(a.machine_path, a.job_path, a.allow_unknown)?;
+    let machine = &files.machine;
     if !a.quiet {
-        for w in &loaded.warnings {
+        for w in &files.job.warnings {
             eprintln!("warning: {w}");
         }
     }
@@ -123,7 +140,7 @@ pub fn run(a: NetArgs) -> Result<()> {
                 "60".to_string(),
                 "--quiet".to_string(),
             ];
-            Session::spawn(&machine, &exe, &extra)?
+            Session::spawn(machine, &exe, &extra)?
         }
         NodesMode::Paired => {
             let path = pairing_path(a.machine_path);
@@ -134,66 +151,55 @@ pub fn run(a: NetArgs) -> Result<()> {
                     a.machine_path.display()
                 );
             }
-            Session::paired(&machine, &PairingFile::load(&path)?, &path)?
+            Session::paired(machine, &PairingFile::load(&path)?, &path)?
         }
         NodesMode::Sim => unreachable!("in-process runs do not come here"),
     };
-    let resume_file = ResumeFile {
-        machine: a.machine_path.to_path_buf(),
-        job: a.job_path.to_path_buf(),
+    let identity = RunIdentity::new(files.machine_sha256, files.job_sha256);
+    let record = RunRecord {
+        format: RECORD_FORMAT,
+        run: format!("{:08x}", identity.run),
+        machine: files.machine_path.clone(),
+        machine_sha256: files.machine_sha256,
+        job: files.job_path.clone(),
+        job_sha256: files.job_sha256,
         allow_unknown: a.allow_unknown,
         time_scale: a.time_scale,
         lead_ms: a.lead_ms,
         sync_ms: a.sync_ms,
-        base_command: 0,
-        prelude: 0,
-        prelude_to: None,
-        nodes: session
-            .nodes
-            .iter()
-            .map(|n| ResumeNode {
-                name: n.name.clone(),
-                link: n.link.clone(),
-                address: n.address,
-            })
-            .collect(),
+        continues: None,
+        nodes: record_nodes(&session),
     };
     drive(
-        &machine,
-        loaded.commands,
+        machine,
+        files.job.commands,
         machine.start,
         session,
-        resume_file,
+        record,
+        identity,
         &out,
         a.quiet,
     )
 }
 
+#[allow(clippy::too_many_arguments)]
 fn drive(
     machine: &Machine,
     commands: Vec<Located<Command>>,
     start: Point,
     mut session: Session,
-    resume_file: ResumeFile,
+    record: RunRecord,
+    identity: RunIdentity,
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    std::fs::write(
-        out.join("resume.toml"),
-        toml::to_string_pretty(&resume_file)?,
-    )?;
+    record.save(out)?;
     let journal = JournalWriter::create(&out.join("journal"))?;
-    let clock = WallClock::with(resume_file.time_scale, 0.0, 0);
+    let clock = WallClock::with(record.time_scale, 0.0, 0);
     let peers = std::mem::take(&mut session.peers);
     let total = commands.len();
-    let mut run = NetRun::new(
-        machine,
-        commands,
-        peers,
-        start,
-        cfg(&resume_file),
-        Some(journal),
-    );
+    let mut run = NetRun::new(machine, commands, peers, start, cfg(&record), Some(journal))
+        .with_identity(identity);
     let bar = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
@@ -235,6 +241,7 @@ fn drive(
         "windows": run.windows,
         "wall_s": started.elapsed().as_secs_f64(),
         "outcome": match &phase { Phase::Done => "done".to_string(), Phase::Stopped(s) => format!("stopped: {}", s.reason), _ => "?".into() },
+        "lost": match &phase { Phase::Stopped(s) => s.lost.iter().map(|l| serde_json::json!({ "node": l.name, "why": l.why })).collect::<Vec<_>>(), _ => Vec::new() },
         "nodes": figures.iter().enumerate().map(|(k, f)| serde_json::json!({
             "name": f.name,
             "rtt_us": f.rtt_us,
@@ -283,18 +290,8 @@ fn drive(
             Ok(())
         }
         Phase::Stopped(s) => {
-            let text = format!(
-                "reason = {:?}\nwindow_end = {}\ntail_start = {}\npoint = {:?}\n",
-                s.reason, s.window_end, s.tail_start, s.point
-            );
-            std::fs::write(out.join("stop.toml"), text)?;
-            bail!(
-                "stopped: {}\n  every node came to rest at {:?} (end of segment {}); continue with `motet resume {}`",
-                s.reason,
-                s.point,
-                s.window_end.saturating_sub(1),
-                out.display()
-            )
+            std::fs::write(out.join("stop.toml"), stop_summary(machine, &s))?;
+            bail!("{}", stop_message(machine, &s, out))
         }
         _ => unreachable!("the loop ends only when done or stopped"),
     }
@@ -312,27 +309,123 @@ fn window(m: Option<&NodeMessage>) -> serde_json::Value {
     }
 }
 
+/// What `stop.toml` says: the stop as a person reads it.
+fn stop_summary(machine: &Machine, s: &StopInfo) -> String {
+    let names = |v: &mut dyn Iterator<Item = usize>| -> Vec<String> {
+        v.map(|k| machine.nodes[k].name.clone()).collect()
+    };
+    let mut t = toml::Table::new();
+    t.insert("reason".into(), s.reason.clone().into());
+    t.insert("window_end".into(), i64::from(s.window_end).into());
+    t.insert("tail_start".into(), i64::from(s.tail_start).into());
+    t.insert("done".into(), i64::from(s.done).into());
+    t.insert(
+        "point".into(),
+        s.point[..machine.axes.len()].to_vec().into(),
+    );
+    t.insert(
+        "at_rest".into(),
+        names(&mut s.confirmed.iter().map(|c| c.0)).into(),
+    );
+    t.insert(
+        "lost".into(),
+        names(&mut s.lost.iter().map(|l| l.node)).into(),
+    );
+    toml::to_string(&t).unwrap_or_default()
+}
+
+/// The error a stopped run ends with: why, which nodes rest where, which
+/// were lost, and how to go on.
+fn stop_message(machine: &Machine, s: &StopInfo, out: &Path) -> String {
+    let mut text = format!("stopped: {}", s.reason);
+    let at_end: Vec<&str> = s
+        .confirmed
+        .iter()
+        .filter(|c| c.1 == s.window_end)
+        .map(|c| machine.nodes[c.0].name.as_str())
+        .collect();
+    if !at_end.is_empty() {
+        text += &format!(
+            "\n  {} came to rest at {} (end of segment {})",
+            plural_nodes(&at_end),
+            show_point(machine, &s.point),
+            s.window_end.saturating_sub(1)
+        );
+    }
+    for &(k, end) in s.confirmed.iter().filter(|c| c.1 != s.window_end) {
+        text += &format!(
+            "\n  node {} came to rest at the end of segment {} (it missed the last window)",
+            machine.nodes[k].name,
+            end.saturating_sub(1)
+        );
+    }
+    for l in &s.lost {
+        // The reason may already say why.
+        let why = if s.reason.contains(&l.why) {
+            String::new()
+        } else {
+            format!(" ({})", l.why)
+        };
+        text += &format!(
+            "\n  node {} was lost{why}: where it is is not known",
+            l.name
+        );
+    }
+    text += &format!("\ncontinue with `motet resume {}`", out.display());
+    if !s.lost.is_empty() {
+        text += " once every node answers again (a node that restarted needs --assume-position)";
+    }
+    text
+}
+
+fn plural_nodes(names: &[&str]) -> String {
+    match names {
+        [one] => format!("node {one}"),
+        _ => format!("nodes {}", names.join(", ")),
+    }
+}
+
+fn show_point(machine: &Machine, p: &Point) -> String {
+    machine
+        .axes
+        .iter()
+        .zip(p)
+        .map(|(a, v)| format!("{}={v}", a.name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// `motet resume OUT`
-pub fn resume_cmd(out: &Path, quiet: bool) -> Result<()> {
-    let path = out.join("resume.toml");
-    let text = std::fs::read_to_string(&path).with_context(|| {
-        format!(
-            "cannot read {}: is {} the output folder of a networked run?",
-            path.display(),
-            out.display()
-        )
-    })?;
-    let rf: ResumeFile = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
-    let machine = Machine::load(&rf.machine)?;
-    let loaded = load_job(
-        &machine,
-        &rf.job,
-        &JobOptions {
-            allow_unknown: rf.allow_unknown,
-        },
+pub struct ResumeArgs<'a> {
+    pub out: &'a Path,
+    pub quiet: bool,
+    /// `x=…,y=…`: where the machine is, for nodes that lost their position.
+    pub assume_position: Option<&'a str>,
+    /// The machine file and job if they moved since the run (checked by SHA-256).
+    pub machine: Option<&'a Path>,
+    pub job: Option<&'a Path>,
+}
+
+pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
+    let out = a.out;
+    let record = RunRecord::load(out)?;
+    let files = read_files(
+        a.machine.unwrap_or(&record.machine),
+        a.job.unwrap_or(&record.job),
+        record.allow_unknown,
     )?;
-    let mut journal = Journal::load(&out.join("journal"))?;
-    let nodes: Vec<NodeAddr> = rf
+    let machine = &files.machine;
+    let journal_path = out.join("journal");
+    let journal = Journal::load(&journal_path)?;
+    if record.nodes.len() != machine.nodes.len() {
+        bail!(
+            "{}: the run had {} nodes, the machine has {}",
+            out.join("resume.toml").display(),
+            record.nodes.len(),
+            machine.nodes.len()
+        );
+    }
+    let nodes: Vec<NodeAddr> = record
         .nodes
         .iter()
         .map(|n| NodeAddr {
@@ -341,86 +434,88 @@ pub fn resume_cmd(out: &Path, quiet: bool) -> Result<()> {
             address: n.address,
         })
         .collect();
-    let mut session = Session::attach(&machine, &nodes)?;
-    let clock = WallClock::with(rf.time_scale, 0.0, 0);
-    let status = probe(&mut session.peers, &clock, Duration::from_secs(3));
-    let mut window_end: Option<u32> = None;
-    for (k, s) in status.into_iter().enumerate() {
-        match s {
-            Some(NodeMessage::Status {
-                committed,
-                stopped,
-                segment_space,
-                ..
-            }) => {
-                if !stopped && (segment_space as usize) < machine.nodes[k].queue {
-                    bail!(
-                        "node {} is still moving; wait for it to stop",
-                        nodes[k].name
-                    );
-                }
-                if machine.nodes[k].actuators.is_empty() {
-                    continue;
-                }
-                match window_end {
-                    None => window_end = Some(committed),
-                    Some(w) if w != committed => bail!(
-                        "the nodes disagree on where they stopped (segment {w} and {committed}); they did not stop together"
-                    ),
-                    _ => {}
-                }
-            }
-            _ => bail!("node {} did not answer", nodes[k].name),
-        }
-    }
-    let window_end = window_end.unwrap_or(0);
-    // A resumed run's journal counts its own commands: map them to the job's.
-    let raw: Vec<usize> = journal.segments.iter().map(|s| s.command).collect();
-    if rf.base_command > 0 || rf.prelude > 0 {
-        for s in journal.segments.iter_mut() {
-            s.command = if s.command < rf.prelude {
-                rf.base_command
-            } else {
-                rf.base_command + s.command - rf.prelude
-            };
-        }
-    }
-    // Stopped while going back for an earlier stop: go back to the same place.
-    let in_prelude = journal
-        .seal_ending(window_end)
-        .and_then(|s| raw.get(s.tail as usize).copied())
-        .is_some_and(|c| c < rf.prelude);
-    let mut r = resume(&loaded.commands, &journal, window_end, machine.start)?;
-    if in_prelude {
-        if let Some(to) = rf
-            .prelude_to
-            .as_deref()
-            .and_then(|v| <[f64; 6]>::try_from(v).ok())
-        {
-            r = motet_net::resume::resume_at(&loaded.commands, r.from, to, rf.base_command);
-        }
-    }
-    if !quiet {
-        println!(
-            "resuming {}: the machine rests at {:?}; back to {:?}, then on from command {} of {}",
-            rf.job.display(),
-            &r.from[..machine.axes.len()],
-            &r.to[..machine.axes.len()],
-            r.command,
-            loaded.commands.len()
-        );
-    }
-    let prelude = r.commands.len() - (loaded.commands.len() - r.command);
-    let next = ResumeFile {
-        base_command: r.command,
-        prelude,
-        prelude_to: Some(r.to.to_vec()),
-        ..rf.clone()
+    let mut session = match Session::attach(machine, &nodes) {
+        Ok(s) => s,
+        Err(SessionError::Admin {
+            node,
+            source: AdminError::NoAnswer { link, .. },
+        }) => bail!("{}", ResumeError::Silent { node, link }),
+        Err(e) => return Err(e.into()),
     };
-    // Keep the stopped run's files beside the new ones.
-    let _ = std::fs::rename(
-        out.join("journal"),
-        out.join(format!("journal.{window_end}")),
-    );
-    drive(&machine, r.commands, r.from, session, next, out, quiet)
+    let clock = WallClock::with(record.time_scale, 0.0, 0);
+    let positions = locate(&mut session.peers, &clock, Duration::from_secs(3));
+    let seen: Vec<NodeSeen> = session
+        .infos
+        .iter()
+        .zip(positions)
+        .map(|(i, p)| NodeSeen::Answered {
+            uid: i.uid,
+            firmware: i.firmware,
+            position: p,
+        })
+        .collect();
+    let assumed = a
+        .assume_position
+        .map(|t| parse_assumed(machine, t))
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--assume-position: {e}"))?;
+    let r = prove(
+        &Evidence {
+            machine,
+            machine_sha256: files.machine_sha256,
+            job: &files.job.commands,
+            job_sha256: files.job_sha256,
+            record: &record,
+            journal: &journal,
+            journal_path: &journal_path.display().to_string(),
+            nodes: &seen,
+        },
+        assumed.as_deref(),
+    )?;
+    if !a.quiet {
+        if journal.torn_tail {
+            println!("note: the journal's last line was cut short (the host died writing it); it held nothing the nodes had");
+        }
+        println!(
+            "resuming {}: the machine rests at {}; back to {}, then on from command {} of {}",
+            files.job_path.display(),
+            show_point(machine, &r.from),
+            show_point(machine, &r.to),
+            r.command,
+            files.job.commands.len()
+        );
+        if !r.assumed.is_empty() {
+            println!(
+                "  where {} {} was given with --assume-position",
+                plural_nodes(&r.assumed.iter().map(String::as_str).collect::<Vec<_>>()),
+                if r.assumed.len() == 1 { "is" } else { "are" }
+            );
+        }
+        for n in &r.notes {
+            println!("  {n}");
+        }
+    }
+    let identity = RunIdentity::new(files.machine_sha256, files.job_sha256);
+    let next = RunRecord {
+        run: format!("{:08x}", identity.run),
+        machine: files.machine_path.clone(),
+        job: files.job_path.clone(),
+        continues: Some(r.continues.clone()),
+        nodes: record_nodes(&session),
+        ..record.clone()
+    };
+    // Keep the stopped run's record and journal beside the new ones.
+    for (name, kept) in [
+        ("journal", format!("journal.{}", record.run)),
+        ("resume.toml", format!("resume.{}.toml", record.run)),
+        ("stop.toml", format!("stop.{}.toml", record.run)),
+    ] {
+        if out.join(name).exists() {
+            std::fs::rename(out.join(name), out.join(&kept))
+                .with_context(|| format!("cannot keep {} as {kept}", out.join(name).display()))?;
+        }
+    }
+    drive(
+        machine, r.commands, r.from, session, next, identity, out, a.quiet,
+    )
 }

@@ -88,6 +88,11 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
         let mut a = admin(link)?;
         let address = free_address(&taken);
         let found = a.scan(Duration::from_millis(600))?;
+        // A node paired before may be running a job: a new address would
+        // cut it off mid-move.
+        for f in found.iter().filter(|f| f.info.address != UNPAIRED) {
+            a.at_rest(f.info.address, "pairing it again")?;
+        }
         let uid = if found.len() == 1 && !button {
             // Alone on its link: no button needed.
             let uid = found[0].info.uid;

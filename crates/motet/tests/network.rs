@@ -357,6 +357,190 @@ fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
     assert!(report.contains("\"outcome\": \"done\""), "{report}");
 }
 
+/// A UDP port free on this machine now.
+fn free_udp_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+fn journal_seals(out: &Path) -> usize {
+    std::fs::read_to_string(out.join("journal"))
+        .map(|t| t.lines().filter(|l| l.starts_with("seal")).count())
+        .unwrap_or(0)
+}
+
+/// The defects of a trusting resume, end to end: firmware upload mid-job is
+/// refused; a node killed mid-job is reported lost, not at rest; restarted,
+/// it knows nothing, and resume asks where the machine is instead of
+/// starting over; an edited journal or job is refused; given a position,
+/// the job finishes, resumed from another folder than the run's.
+#[test]
+fn a_crashed_node_is_lost_and_resume_trusts_nothing() {
+    let _serial = serial();
+    let dir = scratch("crash");
+    let machine = machine_copy(&dir, "plotter.toml");
+    std::fs::copy(
+        root().join("examples/jobs/drawing.svg"),
+        dir.join("drawing.svg"),
+    )
+    .unwrap();
+    let state = dir.join("node.state");
+    let listen = format!("udp:127.0.0.1:{}", free_udp_port());
+    let node_args = [
+        "--listen",
+        listen.as_str(),
+        "--state",
+        state.to_str().unwrap(),
+        "--time-scale",
+        "5",
+    ];
+    let node = start_node(&node_args);
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "pair",
+        machine.to_str().unwrap(),
+        "--link",
+        &format!("ebb={}", node.link),
+    ]);
+    assert!(ok, "{stderr}");
+    // A firmware image to try mid-job.
+    std::fs::write(dir.join("payload.bin"), vec![7u8; 2000]).unwrap();
+    let img = dir.join("fw.img");
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "image",
+        "--kind",
+        "stepper",
+        "--version",
+        "2.0.0",
+        dir.join("payload.bin").to_str().unwrap(),
+        "-o",
+        img.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+
+    // The run, from the scratch folder with relative paths.
+    let out = dir.join("out");
+    let host = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "run",
+            "plotter.toml",
+            "drawing.svg",
+            "--nodes",
+            "paired",
+            "-q",
+            "--out",
+            "out",
+        ])
+        .args(FAST)
+        .current_dir(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while journal_seals(&out) < 10 {
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the run never got going"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let (ok, stdout, stderr) = motet(&[
+        "nodes",
+        "flash",
+        machine.to_str().unwrap(),
+        "ebb",
+        img.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("is moving"), "{stdout}{stderr}");
+    let (_, stdout, _) = motet(&["nodes", "status", machine.to_str().unwrap()]);
+    assert!(
+        stdout.contains("Running") && stdout.contains("firmware 0.1.0"),
+        "{stdout}"
+    );
+
+    // The node's process dies.
+    drop(node);
+    let result = host.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("node ebb")
+            && stderr.contains("where it is is not known")
+            && !stderr.contains("came to rest"),
+        "{stderr}"
+    );
+    let stop = std::fs::read_to_string(out.join("stop.toml")).unwrap();
+    assert!(stop.contains("lost = [\"ebb\"]"), "{stop}");
+
+    // Started again from its state file: same address, no position.
+    let _node = start_node(&node_args);
+    let o = out.to_str().unwrap();
+    let (ok, _, stderr) = motet(&["resume", o]);
+    assert!(
+        !ok && stderr.contains("restarted") && stderr.contains("--assume-position x=…,y=…"),
+        "{stderr}"
+    );
+    // An edited journal, then an edited job: refused, saying where.
+    let journal = std::fs::read_to_string(out.join("journal")).unwrap();
+    let seg = journal
+        .lines()
+        .position(|l| l.starts_with("seg 5 "))
+        .unwrap();
+    let edited: Vec<String> = journal
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == seg {
+                l.replacen(" | ", " | 921", 1)
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    std::fs::write(out.join("journal"), edited.join("\n") + "\n").unwrap();
+    let (ok, _, stderr) = motet(&["resume", o, "--assume-position", "x=100,y=100"]);
+    assert!(
+        !ok && stderr.contains(&format!("journal:{}: checksum", seg + 1)),
+        "{stderr}"
+    );
+    std::fs::write(out.join("journal"), &journal).unwrap();
+    let job = std::fs::read_to_string(dir.join("drawing.svg")).unwrap();
+    std::fs::write(
+        dir.join("drawing.svg"),
+        job.replacen("<svg", "<svg data-x=\"1\"", 1),
+    )
+    .unwrap();
+    let (ok, _, stderr) = motet(&["resume", o, "--assume-position", "x=100,y=100"]);
+    assert!(
+        !ok && stderr.contains("drawing.svg changed since the run"),
+        "{stderr}"
+    );
+    std::fs::write(dir.join("drawing.svg"), &job).unwrap();
+    // Beyond travel: refused before anything moves.
+    let (ok, _, stderr) = motet(&["resume", o, "--assume-position", "x=921,y=100"]);
+    assert!(
+        !ok && stderr.contains("beyond the axis's travel"),
+        "{stderr}"
+    );
+
+    // Told where the machine is, it finishes the job.
+    let (ok, stdout, stderr) = motet(&["resume", o, "--assume-position", "x=100,y=100"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("was given with --assume-position")
+            && stdout.contains("may run twice")
+            && stdout.contains("done"),
+        "{stdout}"
+    );
+    let report = std::fs::read_to_string(out.join("net.json")).unwrap();
+    assert!(report.contains("\"outcome\": \"done\""), "{report}");
+}
+
 #[test]
 fn bad_network_input_is_a_clear_error() {
     let _serial = serial();
@@ -421,6 +605,17 @@ fn bad_network_input_is_a_clear_error() {
     let (ok, _, stderr) = motet(&["run", m, "examples/jobs/drawing.svg", "--nodes", "paired"]);
     assert!(
         !ok && stderr.contains("but uid 0000000000000001 was paired"),
+        "{stderr}"
+    );
+    // A node started with another --time-scale than the host's: its clock
+    // runs 5 times as fast; refused before anything moves.
+    drop(node);
+    let node = start_node(&["--time-scale", "5"]);
+    let (ok, _, _) = motet(&["nodes", "pair", m, "--link", &format!("ebb={}", node.link)]);
+    assert!(ok);
+    let (ok, _, stderr) = motet(&["run", m, "examples/jobs/drawing.svg", "--nodes", "paired"]);
+    assert!(
+        !ok && stderr.contains("× as fast as the host") && stderr.contains("--time-scale"),
         "{stderr}"
     );
 }
