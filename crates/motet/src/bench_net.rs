@@ -10,8 +10,13 @@ use motet_api::{JobKind, JobOptions};
 use motet_host::Machine;
 use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
 use motet_link::Transport;
+use motet_net::digest::Digest;
+use motet_net::journal::{Journal, JournalWriter};
 use motet_net::loopback::{Loopback, NodeClock};
-use motet_net::{NetConfig, Phase};
+use motet_net::pairing_file::format_uid;
+use motet_net::resume::{prove, Evidence};
+use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
+use motet_net::{NetConfig, Phase, RunIdentity};
 use motet_wire::frame::{self, Flags, Header, MAX_FRAME};
 use motet_wire::service::{ServiceReply, ServiceRequest};
 use motet_wire::{encode, MAX_MESSAGE};
@@ -38,6 +43,11 @@ pub struct Args {
     /// Clock exchanges with each node, ms apart [default: the run's default].
     #[arg(long)]
     sync_ms: Option<f64>,
+    /// Kill the host after this many seconds of motion, let the nodes come
+    /// to rest, and time what `motet resume` checks before it moves: the
+    /// journal read, the job planned again and compared, the nodes' answers.
+    #[arg(long, value_name = "SECONDS")]
+    kill_host_at: Option<f64>,
 }
 
 /// Wire size of a datagram carrying `m`.
@@ -117,14 +127,37 @@ pub fn bench_net(args: Args) -> Result<()> {
         }
         cfg.sync_interval_us = (ms * 1000.0) as u64;
     }
-    let mut lb = Loopback::new(&machine, job.commands, machine.start, links, &clocks, cfg);
+    let scratch = std::env::temp_dir().join(format!("motet-bench-net-{}", std::process::id()));
+    let journal_path = scratch.join("journal");
+    let journal = match args.kill_host_at {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            bail!("--kill-host-at must be a positive number of seconds")
+        }
+        Some(_) => {
+            std::fs::create_dir_all(&scratch)?;
+            Some(JournalWriter::create(&journal_path)?)
+        }
+        None => None,
+    };
+    let identity = RunIdentity::new(Digest::of(text.as_bytes()), Digest::of(&data));
+    let commands = job.commands.clone();
+    let mut lb = Loopback::with_journal(
+        &machine,
+        job.commands,
+        machine.start,
+        links,
+        &clocks,
+        cfg,
+        journal,
+    );
+    lb.run.set_identity(identity);
     if args.jitter_us > 0 || args.faults > 0.0 {
         lb.max_step_us = 50;
     }
     let mut streaming_at = None;
     let mut errors: Vec<Vec<f64>> = vec![Vec::new(); n];
     let mut next_sample = 0u64;
-    let limit = args.seconds.map(|s| (s * 1e6) as u64);
+    let limit = args.kill_host_at.or(args.seconds).map(|s| (s * 1e6) as u64);
     let phase = loop {
         clock.set(lb.now);
         lb.step()?;
@@ -207,6 +240,18 @@ pub fn bench_net(args: Args) -> Result<()> {
             .map(|p| p.link().stats().retransmits)
             .sum::<u64>()
     );
+    if args.kill_host_at.is_some() {
+        resume_figures(
+            &machine,
+            &text,
+            &data,
+            &commands,
+            identity,
+            &mut lb,
+            &journal_path,
+        )?;
+        let _ = std::fs::remove_dir_all(&scratch);
+    }
     for (k, e) in errors.iter().enumerate() {
         if e.is_empty() {
             continue;
@@ -236,4 +281,76 @@ fn fmt_s(s: f64) -> String {
     } else {
         format!("{s:.1} s")
     }
+}
+
+/// Kills the host, lets the nodes rest, and times `motet resume`'s checks.
+fn resume_figures(
+    machine: &Machine,
+    machine_text: &str,
+    job_bytes: &[u8],
+    commands: &[motet_planner::Located<motet_planner::Command>],
+    identity: RunIdentity,
+    lb: &mut Loopback,
+    journal_path: &std::path::Path,
+) -> Result<()> {
+    lb.host_alive = false;
+    lb.run_until_settled(600_000_000)?;
+    let record = RunRecord {
+        format: RECORD_FORMAT,
+        run: format!("{:08x}", identity.run),
+        machine: PathBuf::from("machine"),
+        machine_sha256: identity.machine,
+        job: PathBuf::from("job"),
+        job_sha256: identity.job,
+        allow_unknown: true,
+        time_scale: 1.0,
+        lead_ms: 100.0,
+        sync_ms: 400.0,
+        continues: None,
+        nodes: lb
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(k, n)| {
+                let i = n.node.endpoint.services().info();
+                RunNode {
+                    name: machine.nodes[k].name.clone(),
+                    link: format!("mem{k}"),
+                    address: i.address,
+                    uid: format_uid(i.uid),
+                    firmware: i.firmware.to_string(),
+                }
+            })
+            .collect(),
+    };
+    let t = std::time::Instant::now();
+    let journal = Journal::load(journal_path)?;
+    let read = t.elapsed().as_secs_f64();
+    let seen = lb.seen();
+    let r = prove(
+        &Evidence {
+            machine,
+            machine_sha256: Digest::of(machine_text.as_bytes()),
+            job: commands,
+            job_sha256: Digest::of(job_bytes),
+            record: &record,
+            journal: &journal,
+            journal_path: &journal_path.display().to_string(),
+            nodes: &seen,
+        },
+        None,
+    )?;
+    let all = t.elapsed().as_secs_f64();
+    let size = std::fs::metadata(journal_path).map_or(0, |m| m.len());
+    println!(
+        "resume after the host was killed: journal {} segments, {} windows, {:.1} MB read in {:.2} s; whole check (job planned again and compared, tails, nodes) {:.2} s; the job continues at command {} of {}",
+        journal.segments.len(),
+        journal.seals.len(),
+        size as f64 / 1e6,
+        read,
+        all,
+        r.command,
+        commands.len()
+    );
+    Ok(())
 }
