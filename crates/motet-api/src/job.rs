@@ -27,8 +27,17 @@ pub enum JobError {
     Gzip { file: String, error: std::io::Error },
     #[error("{file}:{line}: G-code is not valid UTF-8 text")]
     NotText { file: String, line: usize },
-    #[error("{file}:{error}")]
+    #[error("{}", located(.file, .error))]
     Source { file: String, error: SourceError },
+}
+
+/// `file:line:column: message`; `file: message` for errors about the whole
+/// file (line 0, as for an image that cannot be decoded).
+fn located(file: &str, error: &SourceError) -> String {
+    match error.loc.line {
+        0 => format!("{file}: {}", error.message),
+        _ => format!("{file}:{error}"),
+    }
 }
 
 /// Options for reading jobs.

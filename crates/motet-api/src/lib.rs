@@ -17,7 +17,9 @@
 //! calls go straight into the planner's lookahead; planned segments stream to
 //! the machine's nodes as soon as they are final. A call blocks only while a
 //! node's segment queue is full; on the simulated machine that means the
-//! simulated clock runs until a place frees up.
+//! simulated clock runs until a place frees up. `on_interrupt` lets a caller
+//! stop such a call (Ctrl-C in the Python bindings) without losing or
+//! repeating anything already accepted.
 
 pub mod job;
 mod machine;

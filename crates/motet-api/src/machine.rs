@@ -31,10 +31,15 @@ pub enum ApiError {
     Sim(#[from] SimError),
     #[error("cannot write {path}: {error}")]
     Io { path: String, error: std::io::Error },
+    #[error("cannot save into {dir}: the directory {parent} does not exist")]
+    NoParent { dir: String, parent: String },
     #[error("render failed: {0}")]
     Render(String),
     #[error(transparent)]
     Job(#[from] crate::job::JobError),
+    /// The check given to [`Machine::on_interrupt`] asked to stop.
+    #[error("interrupted; everything accepted before stays queued and `wait` runs it")]
+    Interrupted,
 }
 
 /// Something the machine did, with the simulated time in seconds.
@@ -46,7 +51,10 @@ pub enum Event {
     Idle { time: f64 },
 }
 
-type Listener = Box<dyn FnMut(&Event)>;
+// `Send`, so that a machine can be handed to another thread (the Python
+// bindings let it work while the interpreter runs other threads).
+type Listener = Box<dyn FnMut(&Event) + Send>;
+type Interrupt = Box<dyn FnMut() -> bool + Send>;
 
 /// A machine you drive call by call.
 pub struct Machine {
@@ -57,6 +65,9 @@ pub struct Machine {
     /// Feed used when a call gives none, units/s.
     default_feed: f64,
     listeners: Vec<Listener>,
+    interrupt: Option<Interrupt>,
+    /// Nothing was accepted since the last `wait` that finished.
+    idle: bool,
     calls: usize,
     /// Trajectory end time of everything planned so far, µs.
     end: f64,
@@ -83,6 +94,8 @@ impl Machine {
             sim,
             planner,
             listeners: Vec::new(),
+            interrupt: None,
+            idle: true,
             calls: 0,
             end: 0.0,
             started: Instant::now(),
@@ -113,8 +126,25 @@ impl Machine {
     }
 
     /// Calls `f` for every [`Event`] from now on.
-    pub fn on_event(&mut self, f: impl FnMut(&Event) + 'static) {
+    pub fn on_event(&mut self, f: impl FnMut(&Event) + Send + 'static) {
         self.listeners.push(Box::new(f));
+    }
+
+    /// Asks `f`, between planned items, whether to stop a call that lets
+    /// time pass (a move waiting for queue room, `run_job`, `wait`); `true`
+    /// ends the call with [`ApiError::Interrupted`]. Nothing accepted is lost
+    /// or run twice: the call's own command stays queued (a job's commands
+    /// up to the interruption), `target` says where the queued motion ends
+    /// and the next call or `wait` carries on from there. `f` is asked often;
+    /// it should be cheap.
+    pub fn on_interrupt(&mut self, f: impl FnMut() -> bool + Send + 'static) {
+        self.interrupt = Some(Box::new(f));
+    }
+
+    /// Whether everything accepted has run: no call was accepted since the
+    /// last [`Machine::wait`] that finished.
+    pub fn is_idle(&self) -> bool {
+        self.idle
     }
 
     /// Moves the named axes to absolute positions (others stay) at `feed`
@@ -190,9 +220,6 @@ impl Machine {
         }
         for c in &job.commands {
             self.push(c.item)?;
-            if let Command::Move(m) = c.item {
-                self.target = m.target;
-            }
         }
         Ok(job.commands.len())
     }
@@ -208,6 +235,7 @@ impl Machine {
         // A fresh lookahead starts from rest, on the clock as it is now.
         self.planner = Planner::new(self.description().limits(), self.target, now);
         self.end = now;
+        self.idle = true;
         let t = now * 1e-6;
         self.emit(&Event::Idle { time: t });
         Ok(())
@@ -251,7 +279,23 @@ impl Machine {
             path: dir.display().to_string(),
             error: e,
         };
-        std::fs::create_dir_all(dir).map_err(io)?;
+        // Only the folder itself is made: a mistyped parent path is an
+        // error, not a tree of new folders.
+        if !dir.is_dir() {
+            // The missing folder nearest the root is the one to name.
+            let missing = dir
+                .ancestors()
+                .skip(1)
+                .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+                .last();
+            if let Some(parent) = missing {
+                return Err(ApiError::NoParent {
+                    dir: dir.display().to_string(),
+                    parent: parent.display().to_string(),
+                });
+            }
+            std::fs::create_dir(dir).map_err(io)?;
+        }
         self.strokes.extend(self.sim.take_strokes());
         let m = self.description();
         let (x, y) = (m.axis("x").unwrap_or(0), m.axis("y").unwrap_or(0));
@@ -305,26 +349,35 @@ impl Machine {
             target: to,
             feed,
             kind,
-        }))?;
-        self.target = to;
-        Ok(())
+        }))
     }
 
-    /// Plans a command and streams whatever became final.
+    /// Plans a command and streams whatever became final. Once the planner
+    /// has accepted the command it counts as queued, even if streaming is
+    /// interrupted.
     fn push(&mut self, cmd: Command) -> Result<(), ApiError> {
         self.planner.push(&cmd)?;
         self.calls += 1;
+        self.idle = false;
+        if let Command::Move(m) = cmd {
+            self.target = m.target;
+        }
         self.drain()?;
         self.notify_tools();
         Ok(())
     }
 
+    /// Streams the planned items to the nodes; whatever an interruption
+    /// leaves stays in the planner for the next call.
     fn drain(&mut self) -> Result<(), ApiError> {
         while let Some(item) = self.planner.pop() {
             if let Planned::Segment(s) = &item {
                 self.end = s.t1();
             }
             self.sim.submit(item)?;
+            if self.interrupt.as_mut().is_some_and(|f| f()) {
+                return Err(ApiError::Interrupted);
+            }
         }
         Ok(())
     }

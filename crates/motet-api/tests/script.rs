@@ -1,8 +1,7 @@
 //! Driving machines call by call.
 
 use motet_api::{ApiError, Event, Machine};
-use std::cell::RefCell;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex};
 
 fn machine(name: &str) -> Machine {
     Machine::open(format!(
@@ -125,15 +124,15 @@ fn polar_centre_is_refused() {
 #[test]
 fn events_report_tool_changes_in_time_order() {
     let mut m = machine("plotter.toml");
-    let seen = Rc::new(RefCell::new(Vec::new()));
+    let seen = Arc::new(Mutex::new(Vec::new()));
     let s = seen.clone();
-    m.on_event(move |e| s.borrow_mut().push(e.clone()));
+    m.on_event(move |e| s.lock().unwrap().push(e.clone()));
     m.move_to(&[("x", 10.0)], None).unwrap();
     m.set_tool("pen", 1.0).unwrap();
     m.move_to(&[("x", 40.0)], None).unwrap();
     m.set_tool("pen", 0.0).unwrap();
     m.wait().unwrap();
-    let seen = seen.borrow();
+    let seen = seen.lock().unwrap();
     let tools: Vec<(String, f32)> = seen
         .iter()
         .filter_map(|e| {
@@ -194,4 +193,130 @@ fn a_reversal_needs_a_rest_and_a_smooth_stream_does_not() {
         m.wait().unwrap();
         assert_eq!(m.report().rests, *want, "{moves:?}");
     }
+}
+
+/// What a run did: steps and final position of every actuator, distances.
+fn outcome(m: &Machine) -> (Vec<(u64, i64)>, f64, f64) {
+    let r = m.report();
+    (
+        r.actuators.iter().map(|a| (a.steps, a.position)).collect(),
+        r.tool_on_distance_mm,
+        r.travel_distance_mm,
+    )
+}
+
+/// A script of calls on the plotter: zigzag strokes, pen changes, a dwell,
+/// a wait halfway.
+fn script(m: &mut Machine, go: &mut dyn FnMut(&mut Machine, usize) -> Result<(), ApiError>) {
+    for k in 0..300 {
+        go(m, k).unwrap();
+    }
+}
+
+fn call(m: &mut Machine, k: usize) -> Result<(), ApiError> {
+    match k {
+        100 => m.set_tool("pen", 1.0),
+        150 => m.dwell(0.25),
+        200 => m.wait(),
+        250 => m.set_tool("pen", 0.0),
+        _ => {
+            let x = 10.0 + (k % 2) as f64 * 120.0;
+            let y = 10.0 + k as f64 * 0.5;
+            m.move_to(&[("x", x), ("y", y)], Some(150.0))
+        }
+    }
+}
+
+#[test]
+fn interrupted_calls_lose_and_repeat_nothing() {
+    let mut whole = machine("plotter.toml");
+    script(&mut whole, &mut call);
+    whole.wait().unwrap();
+
+    // (interrupt at every n-th question)
+    for every in [1, 3, 40] {
+        let mut m = machine("plotter.toml");
+        let mut asked = 0usize;
+        m.on_interrupt(move || {
+            asked += 1;
+            asked.is_multiple_of(every)
+        });
+        let mut interrupted = 0;
+        script(&mut m, &mut |m, k| match call(m, k) {
+            // A wait must finish before the script goes on, as it did
+            // above; any other call already accepted its command.
+            Err(ApiError::Interrupted) if k == 200 => {
+                interrupted += 1;
+                while let Err(ApiError::Interrupted) = m.wait() {
+                    interrupted += 1;
+                }
+                Ok(())
+            }
+            Err(ApiError::Interrupted) => {
+                interrupted += 1;
+                Ok(())
+            }
+            r => r,
+        });
+        assert!(!m.is_idle());
+        while let Err(e) = m.wait() {
+            assert!(matches!(e, ApiError::Interrupted), "{e}");
+            interrupted += 1;
+        }
+        assert!(m.is_idle());
+        assert!(interrupted > 0, "every {every}: never interrupted");
+        assert_eq!(outcome(&m), outcome(&whole), "every {every}");
+        assert_eq!(m.target(), whole.target());
+    }
+}
+
+#[test]
+fn an_interrupted_job_keeps_the_commands_queued_so_far() {
+    let job = format!(
+        "{}/../../examples/jobs/drawing.svg",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut whole = machine("plotter.toml");
+    let n = whole.run_job(&job, false).unwrap();
+    let mut m = machine("plotter.toml");
+    let stop = Arc::new(Mutex::new(true));
+    let s = stop.clone();
+    let mut asked = 0;
+    m.on_interrupt(move || {
+        asked += 1;
+        asked == 200 && *s.lock().unwrap()
+    });
+    assert!(matches!(m.run_job(&job, false), Err(ApiError::Interrupted)));
+    assert_ne!(
+        m.target(),
+        whole.target(),
+        "the whole job of {n} commands was queued"
+    );
+    *stop.lock().unwrap() = false;
+    m.wait().unwrap();
+    for ((axis, p), (_, t)) in m.position().iter().zip(m.target()) {
+        assert!((p - t).abs() < 0.01, "{axis}: at {p}, queued to {t}");
+    }
+}
+
+#[test]
+fn save_makes_its_folder_but_no_missing_parent() {
+    let mut m = machine("plotter.toml");
+    m.move_to(&[("x", 10.0)], None).unwrap();
+    m.wait().unwrap();
+    let base = std::env::temp_dir().join(format!("motet-api-save-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    let deep = base.join("missing").join("out");
+    let err = m.save(&deep).unwrap_err();
+    assert!(matches!(err, ApiError::NoParent { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(
+        msg.ends_with(&format!("the directory {} does not exist", base.display())),
+        "{msg}"
+    );
+    assert!(!base.exists(), "nothing is created");
+    std::fs::create_dir(&base).unwrap();
+    m.save(base.join("out")).unwrap();
+    assert!(base.join("out/path.png").exists());
+    std::fs::remove_dir_all(&base).unwrap();
 }

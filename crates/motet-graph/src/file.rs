@@ -13,9 +13,10 @@ use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
 
-/// A problem in a graph file, with its place.
+/// A problem in a graph file, with its place (line 0: the whole file, as
+/// when it cannot be read).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{file}:{line}:{column}: {message}")]
+#[error("{}: {message}", place(.file, *.line, *.column))]
 pub struct FileError {
     pub file: String,
     pub line: usize,
@@ -33,6 +34,14 @@ pub struct Loc {
 }
 
 /// A problem with a live request (a parameter change, an input value).
+/// `file:line:column`, or the file alone when the error has no line.
+fn place(file: &str, line: usize, column: usize) -> String {
+    match line {
+        0 => file.to_string(),
+        _ => format!("{file}:{line}:{column}"),
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LiveError {
     #[error("no component `{0}` in the graph")]

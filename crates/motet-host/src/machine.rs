@@ -15,14 +15,23 @@ mod motet_node_limits {
 }
 use std::path::{Path, PathBuf};
 
-/// A problem in a machine file, with its place.
+/// A problem in a machine file, with its place (line 0: the whole file, as
+/// when it cannot be read).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{file}:{line}:{column}: {message}")]
+#[error("{}: {message}", place(.file, *.line, *.column))]
 pub struct MachineError {
     pub file: String,
     pub line: usize,
     pub column: usize,
     pub message: String,
+}
+
+/// `file:line:column`, or the file alone when the error has no line.
+fn place(file: &str, line: usize, column: usize) -> String {
+    match line {
+        0 => file.to_string(),
+        _ => format!("{file}:{line}:{column}"),
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]

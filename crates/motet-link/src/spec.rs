@@ -58,15 +58,18 @@ pub enum SpecError {
     BadBitrate(String),
 }
 
-/// Why [`open`] failed.
+/// Why [`open`] failed. The messages leave naming the link to the caller
+/// (`cannot open link SPEC: …`), so that it is not named twice; the
+/// system's error is part of the message, not a separate source.
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {
     #[error(transparent)]
     Spec(#[from] SpecError),
-    #[error("cannot resolve {addr:?}: {source}")]
-    Resolve { addr: String, source: io::Error },
-    #[error("cannot open {spec}: {source}")]
-    Io { spec: String, source: io::Error },
+    #[error("cannot resolve {addr:?}: {error}")]
+    Resolve { addr: String, error: io::Error },
+    /// `spec` is the link with its defaults filled in (`serial:PATH@115200`).
+    #[error("{error}")]
+    Io { spec: String, error: io::Error },
 }
 
 /// `any_port` lets port 0 (any free port) through, for binding.
@@ -162,21 +165,19 @@ impl LinkSpec {
 
     /// Opens the transport.
     pub fn open(&self) -> Result<Box<dyn Transport + Send>, OpenError> {
-        let io_err = |source| OpenError::Io {
+        let io_err = |error| OpenError::Io {
             spec: self.to_string(),
-            source,
+            error,
         };
         let resolve = |host: &str, port: u16| {
             let addr = format!("{host}:{port}");
-            let mut all = addr
-                .to_socket_addrs()
-                .map_err(|source| OpenError::Resolve {
-                    addr: addr.clone(),
-                    source,
-                })?;
+            let mut all = addr.to_socket_addrs().map_err(|error| OpenError::Resolve {
+                addr: addr.clone(),
+                error,
+            })?;
             all.next().ok_or_else(|| OpenError::Resolve {
                 addr,
-                source: io::Error::new(io::ErrorKind::NotFound, "no address"),
+                error: io::Error::new(io::ErrorKind::NotFound, "no address"),
             })
         };
         Ok(match self {

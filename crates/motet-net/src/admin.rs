@@ -14,11 +14,8 @@ use std::time::{Duration, Instant};
 
 #[derive(Debug, thiserror::Error)]
 pub enum AdminError {
-    #[error("{link}: {source}")]
-    Io {
-        link: String,
-        source: std::io::Error,
-    },
+    #[error("{link}: {error}")]
+    Io { link: String, error: std::io::Error },
     #[error("{link}: no answer from node {address:#06x} after {tries} tries")]
     NoAnswer {
         link: String,
@@ -54,7 +51,8 @@ pub enum AdminError {
     },
     #[error("{link}: no node's button was pressed within {seconds:.0} s")]
     NoButton { link: String, seconds: f64 },
-    #[error("firmware image: {0}")]
+    /// The image's own message; every one of them says it is about firmware.
+    #[error("{0}")]
     Image(String),
     #[error("{link}: node {address:#06x} is moving (it has committed motion): {what} would lose its position; wait for its job to finish or stop")]
     Busy {
@@ -102,10 +100,10 @@ impl Admin {
         self.transport
     }
 
-    fn io(&self, source: std::io::Error) -> AdminError {
+    fn io(&self, error: std::io::Error) -> AdminError {
         AdminError::Io {
             link: self.link.clone(),
-            source,
+            error,
         }
     }
 

@@ -42,11 +42,8 @@ pub struct PairingFile {
 
 #[derive(Debug, thiserror::Error)]
 pub enum PairingFileError {
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("{path}:{message}")]
     Parse { path: String, message: String },
     #[error("{path}: node {node}: {message}")]
@@ -54,6 +51,14 @@ pub enum PairingFileError {
         path: String,
         node: String,
         message: String,
+    },
+    #[error("{path}: nodes {first} and {second} are both {device}: each machine node needs its own device; pair again with `motet nodes pair`")]
+    SameDevice {
+        path: String,
+        first: String,
+        second: String,
+        /// How the device is named in both: "uid …" or "address … on LINK".
+        device: String,
     },
 }
 
@@ -80,9 +85,9 @@ impl PairingFile {
     /// Reads and checks a pairing file. Errors name the file and, for syntax
     /// errors, line and column.
     pub fn load(path: &Path) -> Result<PairingFile, PairingFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PairingFileError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| PairingFileError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         })?;
         PairingFile::parse(&text, &path.display().to_string())
     }
@@ -105,7 +110,32 @@ impl PairingFile {
                 return Err(bad(format!("uid {:?} is not a hex number", n.uid)));
             }
         }
+        file.check_devices(path)?;
         Ok(file)
+    }
+
+    /// Two machine nodes on one device would get each other's motion: the
+    /// same uid, or the same address on the same link, is refused.
+    fn check_devices(&self, path: &str) -> Result<(), PairingFileError> {
+        let nodes: Vec<_> = self.nodes.iter().collect();
+        for (k, (first, a)) in nodes.iter().enumerate() {
+            for (second, b) in &nodes[k + 1..] {
+                let device = if parse_uid(&a.uid) == parse_uid(&b.uid) {
+                    format!("uid {}", a.uid)
+                } else if a.link == b.link && a.address == b.address {
+                    format!("address {} on {}", a.address, a.link)
+                } else {
+                    continue;
+                };
+                return Err(PairingFileError::SameDevice {
+                    path: path.to_string(),
+                    first: first.to_string(),
+                    second: second.to_string(),
+                    device,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Writes the file (creating or replacing it).
@@ -114,9 +144,9 @@ impl PairingFile {
         let text = format!(
             "# Written by `motet nodes pair`: the device behind each node of the machine.\n{body}"
         );
-        std::fs::write(path, text).map_err(|source| PairingFileError::Io {
+        std::fs::write(path, text).map_err(|error| PairingFileError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         })
     }
 }
@@ -176,6 +206,17 @@ mod tests {
                 "[nodes.a]\nlink='x'\naddress=2\nuid='1'\nkind='k'\nfirmware='1'\ncolour=1\n",
                 "7:1",
             ),
+            (
+                "[nodes.a]\nlink='x'\naddress=2\nuid='0a'\nkind='k'\nfirmware='1'\n\
+                 [nodes.b]\nlink='y'\naddress=3\nuid='000000000000000A'\nkind='k'\nfirmware='1'\n",
+                "nodes a and b are both uid 0a",
+            ),
+            (
+                "[nodes.a]\nlink='x'\naddress=2\nuid='1'\nkind='k'\nfirmware='1'\n\
+                 [nodes.b]\nlink='x'\naddress=3\nuid='2'\nkind='k'\nfirmware='1'\n\
+                 [nodes.c]\nlink='x'\naddress=2\nuid='3'\nkind='k'\nfirmware='1'\n",
+                "nodes a and c are both address 2 on x",
+            ),
         ];
         for (text, want) in cases {
             let e = PairingFile::parse(text, "p.toml").unwrap_err().to_string();
@@ -184,6 +225,15 @@ mod tests {
                 "{text:?} gave {e}"
             );
         }
+    }
+
+    #[test]
+    fn distinct_devices_are_accepted() {
+        // (the same link with other addresses, the same address on other links)
+        let text = "[nodes.a]\nlink='x'\naddress=2\nuid='1'\nkind='k'\nfirmware='1'\n\
+                    [nodes.b]\nlink='x'\naddress=3\nuid='2'\nkind='k'\nfirmware='1'\n\
+                    [nodes.c]\nlink='y'\naddress=2\nuid='3'\nkind='k'\nfirmware='1'\n";
+        assert_eq!(PairingFile::parse(text, "p.toml").unwrap().nodes.len(), 3);
     }
 
     #[test]

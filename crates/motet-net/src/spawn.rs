@@ -15,8 +15,8 @@ pub struct SpawnedNode {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SpawnError {
-    #[error("cannot start {exe}: {source}")]
-    Start { exe: String, source: std::io::Error },
+    #[error("cannot start {exe}: {error}")]
+    Start { exe: String, error: std::io::Error },
     #[error("node process did not announce its link (it printed {0:?})")]
     NoAnnounce(String),
 }
@@ -51,9 +51,9 @@ pub fn spawn_sim_node(exe: &Path, kind: &str, extra: &[String]) -> Result<Spawne
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
-        .map_err(|source| SpawnError::Start {
+        .map_err(|error| SpawnError::Start {
             exe: exe.display().to_string(),
-            source,
+            error,
         })?;
     let stdout = child.stdout.take().expect("stdout is piped");
     let mut line = String::new();

@@ -5,6 +5,7 @@ mod bench;
 mod bench_net;
 mod bench_wire;
 mod dance;
+mod error_text;
 mod netrun;
 mod node;
 mod nodes;
@@ -243,7 +244,7 @@ fn main() -> std::process::ExitCode {
     match dispatch(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text::error_text(&e));
             std::process::ExitCode::FAILURE
         }
     }

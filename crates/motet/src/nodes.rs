@@ -69,6 +69,9 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
                     .join(", ")
             );
         }
+        if assigned.iter().any(|(a, _)| a == name) {
+            bail!("--link {l:?}: machine node `{name}` has a --link already");
+        }
         assigned.push((name.to_string(), spec.to_string()));
     }
     for n in &machine.nodes {
@@ -79,6 +82,8 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
     let path = pairing_path(machine_path);
     let mut file = PairingFile::default();
     let mut taken = Vec::new();
+    // (machine node, device uid, link) of the nodes paired so far
+    let mut devices: Vec<(String, u64, String)> = Vec::new();
     for spec in &machine.nodes {
         let link = &assigned
             .iter()
@@ -93,9 +98,27 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
         for f in found.iter().filter(|f| f.info.address != UNPAIRED) {
             a.at_rest(f.info.address, "pairing it again")?;
         }
+        // Two machine nodes on one device would each get the other's
+        // motion: refused before the device's address is changed.
+        let same_device = |uid: u64| -> Result<()> {
+            let Some((other, _, other_link)) = devices.iter().find(|(_, u, _)| *u == uid) else {
+                return Ok(());
+            };
+            let on = if other_link == link {
+                format!("on {link}")
+            } else {
+                format!("on {other_link} and on {link}")
+            };
+            bail!(
+                "machine nodes `{other}` and `{}` would both be the device uid {} {on}: each machine node needs its own device; nothing was written",
+                spec.name,
+                format_uid(uid)
+            )
+        };
         let uid = if found.len() == 1 && !button {
             // Alone on its link: no button needed.
             let uid = found[0].info.uid;
+            same_device(uid)?;
             a.set_address(uid, address)?;
             println!(
                 "{}: the only node on {link} (uid {}) is now address {address}",
@@ -114,6 +137,7 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
                 spec.name
             );
             let uid = a.pair_by_button(address, Duration::from_secs_f64(wait))?;
+            same_device(uid)?;
             println!(
                 "{}: uid {} is now address {address}",
                 spec.name,
@@ -134,6 +158,7 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
             bail!("{}: {e}", spec.name);
         }
         taken.push(address);
+        devices.push((spec.name.clone(), uid, link.clone()));
         file.nodes.insert(
             spec.name.clone(),
             PairedNode {
@@ -175,10 +200,16 @@ fn node_entry<'a>(file: &'a PairingFile, machine: &Path, node: &str) -> Result<&
 /// `motet nodes status MACHINE`
 pub fn status(machine_path: &Path) -> Result<()> {
     let file = paired(machine_path)?;
+    // Every node is asked, even after one failed: the ones that answer are
+    // shown, the others named at the end.
+    let mut silent = Vec::new();
     for (name, p) in &file.nodes {
-        let mut a = admin(&p.link)?;
-        match (a.info(p.address), a.status(p.address)) {
-            (Ok(i), Ok(s)) => println!(
+        let answer = admin(&p.link).and_then(|mut a| {
+            let info = a.info(p.address)?;
+            Ok((info, a.status(p.address)?))
+        });
+        match answer {
+            Ok((i, s)) => println!(
                 "{name}: {} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}, up {:.1} s",
                 i.kind,
                 format_uid(i.uid),
@@ -190,8 +221,19 @@ pub fn status(machine_path: &Path) -> Result<()> {
                 if s.synced { "synced" } else { "not synced" },
                 s.uptime_us as f64 * 1e-6
             ),
-            (Err(e), _) | (_, Err(e)) => println!("{name}: {e}"),
+            Err(e) => {
+                eprintln!("{name}: {}", crate::error_text::error_text(&e));
+                silent.push(name.as_str());
+            }
         }
+    }
+    if !silent.is_empty() {
+        bail!(
+            "{} of {} paired nodes gave no status: {}",
+            silent.len(),
+            file.nodes.len(),
+            silent.join(", ")
+        );
     }
     Ok(())
 }

@@ -619,3 +619,86 @@ fn bad_network_input_is_a_clear_error() {
         "{stderr}"
     );
 }
+
+#[test]
+fn one_device_for_two_nodes_is_refused_and_status_names_silent_nodes() {
+    let _serial = serial();
+    let dir = scratch("twice");
+    let machine = machine_copy(&dir, "clay-printer.toml");
+    let m = machine.to_str().unwrap();
+    let pairing = dir.join("clay-printer.nodes.toml");
+    let a = start_node(&[]);
+    let b = start_node(&[]);
+
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "pair",
+        m,
+        "--link",
+        &format!("table={}", a.link),
+        "--link",
+        &format!("tower={}", a.link),
+    ]);
+    assert!(
+        !ok && stderr.contains("machine nodes `table` and `tower` would both be the device uid")
+            && stderr.contains(&a.link),
+        "{stderr}"
+    );
+    assert!(!pairing.exists(), "nothing is written");
+
+    let (ok, _, stderr) = motet(&[
+        "nodes",
+        "pair",
+        m,
+        "--link",
+        &format!("table={}", a.link),
+        "--link",
+        &format!("tower={}", b.link),
+    ]);
+    assert!(ok, "{stderr}");
+    let (ok, stdout, stderr) = motet(&["nodes", "status", m]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("table: stepper") && stdout.contains("tower: stepper"),
+        "{stdout}"
+    );
+
+    // A node that does not answer fails the command, by name; the other is
+    // still shown.
+    drop(b);
+    let (ok, stdout, stderr) = motet(&["nodes", "status", m]);
+    assert!(!ok, "a silent node must fail: {stdout}");
+    assert!(stdout.contains("table: stepper"), "{stdout}");
+    assert!(
+        stderr.contains("1 of 2 paired nodes gave no status: tower") && stderr.contains("tower: "),
+        "{stderr}"
+    );
+
+    // A pairing file that puts both nodes on one device is refused when read.
+    let text = std::fs::read_to_string(&pairing).unwrap();
+    let uid = |node: &str| {
+        let at = text.find(&format!("[nodes.{node}]")).unwrap();
+        text[at..]
+            .lines()
+            .find(|l| l.starts_with("uid"))
+            .unwrap()
+            .to_string()
+    };
+    std::fs::write(&pairing, text.replace(&uid("tower"), &uid("table"))).unwrap();
+    for args in [
+        vec!["nodes", "status", m],
+        vec![
+            "run",
+            m,
+            "examples/jobs/clay-vase.gcode",
+            "--nodes",
+            "paired",
+        ],
+    ] {
+        let (ok, _, stderr) = motet(&args);
+        assert!(
+            !ok && stderr.contains("clay-printer.nodes.toml: nodes table and tower are both uid"),
+            "{args:?}: {stderr}"
+        );
+    }
+}

@@ -13,10 +13,15 @@ Moves are planned and streamed to the machine's nodes as they are called;
 no batch file in between. A call blocks only while the machine's queues are
 full. Refused calls raise a subclass of MotetError and leave the queued motion
 untouched.
+
+Event callbacks (``on_event``) run after the call that produced the events and
+may use the machine; an exception they raise is raised by that call. Ctrl-C
+stops any long call with KeyboardInterrupt and leaves the machine usable.
 """
 
 from ._motet import (
     Machine,
+    MachineBusyError,
     MachineFileError,
     MotetError,
     UnknownNameError,
@@ -33,6 +38,7 @@ __all__ = [
     "UnreachableError",
     "UnknownNameError",
     "ValueOutOfRangeError",
+    "MachineBusyError",
     "run_job",
     "trace_edges",
 ]

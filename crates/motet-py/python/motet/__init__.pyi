@@ -16,8 +16,26 @@ class UnknownNameError(MotetError):
 class ValueOutOfRangeError(MotetError):
     """A feed, dwell or tool value is out of range."""
 
+class MachineBusyError(MotetError):
+    """The Machine was used while one of its own calls was still working: from
+    a signal handler or a finalizer that ran during that call. (Event
+    callbacks run after the call's work and may use the machine.)"""
+
 class Machine:
-    """A machine driven call by call, on simulated nodes."""
+    """A machine driven call by call, on simulated nodes.
+
+    Calls that let time pass (moves waiting for queue room, wait, run_job,
+    save) release the GIL while they work and stop within milliseconds on
+    Ctrl-C with KeyboardInterrupt. The machine stays usable afterwards:
+    nothing accepted is lost or run twice. A move whose call was interrupted
+    was accepted (``target`` includes it); a job interrupted in run_job is
+    queued up to that point; ``wait()`` runs whatever is queued.
+
+    Event callbacks run after the work of the call that produced the events,
+    in order; they may read and drive the machine (even wait for it). An
+    exception a callback raises is raised by that call, with its traceback,
+    after the call's own work is done; events not yet delivered come with the
+    next call."""
 
     def __init__(self, path: str) -> None:
         """Opens the machine described by a machine file (TOML)."""
@@ -40,7 +58,8 @@ class Machine:
     def dwell(self, seconds: float) -> None:
         """Stand still for `seconds` after the motion queued before."""
     def wait(self) -> None:
-        """Block until everything queued has run and the machine is at rest."""
+        """Block until everything queued has run and the machine is at rest,
+        including motion that event callbacks queue meanwhile."""
     @property
     def position(self) -> Dict[str, float]:
         """Where the motors are now, by axis name."""
@@ -51,19 +70,27 @@ class Machine:
     def time(self) -> float:
         """Simulated time in seconds."""
     def on_event(self, callback: Callable[[Dict[str, Any]], None]) -> None:
-        """Call callback(event) for every event: a dict with kind ("tool" or "idle"),
-        time (s) and, for tools, tool and value."""
+        """Call callback(event) for every event from now on: a dict with kind
+        ("tool" or "idle"), time (s) and, for tools, tool and value.
+
+        Callbacks run after the call that produced the event and may use the
+        machine; an exception they raise is raised by that call."""
     def report(self) -> Dict[str, Any]:
         """The run report: duration, distances, steps, peaks against limits, accuracy."""
     def save(self, directory: str) -> None:
-        """Write path.png, path.svg and report.json of everything executed so far."""
+        """Write path.png, path.svg and report.json of everything executed so far
+        into directory, which is made if missing; a missing parent is an error
+        (MotetError naming it), not made."""
     def __enter__(self) -> "Machine": ...
     def __exit__(
         self,
         exc_type: Optional[Type[BaseException]],
         exc: Optional[BaseException],
         tb: Optional[TracebackType],
-    ) -> bool: ...
+    ) -> bool:
+        """Waits for the machine to finish, unless the block raised (Ctrl-C
+        included): then the exception goes on at once and the queued motion
+        stays queued."""
 
 def trace_edges(
     path: str,
@@ -82,4 +109,7 @@ def trace_edges(
 
 def run_job(machine: Machine, path: str, allow_unknown: bool = False) -> int:
     """Read a job file (G-code, SVG or photo), check it against the machine and
-    queue all of it, as `motet run` does. Returns the number of commands."""
+    queue all of it, as `motet run` does. Returns the number of commands.
+
+    Ctrl-C stops it with KeyboardInterrupt; the commands queued until then
+    stay queued (``target`` is where they end), the rest of the job is not."""
