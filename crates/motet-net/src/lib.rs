@@ -16,6 +16,7 @@ pub mod pairing_file;
 pub mod peer;
 pub mod plan_feed;
 pub mod registry;
+pub mod replay;
 pub mod resume;
 pub mod run;
 pub mod run_record;
@@ -25,4 +26,4 @@ pub mod source;
 pub mod spawn;
 pub mod tail;
 
-pub use run::{LostNode, NetConfig, NetError, NetRun, Phase, RunIdentity, StopInfo};
+pub use run::{LostNode, NetConfig, NetError, NetRun, Phase, RunIdentity, StopInfo, Tally};

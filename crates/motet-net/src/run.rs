@@ -21,7 +21,7 @@ use motet_planner::{Command, Located, PlanError, Planned, SourceLoc};
 use motet_trajectory::{Point, Segment};
 use motet_wire::link::State;
 use motet_wire::service::{ServiceRequest, MAX_SKEW};
-use motet_wire::{HostMessage, NodeMessage};
+use motet_wire::{HostMessage, NodeMessage, Refusal};
 use std::collections::VecDeque;
 
 /// Clock exchanges µs apart until every node's clock is settled.
@@ -156,6 +156,24 @@ pub struct StopInfo {
     pub confirmed: Vec<(usize, u32)>,
 }
 
+/// What a node's outputs did in a run (`NodeMessage::Tally`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tally {
+    pub steps: [u32; 8],
+    pub tool_changes: u32,
+    pub crc: u32,
+}
+
+impl From<&motet_node::StepTally> for Tally {
+    fn from(t: &motet_node::StepTally) -> Tally {
+        Tally {
+            steps: t.steps,
+            tool_changes: t.tool_changes,
+            crc: t.crc(),
+        }
+    }
+}
+
 /// A node the host lost during a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LostNode {
@@ -232,6 +250,10 @@ pub struct NetRun {
     next_status: u64,
     /// When to ask the stopping nodes where they are next.
     next_where: u64,
+    /// When the tallies were asked for, at the end.
+    tally_asked: Option<u64>,
+    /// Each node's answer: not yet, none kept, or its tally.
+    tallies: Vec<Option<Option<Tally>>>,
     room_asked_at: Option<u64>,
     pub windows: u64,
     pub segments_sent: u64,
@@ -279,6 +301,8 @@ impl NetRun {
             next_sync: 0,
             next_status: 0,
             next_where: 0,
+            tally_asked: None,
+            tallies: vec![None; n],
             room_asked_at: None,
             windows: 0,
             segments_sent: 0,
@@ -465,7 +489,7 @@ impl NetRun {
                 self.watch(now);
                 self.ask_status(now);
                 if matches!(self.phase, Phase::Draining) && self.finished(now) {
-                    self.phase = Phase::Done;
+                    self.collect_tallies(now);
                 }
             }
             Phase::Stopping(_) => self.settle(now)?,
@@ -507,6 +531,23 @@ impl NetRun {
         for k in 0..self.peers.len() {
             while let Some(m) = self.peers[k].take() {
                 match m {
+                    // A node that keeps no tally says so; nothing is wrong.
+                    Incoming::Motion(NodeMessage::Refused {
+                        reason: Refusal::BadConfig,
+                    }) if self.tally_asked.is_some() && self.tallies[k].is_none() => {
+                        self.tallies[k] = Some(None);
+                    }
+                    Incoming::Motion(NodeMessage::Tally {
+                        steps,
+                        tool_changes,
+                        crc,
+                    }) => {
+                        self.tallies[k] = Some(Some(Tally {
+                            steps,
+                            tool_changes,
+                            crc,
+                        }))
+                    }
                     Incoming::Motion(NodeMessage::Refused { reason }) => {
                         let node = self.peers[k].name.clone();
                         let message = format!("refused a message: {reason:?}");
@@ -775,6 +816,25 @@ impl NetRun {
             }
             self.next_status = now + self.cfg.status_interval_us;
         }
+    }
+
+    /// At the end: what each node's outputs did, for the report; done once
+    /// every node answered (or after the node timeout: a report without it).
+    fn collect_tallies(&mut self, now: u64) {
+        let asked = *self.tally_asked.get_or_insert_with(|| {
+            for p in self.peers.iter_mut() {
+                p.send_motion(&HostMessage::TallyGet);
+            }
+            now
+        });
+        if self.tallies.iter().all(Option::is_some) || now > asked + self.cfg.node_timeout_us {
+            self.phase = Phase::Done;
+        }
+    }
+
+    /// What each node's outputs did in the run, if it said (after `Done`).
+    pub fn tallies(&self) -> Vec<Option<Tally>> {
+        self.tallies.iter().map(|t| t.flatten()).collect()
     }
 
     /// Every node at rest after the trajectory's end.

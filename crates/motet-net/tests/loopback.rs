@@ -212,3 +212,39 @@ fn tiny_fast_moves_slow_down_instead_of_stopping_the_network() {
     // Every window held at most the queue.
     assert!(lb.run.segments_sent as f64 / lb.run.windows as f64 <= 64.0);
 }
+
+/// What every node's outputs did in a networked run equals the run replayed
+/// in this process from its journal's header: the same steps, at the same
+/// times, in the same order.
+#[test]
+fn each_node_tallies_what_the_replay_computes() {
+    for (machine, job) in [
+        ("examples/plotter.toml", "examples/jobs/drawing.svg"),
+        ("examples/laser.toml", "examples/jobs/laser-badge.gcode"),
+    ] {
+        let (m, cmds) = load(machine, job);
+        let n = m.nodes.len();
+        let dir = std::env::temp_dir().join(format!("motet-tally-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let jpath = dir.join(format!("journal-{}", m.name.len()));
+        let mut lb = Loopback::with_journal(
+            &m,
+            cmds.clone(),
+            m.start,
+            clean_links(n),
+            &clocks(n),
+            NetConfig::default(),
+            Some(motet_net::journal::JournalWriter::create(&jpath).unwrap()),
+        );
+        assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
+        let got: Vec<_> = lb.run.tallies().into_iter().map(Option::unwrap).collect();
+        let header = motet_net::journal::Journal::load(&jpath)
+            .unwrap()
+            .header
+            .unwrap();
+        let want = motet_net::replay::replay(&m, cmds, &header).unwrap();
+        assert_eq!(got, want, "{machine} {job}");
+        assert!(got.iter().any(|t| t.steps.iter().sum::<u32>() > 1000));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

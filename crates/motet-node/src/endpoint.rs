@@ -72,9 +72,13 @@ pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
 
 impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
     pub fn new(cfg: NodeConfig, store: S, flash: F, now_local_us: u64) -> Self {
+        // A node on a link keeps a tally of its outputs, so that a host can
+        // check what a board did against what it computes (`TallyGet`).
+        let mut node = Node::new();
+        node.keep_tally();
         Endpoint {
             services: Services::new(cfg, store, flash, now_local_us),
-            node: Node::new(),
+            node,
             link: None,
             outbox: Deque::new(),
             datagrams: Deque::new(),
@@ -231,6 +235,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             Action::None => {}
             Action::Reset => {
                 self.node = Node::new();
+                self.node.keep_tally();
                 self.ran_until = f64::NEG_INFINITY;
                 // The host reconnects with a new SYN; a reply through the old
                 // link would be lost with it, so a reset is acknowledged
@@ -244,6 +249,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             }
             Action::EnterBootloader | Action::StartApplication => {
                 self.node = Node::new();
+                self.node.keep_tally();
                 self.ran_until = f64::NEG_INFINITY;
             }
         }

@@ -16,6 +16,7 @@ pub mod graph;
 pub mod node;
 pub mod service;
 pub mod storage;
+pub mod tally;
 pub mod tool;
 
 pub use board::Board;
@@ -27,3 +28,4 @@ pub use node::{
 };
 pub use service::{Action, Handled, NodeConfig, Services};
 pub use storage::{Flash, Persisted, RamFlash, RamStore, StorageError, Store};
+pub use tally::{StepTally, Tallying};

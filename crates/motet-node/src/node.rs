@@ -6,6 +6,7 @@ use crate::graph::{
     self, Component, FrameOut, Graph, GraphBuilder, Inputs, Mode, PortRef, Tape, MAX_HW,
     SLOW_FRAME_US,
 };
+use crate::tally::{StepTally, Tallying};
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
 use motet_trajectory::{Contingency, JointMap, Point, Profile, Segment, MAX_AXES};
@@ -109,6 +110,8 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// The run this node's trajectory belongs to (`Windowed`); 0: none, so
     /// the node's position is not one a host can resume from.
     run: u32,
+    /// What the outputs did since the last reset, when kept.
+    tally: Option<StepTally>,
     stream: StreamConfig,
     /// Context the next batched segment is decoded against.
     stream_state: StreamState,
@@ -152,6 +155,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             tail_start: None,
             stopped: false,
             run: 0,
+            tally: None,
             stream: StreamConfig {
                 quantum: 1e-4,
                 speed_quantum: 1e-3,
@@ -178,7 +182,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             // its position mid-move (a second host, or a stray message).
             HostMessage::Reset if self.moving() => Err(Refusal::NotAtRest),
             HostMessage::Reset => {
+                let tally = self.tally.map(|_| StepTally::default());
                 *self = Self::new();
+                self.tally = tally;
                 Ok(())
             }
             HostMessage::ConfigureChannel(c) => self.configure_channel(c),
@@ -209,6 +215,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             }
             HostMessage::Status => return Some(self.status_message()),
             HostMessage::Where => return Some(self.position()),
+            HostMessage::TallyGet => match &self.tally {
+                Some(t) => return Some(t.message()),
+                None => Err(Refusal::BadConfig),
+            },
             HostMessage::GraphBegin { frame_us } => {
                 if !(frame_us.is_finite() && frame_us >= 1.0) {
                     Err(Refusal::BadGraph)
@@ -793,6 +803,32 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// In windowed mode, reaching the committed window's tail start applies
     /// the tail there, between the outputs before it and those after.
     pub fn poll<B: Board>(&mut self, until: f64, board: &mut B) {
+        if let Some(mut tally) = self.tally.take() {
+            self.poll_outputs(
+                until,
+                &mut Tallying {
+                    inner: board,
+                    tally: &mut tally,
+                },
+            );
+            self.tally = Some(tally);
+        } else {
+            self.poll_outputs(until, board);
+        }
+    }
+
+    /// Keeps a tally of every output from now on (kept across `Reset`, which
+    /// starts it again), reported on `TallyGet`.
+    pub fn keep_tally(&mut self) {
+        self.tally.get_or_insert_with(StepTally::default);
+    }
+
+    /// The tally, when kept.
+    pub fn tally(&self) -> Option<&StepTally> {
+        self.tally.as_ref()
+    }
+
+    fn poll_outputs<B: Board>(&mut self, until: f64, board: &mut B) {
         if let Some(ts) = self.tail_start.filter(|&t| t < until) {
             self.poll_until(ts, board);
             self.stop_on_tail(ts, board);

@@ -141,6 +141,9 @@ pub enum HostMessage {
     Segments(SegmentBatch),
     /// Ask for a [`NodeMessage::Position`].
     Where,
+    /// Ask for a [`NodeMessage::Tally`] (refused `BadConfig` by a node that
+    /// keeps none).
+    TallyGet,
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -265,6 +268,16 @@ pub enum NodeMessage {
         /// the axes the node reads; other axes are as the host last set them.
         at: Point,
     },
+    /// What the node's outputs did since its last `Reset`: steps per channel,
+    /// tool changes, and the CRC-32C of every step (channel, direction,
+    /// time's f64 bits, little endian) and tool change (0x80 | output, value's
+    /// f32 bits, time's bits) in order. Equal tallies: the same outputs at the
+    /// same times.
+    Tally {
+        steps: [u32; 8],
+        tool_changes: u32,
+        crc: u32,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -376,6 +389,7 @@ mod tests {
                 bytes: Vec::from_slice(&[3, 0x21, 7, 0x80, 1]).unwrap(),
             }),
             HostMessage::Where,
+            HostMessage::TallyGet,
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {
@@ -405,6 +419,11 @@ mod tests {
             },
             NodeMessage::Refused {
                 reason: Refusal::TailStarted,
+            },
+            NodeMessage::Tally {
+                steps: [0, 1, u32::MAX, 3, 4, 5, 6, 7],
+                tool_changes: 9,
+                crc: 0xdead_beef,
             },
         ];
         for m in replies {

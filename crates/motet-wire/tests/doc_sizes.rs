@@ -35,6 +35,7 @@ fn documented_sizes() {
         (HostMessage::Windowed { run: 0 }, 2),
         (HostMessage::Windowed { run: u32::MAX }, 6),
         (HostMessage::Where, 1),
+        (HostMessage::TallyGet, 1),
         (HostMessage::Seal { next_seq: 0 }, 2),
         (HostMessage::Seal { next_seq: u32::MAX }, 6),
         (HostMessage::Status, 1),
@@ -94,6 +95,22 @@ fn documented_sizes() {
                 at: [0.0; 6],
             },
             63,
+        ),
+        (
+            NodeMessage::Tally {
+                steps: [0; 8],
+                tool_changes: 0,
+                crc: 0,
+            },
+            11,
+        ),
+        (
+            NodeMessage::Tally {
+                steps: [u32::MAX; 8],
+                tool_changes: u32::MAX,
+                crc: u32::MAX,
+            },
+            51,
         ),
         (
             NodeMessage::Refused {

@@ -234,6 +234,7 @@ fn drive(
     bar.finish_and_clear();
     let now = clock.now_us();
     let figures = run.figures(now);
+    let tallies = run.tallies();
     let report = serde_json::json!({
         "machine": machine.name,
         "commands": total,
@@ -255,6 +256,11 @@ fn drive(
             "skew_ppm": f.skew_ppm,
             "underruns": f.underruns,
             "window": window(run.node_status(k)),
+            "tally": tallies[k].map(|t| serde_json::json!({
+                "steps": t.steps,
+                "tool_changes": t.tool_changes,
+                "crc": format!("{:08x}", t.crc),
+            })),
         })).collect::<Vec<_>>(),
     });
     std::fs::write(
