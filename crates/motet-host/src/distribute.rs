@@ -180,6 +180,8 @@ impl Distributor {
                 channel: ch as u8,
                 map: machine.joints[act.joint].map,
                 steps_per_unit: act.steps_per_unit,
+                pulse_us: act.pulse_us,
+                dir_setup_us: act.dir_setup_us,
             }));
         }
         for (output, &t) in spec.tools.iter().enumerate() {

@@ -26,6 +26,31 @@ pub struct MachineError {
     pub message: String,
 }
 
+/// The fastest a joint moves, units/s: its own limit, or what its axes'
+/// limits allow (a linear joint: the sum of each axis's share; a polar
+/// radius: the planar speed). A polar angle near the centre has no bound
+/// but its own.
+fn joint_speed_bound(j: &Joint, axes: &[Axis]) -> Option<f64> {
+    let v = |i: usize| axes.get(i).map_or(f64::INFINITY, |a| a.max_velocity);
+    let derived = match j.map {
+        JointMap::Linear { coeffs } => Some(
+            coeffs
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c != 0.0)
+                .map(|(i, c)| c.abs() * v(i))
+                .sum::<f64>(),
+        ),
+        JointMap::PolarRadius { x, y } => Some(v(x as usize).hypot(v(y as usize))),
+        JointMap::PolarAngle { .. } => None,
+    };
+    match (j.max_velocity, derived) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+    .filter(|v| v.is_finite())
+}
+
 /// `file:line:column`, or the file alone when the error has no line.
 fn place(file: &str, line: usize, column: usize) -> String {
     match line {
@@ -61,6 +86,13 @@ pub struct Actuator {
     pub joint: usize,
     /// Signed; negative when the chain inverts.
     pub steps_per_unit: f64,
+    /// Step pulse width its driver needs, µs.
+    pub pulse_us: f32,
+    /// Direction set-up time its driver needs, µs.
+    pub dir_setup_us: f32,
+    /// The fastest it steps, steps/s, when the joint's speed is bounded
+    /// (every joint but a polar angle with no `max_velocity`).
+    pub max_step_hz: Option<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -404,6 +436,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
 
     // Actuators and their element chains.
     let mut actuators = Vec::new();
+    let mut actuator_spans: Vec<Range<usize>> = Vec::new();
     let mut driven = vec![false; joints.len()];
     for (name, a) in &raw.actuators {
         let a = a.get_ref();
@@ -490,11 +523,64 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             let j = &mut joints[joint];
             j.max_acceleration = Some(j.max_acceleration.map_or(v, |w| w.min(v)));
         }
+        let timing = |key: &Option<toml::Spanned<f64>>,
+                      default: f32,
+                      range: std::ops::RangeInclusive<f32>,
+                      what: &str|
+         -> Result<f32, MachineError> {
+            let Some(v) = key else {
+                return Ok(default);
+            };
+            let x = *v.get_ref();
+            if !(x.is_finite() && range.contains(&(x as f32))) {
+                return Err(src.err(
+                    v.span(),
+                    format!(
+                        "actuator {name}: {what} must be from {} to {} µs",
+                        range.start(),
+                        range.end()
+                    ),
+                ));
+            }
+            Ok(x as f32)
+        };
+        let pulse_us = timing(
+            &a.pulse_us,
+            motet_wire::message::DEFAULT_PULSE_US,
+            motet_wire::message::PULSE_US,
+            "pulse_us",
+        )?;
+        let dir_setup_us = timing(
+            &a.dir_setup_us,
+            motet_wire::message::DEFAULT_DIR_SETUP_US,
+            motet_wire::message::DIR_SETUP_US,
+            "dir_setup_us",
+        )?;
+        actuator_spans.push(a.pulse_us.as_ref().map_or(a.joint.span(), |p| p.span()));
         actuators.push(Actuator {
             name: name.clone(),
             joint,
             steps_per_unit: chain.steps_per_unit,
+            pulse_us,
+            dir_setup_us,
+            max_step_hz: None,
         });
+    }
+    // A step output high for `pulse_us` and low as long between pulses
+    // steps at most 1 / (2 · pulse_us): a faster actuator would fall behind.
+    for (a, span) in actuators.iter_mut().zip(&actuator_spans) {
+        a.max_step_hz =
+            joint_speed_bound(&joints[a.joint], &axes).map(|v| v * a.steps_per_unit.abs());
+        let reach = 1e6 / (2.0 * a.pulse_us as f64);
+        if let Some(hz) = a.max_step_hz.filter(|&hz| hz > reach) {
+            return Err(src.err(
+                span.clone(),
+                format!(
+                    "actuator {}: at its joint's top speed it steps {hz:.0} times a second, but a {} µs pulse (and as long low) allows {reach:.0}: shorten pulse_us or lower max_velocity",
+                    a.name, a.pulse_us
+                ),
+            ));
+        }
     }
     if let Some(j) = driven.iter().position(|d| !d) {
         return Err(src.err(

@@ -119,6 +119,12 @@ pub struct ActuatorFile {
     pub max_velocity: Option<Spanned<f64>>,
     #[serde(default)]
     pub max_acceleration: Option<Spanned<f64>>,
+    /// Step pulse width for the driver, µs.
+    #[serde(default)]
+    pub pulse_us: Option<Spanned<f64>>,
+    /// Direction set-up time for the driver, µs.
+    #[serde(default)]
+    pub dir_setup_us: Option<Spanned<f64>>,
 }
 
 /// One element of a chain, e.g. `{ pulley = { teeth = 20, belt_pitch = 2 } }`,

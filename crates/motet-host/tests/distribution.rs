@@ -203,6 +203,8 @@ fn setup_resets_configures_and_sets_the_position() {
                     channel: ch as u8,
                     map: m.joints[act.joint].map,
                     steps_per_unit: act.steps_per_unit,
+                    pulse_us: act.pulse_us,
+                    dir_setup_us: act.dir_setup_us,
                 }));
             }
             for (output, &t) in spec.tools.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! whether a node can serve a machine node (enough channels and tools, a
 //! queue the host's window fits in).
 
-use motet_host::NodeSpec;
+use motet_host::{Machine, NodeSpec};
 use motet_wire::service::{kind, Info};
 
 /// What the host knows about driving one kind of node.
@@ -33,8 +33,8 @@ pub fn driver(kind: &str) -> Option<&'static Driver> {
     DRIVERS.iter().find(|d| d.kind == kind)
 }
 
-/// Why a node cannot serve a machine node.
-pub fn check(spec: &NodeSpec, info: &Info) -> Result<&'static Driver, String> {
+/// Why a node cannot serve a machine node of `machine`.
+pub fn check(machine: &Machine, spec: &NodeSpec, info: &Info) -> Result<&'static Driver, String> {
     let d = driver(info.kind.as_str()).ok_or_else(|| {
         format!(
             "node kind `{}` has no driver on this host (known: {})",
@@ -66,6 +66,17 @@ pub fn check(spec: &NodeSpec, info: &Info) -> Result<&'static Driver, String> {
             spec.queue, info.queue_capacity
         ));
     }
+    if info.max_step_hz > 0 {
+        for &a in &spec.actuators {
+            let act = &machine.actuators[a];
+            if let Some(hz) = act.max_step_hz.filter(|&hz| hz > info.max_step_hz as f64) {
+                return Err(format!(
+                    "actuator {} steps up to {hz:.0} times a second at its joint's top speed, but the node's channels reach {} ({}): lower its max_velocity or its microstepping",
+                    act.name, info.max_step_hz, if info.board.is_empty() { "its board" } else { info.board.as_str() }
+                ));
+            }
+        }
+    }
     Ok(d)
 }
 
@@ -85,11 +96,30 @@ mod tests {
             queue_capacity: queue,
             channels,
             tools,
+            board: Kind::new(),
+            max_step_hz: 0,
+        }
+    }
+
+    fn board(max_step_hz: u32) -> Info {
+        Info {
+            board: Kind::try_from("mps2-an500").unwrap(),
+            max_step_hz,
+            ..info("stepper", 8, 4, 64)
         }
     }
 
     #[test]
     fn nodes_are_checked_against_their_machine_node() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/printer.toml");
+        let machine = Machine::load(&path).unwrap();
+        let fastest = machine
+            .actuators
+            .iter()
+            .filter_map(|a| a.max_step_hz)
+            .fold(0.0, f64::max);
+        assert!(fastest > 1000.0);
         let spec = NodeSpec {
             name: "mainboard".into(),
             actuators: vec![0, 1, 2, 3],
@@ -114,9 +144,14 @@ mod tests {
                 info("stepper", 8, 4, 16),
                 Some("queue of 64 but the node holds 16"),
             ),
+            (board(fastest.ceil() as u32), None),
+            (
+                board(fastest as u32 - 1),
+                Some("but the node's channels reach"),
+            ),
         ];
         for (i, want) in cases {
-            match (check(&spec, &i), want) {
+            match (check(&machine, &spec, &i), want) {
                 (Ok(_), None) => {}
                 (Err(e), Some(w)) => assert!(e.contains(w), "{}: {e}", i.kind),
                 (got, want) => panic!("{}: {got:?}, expected {want:?}", i.kind),

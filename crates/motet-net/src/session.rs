@@ -91,7 +91,7 @@ impl Session {
             };
             a.set_address(node.uid, address).map_err(admin_err)?;
             let info = a.info(address).map_err(admin_err)?;
-            registry::check(spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
                 node: spec.name.clone(),
                 message,
             })?;
@@ -170,7 +170,7 @@ impl Session {
                     });
                 }
             }
-            registry::check(spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
                 node: spec.name.clone(),
                 message,
             })?;

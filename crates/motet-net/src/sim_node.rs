@@ -39,6 +39,9 @@ pub fn sim_config(kind: &str, uid: u64) -> Option<NodeConfig> {
         queue_capacity: DEFAULT_QUEUE as u16,
         channels: MAX_CHANNELS as u8,
         tools: MAX_TOOLS as u8,
+        // Simulated: no board, and no step rate it cannot reach.
+        board: None,
+        max_step_hz: 0,
     })
 }
 

@@ -67,6 +67,8 @@ pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
     ran_until: f64,
     /// Local time of the last frame from the host.
     last_host_frame: Option<u64>,
+    /// A verified image was started: firmware restarts into its bootloader.
+    start_requested: bool,
     stats: EndpointStats,
 }
 
@@ -84,6 +86,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             datagrams: Deque::new(),
             ran_until: f64::NEG_INFINITY,
             last_host_frame: None,
+            start_requested: false,
             stats: EndpointStats::default(),
         }
     }
@@ -94,6 +97,19 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
 
     pub fn node(&self) -> &Node<Q> {
         &self.node
+    }
+
+    /// The motion node, for firmware that feeds its graph the board's own
+    /// inputs ([`Node::set_input`]).
+    pub fn node_mut(&mut self) -> &mut Node<Q> {
+        &mut self.node
+    }
+
+    /// A verified image was started (`FirmwareStart`): a board with a
+    /// bootloader sends what is queued (the acknowledgement), then restarts
+    /// into it to install the image. A simulated node has nothing to do.
+    pub fn start_requested(&self) -> bool {
+        self.start_requested
     }
 
     pub fn stats(&self) -> &EndpointStats {
@@ -251,6 +267,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
                 self.node = Node::new();
                 self.node.keep_tally();
                 self.ran_until = f64::NEG_INFINITY;
+                self.start_requested |= h.action == Action::StartApplication;
             }
         }
     }

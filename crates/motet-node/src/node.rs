@@ -340,7 +340,14 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         Ok(())
     }
 
-    fn set_input(&mut self, kind: GraphInputKind, index: u8, value: f64) -> Result<(), Refusal> {
+    /// A reading for the hosted graph's inputs, as `GraphInput` gives it:
+    /// firmware reading its own encoders, ADCs and buttons sets them here.
+    pub fn set_input(
+        &mut self,
+        kind: GraphInputKind,
+        index: u8,
+        value: f64,
+    ) -> Result<(), Refusal> {
         let i = index as usize;
         if i >= MAX_HW || !value.is_finite() {
             return Err(Refusal::BadGraph);
@@ -433,8 +440,11 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // Beyond a million steps per unit the step counter and the poll loop
         // would run away; no real drive comes near it.
         let spu = c.steps_per_unit.abs();
-        let valid =
-            spu.is_finite() && spu > 0.0 && spu <= MAX_STEPS_PER_UNIT && map_is_valid(&c.map);
+        let valid = spu.is_finite()
+            && spu > 0.0
+            && spu <= MAX_STEPS_PER_UNIT
+            && map_is_valid(&c.map)
+            && c.timing_is_valid();
         if !valid || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
         }

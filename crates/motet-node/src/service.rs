@@ -16,7 +16,7 @@
 
 use crate::storage::{Flash, Persisted, Store};
 use motet_wire::frame::Crc32c;
-use motet_wire::image::{ImageError, ImageHeader, IMAGE_HEADER_LEN};
+use motet_wire::image::{ImageError, ImageHeader, MAX_HEADER_LEN, MIN_HEADER_LEN};
 use motet_wire::service::{
     is_node_address, port, Info, Kind, NodeState, ServiceError, ServiceReply, ServiceRequest,
     Status, Version, MAX_SKEW, PAGE_SIZE, UNPAIRED,
@@ -39,6 +39,11 @@ pub struct NodeConfig {
     pub queue_capacity: u16,
     pub channels: u8,
     pub tools: u8,
+    /// The board the firmware runs on: an image must name it. None on a
+    /// simulated node, which takes any image (it runs none of them).
+    pub board: Option<Kind>,
+    /// The fastest step rate a channel reaches, steps/s (0: no limit).
+    pub max_step_hz: u32,
 }
 
 /// What the endpoint must do after a request.
@@ -245,6 +250,8 @@ impl<S: Store, F: Flash> Services<S, F> {
             queue_capacity: self.cfg.queue_capacity,
             channels: self.cfg.channels,
             tools: self.cfg.tools,
+            board: self.cfg.board.clone().unwrap_or_default(),
+            max_step_hz: self.cfg.max_step_hz,
         }
     }
 
@@ -447,10 +454,10 @@ impl<S: Store, F: Flash> Services<S, F> {
         if *kind != self.cfg.kind {
             return Handled::error(ServiceError::WrongKind);
         }
-        if (size as usize) < IMAGE_HEADER_LEN {
+        if (size as usize) < MIN_HEADER_LEN {
             return Handled::error(ServiceError::BadImage(ImageError::Truncated));
         }
-        if size as usize == IMAGE_HEADER_LEN {
+        if size as usize == MIN_HEADER_LEN {
             return Handled::error(ServiceError::BadImage(ImageError::EmptyPayload));
         }
         let capacity = self.flash.capacity();
@@ -556,13 +563,19 @@ impl<S: Store, F: Flash> Services<S, F> {
                 actual,
             });
         }
-        let mut head = [0u8; IMAGE_HEADER_LEN];
+        let mut head = [0u8; MAX_HEADER_LEN];
+        let n = (up.size as usize).min(MAX_HEADER_LEN);
         self.flash
-            .read(0, &mut head)
+            .read(0, &mut head[..n])
             .map_err(|_| ServiceError::Storage)?;
-        let header = ImageHeader::parse(&head).map_err(ServiceError::BadImage)?;
+        let header = ImageHeader::parse(&head[..n]).map_err(ServiceError::BadImage)?;
         if header.kind != self.cfg.kind {
             return Err(ServiceError::WrongKind);
+        }
+        if let Some(board) = &self.cfg.board {
+            if header.board.as_ref() != Some(board) {
+                return Err(ServiceError::WrongBoard);
+            }
         }
         let len = header.image_len();
         if len != up.size as u64 {
@@ -572,7 +585,7 @@ impl<S: Store, F: Flash> Services<S, F> {
                 ImageError::TrailingBytes
             }));
         }
-        let payload_crc = self.flash_crc(IMAGE_HEADER_LEN as u32, up.size)?;
+        let payload_crc = self.flash_crc(header.header_len() as u32, up.size)?;
         if payload_crc != header.payload_crc {
             return Err(ServiceError::BadImage(ImageError::CrcMismatch {
                 expected: header.payload_crc,

@@ -68,6 +68,8 @@ fn batches_are_taken_whole_or_not_at_all() {
             channel: ch,
             map: JointMap::Linear { coeffs },
             steps_per_unit: 80.0,
+            pulse_us: 2.0,
+            dir_setup_us: 1.0,
         };
         assert_eq!(send(&mut node, &HostMessage::ConfigureChannel(c)), None);
     }

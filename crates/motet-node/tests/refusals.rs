@@ -479,13 +479,17 @@ fn arb_map() -> impl Strategy<Value = JointMap> {
 
 fn arb_message() -> impl Strategy<Value = HostMessage> {
     prop_oneof![
-        (0..10u8, arb_map(), small()).prop_map(|(channel, map, steps_per_unit)| {
-            HostMessage::ConfigureChannel(ChannelConfig {
-                channel,
-                map,
-                steps_per_unit,
-            })
-        }),
+        (0..10u8, arb_map(), small(), any::<f32>(), any::<f32>()).prop_map(
+            |(channel, map, steps_per_unit, pulse_us, dir_setup_us)| {
+                HostMessage::ConfigureChannel(ChannelConfig {
+                    channel,
+                    map,
+                    steps_per_unit,
+                    pulse_us,
+                    dir_setup_us,
+                })
+            }
+        ),
         prop::array::uniform6(small()).prop_map(|position| HostMessage::SetPosition { position }),
         (0..4u8, small(), any::<f32>()).prop_map(|(track, time, value)| HostMessage::Event {
             track,

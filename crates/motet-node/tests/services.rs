@@ -4,7 +4,7 @@
 
 use motet_node::{Action, Handled, NodeConfig, Persisted, RamFlash, RamStore, Services};
 use motet_wire::frame::{crc32c, BROADCAST};
-use motet_wire::image::{self, ImageError, IMAGE_HEADER_LEN};
+use motet_wire::image::{self, ImageError, MIN_HEADER_LEN};
 use motet_wire::service::{
     port, Info, Kind, NodeState, ServiceError, ServiceReply, ServiceRequest, Status, Version,
     PAGE_SIZE,
@@ -48,6 +48,8 @@ fn cfg(uid: u64) -> NodeConfig {
         queue_capacity: 64,
         channels: 4,
         tools: 2,
+        board: None,
+        max_step_hz: 0,
     }
 }
 
@@ -77,9 +79,14 @@ fn request(s: &mut Svc, r: &ServiceRequest, broadcast: bool) -> Handled {
 }
 
 fn firmware_image(kind: &str, version: Version, payload_len: usize) -> Vec<u8> {
+    board_image(kind, None, version, payload_len)
+}
+
+fn board_image(kind: &str, board: Option<&str>, version: Version, payload_len: usize) -> Vec<u8> {
     let payload: Vec<u8> = (0..payload_len).map(|i| (i * 7 + 3) as u8).collect();
-    let mut out = vec![0u8; IMAGE_HEADER_LEN + payload_len];
-    image::build(kind, version, &payload, &mut out).unwrap();
+    let mut out = vec![0u8; image::MAX_HEADER_LEN + payload_len];
+    let n = image::build(kind, board, version, &payload, &mut out).unwrap();
+    out.truncate(n);
     out
 }
 
@@ -261,6 +268,8 @@ fn requests_against_states() {
             queue_capacity: 64,
             channels: 4,
             tools: 2,
+            board: Kind::new(),
+            max_step_hz: 0,
         }))
     };
     let img = firmware_image("stepper", V2, 300);
@@ -889,7 +898,7 @@ fn requests_against_states() {
         row(
             Paired,
             R::FirmwareBegin {
-                size: IMAGE_HEADER_LEN as u32,
+                size: MIN_HEADER_LEN as u32,
                 crc32c: 0,
                 kind: kind("stepper"),
                 version: V2,
@@ -1090,6 +1099,49 @@ fn firmware_upload_installs_the_new_version() {
     assert_eq!(again.info().firmware, V2);
 }
 
+/// A board takes only images naming it; a simulated node (no board) takes
+/// any (it runs none of them).
+#[test]
+fn a_board_refuses_images_for_other_boards() {
+    // (node's board, image's board, verify's answer)
+    let cases = [
+        (Some("mps2-an500"), Some("mps2-an500"), Ok(())),
+        (
+            Some("mps2-an500"),
+            Some("teensy41"),
+            Err(ServiceError::WrongBoard),
+        ),
+        (Some("mps2-an500"), None, Err(ServiceError::WrongBoard)),
+        (None, Some("teensy41"), Ok(())),
+        (None, None, Ok(())),
+    ];
+    for (node, img_board, want) in cases {
+        let c = NodeConfig {
+            board: node.map(kind),
+            ..cfg(UID)
+        };
+        let mut s: Svc = Services::new(c, RamStore::default(), RamFlash::new(), START_US);
+        request(
+            &mut s,
+            &ServiceRequest::SetAddress {
+                uid: UID,
+                address: ADDR,
+            },
+            false,
+        );
+        let img = board_image("stepper", img_board, V2, 700);
+        request(&mut s, &begin(&img, V2), false);
+        upload(&mut s, &img);
+        let got = request(&mut s, &ServiceRequest::FirmwareVerify, false).reply;
+        let want = match want {
+            Ok(()) => Some(ServiceReply::FirmwareVerified { version: V2 }),
+            Err(e) => err(e),
+        };
+        assert_eq!(got, want, "{node:?} {img_board:?}");
+        assert_eq!(s.info().board.as_str(), node.unwrap_or(""));
+    }
+}
+
 #[test]
 fn a_resent_page_is_written_again() {
     let img = firmware_image("stepper", V2, 400);
@@ -1148,7 +1200,7 @@ fn bad_uploads() -> Vec<BadUpload> {
     // Announced CRC matches what was sent, but the payload was damaged before
     // the host computed it: only the image's own CRC catches it.
     let mut damaged = good.clone();
-    damaged[IMAGE_HEADER_LEN + 10] ^= 0xFF;
+    damaged[MIN_HEADER_LEN + 10] ^= 0xFF;
     let d = damaged.clone();
     let damaged_payload = move |s: &mut Svc| {
         request(s, &begin(&d, V2), false);
@@ -1208,8 +1260,8 @@ fn bad_uploads() -> Vec<BadUpload> {
             "damaged payload",
             Box::new(damaged_payload),
             ServiceError::BadImage(ImageError::CrcMismatch {
-                expected: crc32c(&good[IMAGE_HEADER_LEN..]),
-                actual: crc32c(&damaged[IMAGE_HEADER_LEN..]),
+                expected: crc32c(&good[MIN_HEADER_LEN..]),
+                actual: crc32c(&damaged[MIN_HEADER_LEN..]),
             }),
         ),
         (

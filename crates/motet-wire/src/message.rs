@@ -35,6 +35,28 @@ pub struct ChannelConfig {
     pub map: JointMap,
     /// Signed: negative inverts the direction output.
     pub steps_per_unit: f64,
+    /// Step pulse width, µs: the step output stays high this long, and low
+    /// at least this long between pulses ([`PULSE_US`]).
+    pub pulse_us: f32,
+    /// Direction set-up time, µs: the direction output settles this long
+    /// before a step's rising edge ([`DIR_SETUP_US`]).
+    pub dir_setup_us: f32,
+}
+
+/// Step pulse widths a node takes, µs.
+pub const PULSE_US: core::ops::RangeInclusive<f32> = 0.1..=1000.0;
+/// Direction set-up times a node takes, µs.
+pub const DIR_SETUP_US: core::ops::RangeInclusive<f32> = 0.0..=1000.0;
+/// Pulse width and direction set-up time when a machine file gives none,
+/// µs: what common drivers (A4988, DRV8825) need.
+pub const DEFAULT_PULSE_US: f32 = 2.0;
+pub const DEFAULT_DIR_SETUP_US: f32 = 1.0;
+
+impl ChannelConfig {
+    /// Whether the step timing is one a node takes.
+    pub fn timing_is_valid(&self) -> bool {
+        PULSE_US.contains(&self.pulse_us) && DIR_SETUP_US.contains(&self.dir_setup_us)
+    }
 }
 
 /// Which event track drives a tool output.
@@ -329,6 +351,8 @@ mod tests {
                 channel: 2,
                 map: JointMap::PolarAngle { x: 0, y: 1 },
                 steps_per_unit: -44.4,
+                pulse_us: 2.5,
+                dir_setup_us: 0.0,
             }),
             HostMessage::ConfigureTool(ToolConfig {
                 output: 0,

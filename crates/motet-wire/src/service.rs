@@ -229,6 +229,12 @@ pub struct Info {
     pub channels: u8,
     /// Tool outputs.
     pub tools: u8,
+    /// The board the firmware runs on (what a firmware image must name);
+    /// empty on a simulated node.
+    pub board: Kind,
+    /// The fastest step rate a channel reaches, steps/s; 0: no limit (a
+    /// simulated node).
+    pub max_step_hz: u32,
 }
 
 /// Node → host, on the port of the request it answers.
@@ -338,6 +344,8 @@ pub enum ServiceError {
     /// reset, a firmware upload or an address change would lose its
     /// position mid-job. Wait for the job to finish or stop.
     Busy,
+    /// The image names another board than the node's, or (format 1) none.
+    WrongBoard,
 }
 
 impl core::fmt::Display for ServiceError {
@@ -378,6 +386,9 @@ impl core::fmt::Display for ServiceError {
             ServiceError::Busy => f.write_str(
                 "the node is moving (it has committed motion); wait for its job to finish or stop",
             ),
+            ServiceError::WrongBoard => {
+                f.write_str("firmware image built for another board (or naming none)")
+            }
         }
     }
 }
@@ -466,6 +477,8 @@ mod tests {
                 queue_capacity: u16::MAX,
                 channels: 255,
                 tools: 255,
+                board: kind("0123456789abcdef"),
+                max_step_hz: u32::MAX,
             }),
             ServiceReply::Paired {
                 uid: u64::MAX,

@@ -32,6 +32,26 @@ fn documented_sizes() {
             192,
         ),
         (HostMessage::Reset, 1),
+        (
+            HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
+                channel: 0,
+                map: motet_trajectory::JointMap::PolarRadius { x: 0, y: 1 },
+                steps_per_unit: 80.0,
+                pulse_us: 2.0,
+                dir_setup_us: 1.0,
+            }),
+            21,
+        ),
+        (
+            HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
+                channel: 0,
+                map: motet_trajectory::JointMap::Linear { coeffs: [1.0; 6] },
+                steps_per_unit: 80.0,
+                pulse_us: 2.0,
+                dir_setup_us: 1.0,
+            }),
+            67,
+        ),
         (HostMessage::Windowed { run: 0 }, 2),
         (HostMessage::Windowed { run: u32::MAX }, 6),
         (HostMessage::Where, 1),
@@ -200,6 +220,8 @@ mod services {
             queue_capacity: w,
             channels: 255,
             tools: 255,
+            board: kind(k),
+            max_step_hz: if big { u32::MAX } else { 0 },
         }
     }
 
@@ -306,7 +328,7 @@ mod services {
                 2,
             ),
             (P::Status(status(false)), P::Status(status(true)), 7, 18),
-            (P::Info(info(0, false)), P::Info(info(16, true)), 12, 51),
+            (P::Info(info(0, false)), P::Info(info(16, true)), 14, 73),
             (
                 P::Paired { uid: 0, address: 2 },
                 P::Paired {
@@ -365,7 +387,7 @@ mod services {
         }
 
         // ServiceError rows, each at its largest (the error's own bytes).
-        let errors: [(E, usize); 17] = [
+        let errors: [(E, usize); 19] = [
             (E::Malformed, 1),
             (E::WrongPort { port: 255 }, 2),
             (E::BadAddress { address: u16::MAX }, 4),
@@ -401,6 +423,8 @@ mod services {
             (E::NotVerified, 1),
             (E::Storage, 1),
             (E::BadClock, 1),
+            (E::Busy, 1),
+            (E::WrongBoard, 1),
         ];
         for (e, n) in errors {
             assert_eq!(len(&e), n, "{e:?}");

@@ -5,6 +5,7 @@ mod bench;
 mod bench_net;
 mod bench_wire;
 mod dance;
+mod elf;
 mod error_text;
 mod netrun;
 mod node;
@@ -68,8 +69,14 @@ enum NodesCmd {
     Image {
         #[arg(long)]
         kind: String,
+        /// The board the payload is built for (`mps2-an500`, …): a board
+        /// refuses images for another board or for none.
+        #[arg(long)]
+        board: Option<String>,
         #[arg(long)]
         version: String,
+        /// The payload: a flat binary, or the firmware's ELF file (its
+        /// loadable segments are laid out at their load addresses).
         payload: PathBuf,
         #[arg(long, short)]
         out: PathBuf,
@@ -334,10 +341,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             } => nodes::flash(&machine, &node, &image),
             NodesCmd::Image {
                 kind,
+                board,
                 version,
                 payload,
                 out,
-            } => nodes::image(&kind, &version, &payload, &out),
+            } => nodes::image(&kind, board.as_deref(), &version, &payload, &out),
         },
         Cmd::Check {
             machine,

@@ -154,7 +154,7 @@ pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> R
                 format_uid(uid)
             );
         }
-        if let Err(e) = motet_net::registry::check(spec, &info) {
+        if let Err(e) = motet_net::registry::check(&machine, spec, &info) {
             bail!("{}: {e}", spec.name);
         }
         taken.push(address);
@@ -264,8 +264,14 @@ pub fn flash(machine_path: &Path, node: &str, image: &Path) -> Result<()> {
     Ok(())
 }
 
-/// `motet nodes image --kind K --version X.Y.Z PAYLOAD -o OUT`
-pub fn image(kind: &str, version: &str, payload: &Path, out: &Path) -> Result<()> {
+/// `motet nodes image --kind K [--board B] --version X.Y.Z PAYLOAD -o OUT`
+pub fn image(
+    kind: &str,
+    board: Option<&str>,
+    version: &str,
+    payload: &Path,
+    out: &Path,
+) -> Result<()> {
     let mut parts = version.split('.').map(|p| p.parse::<u16>());
     let v = match (parts.next(), parts.next(), parts.next(), parts.next()) {
         (Some(Ok(major)), Some(Ok(minor)), Some(Ok(patch)), None) => Version {
@@ -275,16 +281,24 @@ pub fn image(kind: &str, version: &str, payload: &Path, out: &Path) -> Result<()
         },
         _ => bail!("--version {version:?}: expected MAJOR.MINOR.PATCH"),
     };
-    let data =
+    let file =
         std::fs::read(payload).with_context(|| format!("cannot read {}", payload.display()))?;
-    let mut bytes = vec![0u8; motet_wire::image::IMAGE_HEADER_LEN + data.len()];
-    let n =
-        motet_wire::image::build(kind, v, &data, &mut bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let (data, from) = if file.starts_with(b"\x7fELF") {
+        let (data, start) = crate::elf::flatten(&file)
+            .with_context(|| format!("{}: not a firmware ELF file", payload.display()))?;
+        (data, format!(" from ELF, loaded at {start:#010x}"))
+    } else {
+        (file, String::new())
+    };
+    let mut bytes = vec![0u8; motet_wire::image::MAX_HEADER_LEN + data.len()];
+    let n = motet_wire::image::build(kind, board, v, &data, &mut bytes)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
     bytes.truncate(n);
     std::fs::write(out, bytes).with_context(|| format!("cannot write {}", out.display()))?;
     println!(
-        "wrote {} ({kind} {v}, {} payload bytes)",
+        "wrote {} ({kind}{} {v}, {} payload bytes{from})",
         out.display(),
+        board.map_or(String::new(), |b| format!(" for {b}")),
         data.len()
     );
     Ok(())

@@ -190,6 +190,8 @@ pub fn channel(channel: u8, map: JointMap, steps_per_unit: f64) -> ChannelConfig
         channel,
         map,
         steps_per_unit,
+        pulse_us: motet_wire::message::DEFAULT_PULSE_US,
+        dir_setup_us: motet_wire::message::DEFAULT_DIR_SETUP_US,
     }
 }
 
