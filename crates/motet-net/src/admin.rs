@@ -62,6 +62,20 @@ pub enum AdminError {
     },
     #[error("{link}: firmware read-back differs at byte {offset}")]
     ReadBack { link: String, offset: u32 },
+    #[error("{link}: the image is for board {image}, node {address:#06x} is a {node}: build the firmware for {node}")]
+    WrongBoard {
+        link: String,
+        address: u16,
+        image: String,
+        node: String,
+    },
+    #[error("{link}: node {address:#06x} restarted running firmware {running}, not the {flashed} it was given: its bootloader refused the image (the board's console says why)")]
+    NotInstalled {
+        link: String,
+        address: u16,
+        flashed: Version,
+        running: Version,
+    },
 }
 
 /// A node found by a scan.
@@ -312,6 +326,20 @@ impl Admin {
         let img = image::parse(image_bytes).map_err(|e| AdminError::Image(e.to_string()))?;
         let header = img.header.clone();
         self.at_rest(address, "a firmware upload")?;
+        // A board names itself; an image for another (or for none) would
+        // be refused after the whole upload.
+        let info = self.info(address)?;
+        if !info.board.is_empty() && header.board.as_ref() != Some(&info.board) {
+            return Err(AdminError::WrongBoard {
+                link: self.link.clone(),
+                address,
+                image: header
+                    .board
+                    .as_ref()
+                    .map_or("(none: a format 1 image)".to_string(), |b| b.to_string()),
+                node: info.board.to_string(),
+            });
+        }
         let begin = ServiceRequest::FirmwareBegin {
             size: image_bytes.len() as u32,
             crc32c: frame::crc32c(image_bytes),
@@ -361,7 +389,29 @@ impl Admin {
             other => return Err(self.unexpected(address, &req, &other)),
         };
         self.expect_ack(address, &ServiceRequest::FirmwareStart)?;
+        self.running(address, version)?;
         Ok(version)
+    }
+
+    /// Waits for the node at `address` to answer after a firmware start (a
+    /// board restarts through its bootloader) and checks it runs `version`.
+    fn running(&mut self, address: u16, version: Version) -> Result<(), AdminError> {
+        let until = Instant::now() + Duration::from_secs(15);
+        loop {
+            match self.info(address) {
+                Ok(i) if i.firmware == version => return Ok(()),
+                Ok(i) => {
+                    return Err(AdminError::NotInstalled {
+                        link: self.link.clone(),
+                        address,
+                        flashed: version,
+                        running: i.firmware,
+                    })
+                }
+                Err(AdminError::NoAnswer { .. }) if Instant::now() < until => {}
+                Err(e) => return Err(e),
+            }
+        }
     }
 
     fn expect_ack(&mut self, address: u16, req: &ServiceRequest) -> Result<(), AdminError> {

@@ -30,8 +30,13 @@ pub fn scan(links: &[String], wait: f64) -> Result<()> {
             let i = &f.info;
             let driver = motet_net::registry::driver(i.kind.as_str())
                 .map_or("no driver on this host", |d| d.description);
+            let board = if i.board.is_empty() {
+                String::new()
+            } else {
+                format!(" on {}", i.board)
+            };
             println!(
-                "{link}: {} uid {} firmware {} {} — {} channels, {} tools, queue {} ({driver})",
+                "{link}: {}{board} uid {} firmware {} {} — {} channels, {} tools, queue {} ({driver})",
                 i.kind,
                 format_uid(i.uid),
                 i.firmware,
@@ -210,8 +215,13 @@ pub fn status(machine_path: &Path) -> Result<()> {
         });
         match answer {
             Ok((i, s)) => println!(
-                "{name}: {} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}, up {:.1} s",
+                "{name}: {}{} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}, up {:.1} s",
                 i.kind,
+                if i.board.is_empty() {
+                    String::new()
+                } else {
+                    format!(" on {}", i.board)
+                },
                 format_uid(i.uid),
                 i.firmware,
                 p.address,

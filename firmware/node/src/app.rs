@@ -14,11 +14,10 @@ use crate::boot;
 use crate::clock::{Clock, HostToTicks};
 use crate::frames::FrameReader;
 use crate::interrupt::Counters;
-use crate::op::Op;
+use crate::ring::Producer;
 use crate::schedule::{Scheduler, Timing};
 use crate::staging::Staging;
 use crate::store::FlashStore;
-use heapless::spsc::Producer;
 use motet_node::endpoint::Endpoint;
 use motet_node::service::NodeConfig;
 use motet_node::DEFAULT_QUEUE;
@@ -65,7 +64,7 @@ const IDLE_US: u64 = 50_000;
 /// what that interrupt counts.
 pub fn run<B: Board>(
     mut board: B,
-    queue: Producer<'static, Op>,
+    queue: Producer<'static>,
     counters: &'static Counters,
     cfg: AppConfig,
 ) -> ! {
@@ -110,8 +109,13 @@ pub fn run<B: Board>(
     let mut next_report = now + cfg.report_us as u64;
     let mut rx = [0u8; 64];
     let mut tx = [0u8; MAX_FRAME];
+    let mut loop_stats = LoopStats::default();
+    let mut last_round = now;
     loop {
         let now = clock.us(board.ticks());
+        loop_stats.rounds += 1;
+        loop_stats.max_gap_us = loop_stats.max_gap_us.max(now - last_round);
+        last_round = now;
         loop {
             let n = board.link_read(&mut rx);
             if n == 0 {
@@ -199,8 +203,11 @@ pub fn run<B: Board>(
 
         if cfg.report_us > 0 && now >= next_report {
             next_report = now + cfg.report_us as u64;
-            report(&mut board, &ep, &sched, counters);
+            report(&mut board, &ep, &sched, counters, &loop_stats);
+            loop_stats = LoopStats::default();
         }
+        let spent = clock.us(board.ticks()) - now;
+        loop_stats.max_round_us = loop_stats.max_round_us.max(spent);
 
         let busy = ep.node().queued() > 0
             || ep.node().graph().is_some()
@@ -219,6 +226,16 @@ pub fn run<B: Board>(
             board.sleep_until(clock.tick_at(wake));
         }
     }
+}
+
+/// How the loop keeps up, between two reports.
+#[derive(Clone, Copy, Debug, Default)]
+struct LoopStats {
+    rounds: u32,
+    /// Longest round's work, µs.
+    max_round_us: u64,
+    /// Longest time between two rounds' starts, µs.
+    max_gap_us: u64,
 }
 
 /// Gives the node's graph the inputs that changed.
@@ -245,6 +262,7 @@ fn report<B: Board, S, F, const Q: usize>(
     ep: &Endpoint<S, F, Q>,
     sched: &Scheduler<'_>,
     counters: &Counters,
+    rounds: &LoopStats,
 ) where
     S: motet_node::Store,
     F: motet_node::Flash,
@@ -254,7 +272,7 @@ fn report<B: Board, S, F, const Q: usize>(
     let t = ep.node().tally().map(|t| t.steps).unwrap_or_default();
     let st = sched.stats();
     board.console(format_args!(
-        "motet: pulses {:?} tally {:?} tools {} late {} (max {} ticks) delayed {} (max {} ticks) lost {} queued {} state {:?}",
+        "motet: pulses {:?} tally {:?} tools {} late {} (max {} ticks) delayed {} (max {} ticks) lost {} queued {} state {:?} rounds {} (longest {} us, gap {} us)",
         p,
         t,
         counters.tool_changes.load(Relaxed),
@@ -265,5 +283,8 @@ fn report<B: Board, S, F, const Q: usize>(
         st.lost,
         sched.queued(),
         ep.services().state(),
+        rounds.rounds,
+        rounds.max_round_us,
+        rounds.max_gap_us,
     ));
 }

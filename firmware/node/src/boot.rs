@@ -162,6 +162,12 @@ pub fn check_installed<F: FlashPages>(
     )
 }
 
+/// The installed image's header, unchecked (the bootloader checked it
+/// before starting the application): the application reports its version.
+pub fn installed_header<F: FlashPages>(flash: &F, layout: &Layout) -> Option<ImageHeader> {
+    read_header(flash, layout.app.start).ok()
+}
+
 /// Installs the image staged at `at` in `src` (the staging area, or where
 /// a programmer left a factory image) into the application slot of `dst`,
 /// once it passes the checks; then checks the copy.

@@ -9,9 +9,9 @@
 //! the edges by the channel's pulse width and direction set-up time.
 
 use crate::board::{Pins, Ticks};
-use crate::op::{Op, OpKind};
+use crate::op::OpKind;
+use crate::ring::Consumer;
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
-use heapless::spsc::Consumer;
 use motet_node::MAX_CHANNELS;
 
 /// What the interrupt did, for the background and for diagnostics. Only
@@ -48,11 +48,21 @@ impl Counters {
     fn bump(c: &AtomicU32) {
         c.store(c.load(Relaxed).wrapping_add(1), Relaxed);
     }
+
+    /// Off the common path: an operation `by` ticks late.
+    #[inline(never)]
+    #[cold]
+    fn note_late(&self, by: u32) {
+        Self::bump(&self.late);
+        if by > self.max_late.load(Relaxed) {
+            self.max_late.store(by, Relaxed);
+        }
+    }
 }
 
 /// The interrupt's state: the queue's consumer half and its counters.
 pub struct StepInterrupt<'q> {
-    queue: Consumer<'q, Op>,
+    queue: Consumer<'q>,
     counters: &'q Counters,
     /// An operation due within this many ticks is waited for here rather
     /// than through another interrupt (entry and exit cost more).
@@ -62,7 +72,7 @@ pub struct StepInterrupt<'q> {
 }
 
 impl<'q> StepInterrupt<'q> {
-    pub fn new(queue: Consumer<'q, Op>, counters: &'q Counters, spin: Ticks, late: Ticks) -> Self {
+    pub fn new(queue: Consumer<'q>, counters: &'q Counters, spin: Ticks, late: Ticks) -> Self {
         StepInterrupt {
             queue,
             counters,
@@ -75,35 +85,38 @@ impl<'q> StepInterrupt<'q> {
     /// and arms the timer for the next.
     #[inline]
     pub fn run<P: Pins>(&mut self, pins: &mut P) {
-        loop {
-            let Some(&op) = self.queue.peek() else {
-                pins.disarm();
-                return;
-            };
+        let (spin, late, counters) = (self.spin, self.late, self.counters);
+        let mut next = 0;
+        let dry = self.queue.take_while(|op| {
             let wait = op.at.wrapping_sub(pins.now()) as i32;
             if wait > 0 {
-                if wait as u32 > self.spin {
-                    pins.arm(op.at);
-                    return;
+                if wait as u32 > spin {
+                    next = op.at;
+                    return false;
                 }
                 while (op.at.wrapping_sub(pins.now()) as i32) > 0 {}
-            } else if (-wait) as u32 > self.late {
-                Counters::bump(&self.counters.late);
-                if (-wait) as u32 > self.counters.max_late.load(Relaxed) {
-                    self.counters.max_late.store((-wait) as u32, Relaxed);
-                }
+            } else if (wait.unsigned_abs()) > late {
+                counters.note_late(wait.unsigned_abs());
             }
-            op.apply(pins);
             match op.kind {
                 OpKind::StepHigh => {
-                    if let Some(c) = self.counters.pulses.get(op.index as usize) {
-                        Counters::bump(c);
-                    }
+                    pins.step_high(op.index);
+                    Counters::bump(&counters.pulses[(op.index & 7) as usize]);
                 }
-                OpKind::Tool => Counters::bump(&self.counters.tool_changes),
-                _ => {}
+                OpKind::StepLow => pins.step_low(op.index),
+                OpKind::DirForward => pins.set_dir(op.index, true),
+                OpKind::DirBackward => pins.set_dir(op.index, false),
+                OpKind::Tool => {
+                    pins.set_tool(op.index, op.arg);
+                    Counters::bump(&counters.tool_changes);
+                }
             }
-            self.queue.dequeue();
+            true
+        });
+        if dry {
+            pins.disarm();
+        } else {
+            pins.arm(next);
         }
     }
 }

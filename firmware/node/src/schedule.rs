@@ -14,7 +14,7 @@
 use crate::board::Ticks;
 use crate::clock::HostToTicks;
 use crate::op::{before, later, Op, OpKind};
-use heapless::spsc::Producer;
+use crate::ring::Producer;
 use heapless::Vec;
 use motet_node::MAX_CHANNELS;
 
@@ -78,7 +78,7 @@ pub struct ScheduleStats {
 
 /// The producer half of the step engine.
 pub struct Scheduler<'q> {
-    queue: Producer<'q, Op>,
+    queue: Producer<'q>,
     chans: [Chan; MAX_CHANNELS],
     held: Vec<Op, HELD>,
     /// The longest set-up time of any channel: how far back an operation
@@ -89,7 +89,7 @@ pub struct Scheduler<'q> {
 }
 
 impl<'q> Scheduler<'q> {
-    pub fn new(queue: Producer<'q, Op>, ticks_per_us: u32) -> Self {
+    pub fn new(queue: Producer<'q>, ticks_per_us: u32) -> Self {
         let t = Timing::from_us(DEFAULT_PULSE_US, DEFAULT_DIR_SETUP_US, ticks_per_us);
         Scheduler {
             queue,
@@ -158,7 +158,7 @@ impl<'q> Scheduler<'q> {
     fn release_before(&mut self, horizon: Ticks) {
         let mut n = 0;
         for op in self.held.iter() {
-            if !before(op.at, horizon) || self.queue.enqueue(*op).is_err() {
+            if !before(op.at, horizon) || self.queue.push(*op).is_err() {
                 break;
             }
             n += 1;
@@ -176,7 +176,7 @@ impl<'q> Scheduler<'q> {
         if self.held.is_full() {
             // Out of room: the earliest goes to the queue now.
             let first = self.held[0];
-            if self.queue.enqueue(first).is_err() {
+            if self.queue.push(first).is_err() {
                 self.stats.lost += 1;
             }
             self.held.remove(0);
@@ -266,12 +266,13 @@ impl motet_node::Board for Outputs<'_, '_> {
 mod tests {
     extern crate std;
     use super::*;
-    use heapless::spsc::Queue;
+    use crate::ring::{Consumer, Ring};
     use std::vec::Vec as StdVec;
 
-    fn drain(q: &mut heapless::spsc::Consumer<'_, Op>) -> StdVec<Op> {
+    fn drain(q: &mut Consumer<'_>) -> StdVec<Op> {
         let mut v = StdVec::new();
-        while let Some(op) = q.dequeue() {
+        while let Some(op) = q.front() {
+            q.pop();
             v.push(op);
         }
         v
@@ -279,8 +280,8 @@ mod tests {
 
     #[test]
     fn edges_are_spaced_by_pulse_and_setup() {
-        let mut q: Queue<Op, 256> = Queue::new();
-        let (p, mut c) = q.split();
+        let q: Ring<256> = Ring::new();
+        let (p, mut c) = q.split().unwrap();
         // 10 ticks per µs: 2 µs pulse = 20 ticks, 1 µs set-up = 10.
         let mut s = Scheduler::new(p, 10);
         s.set_timing(0, 2.0, 1.0);
@@ -321,8 +322,8 @@ mod tests {
 
     #[test]
     fn nothing_is_released_that_a_later_output_could_precede() {
-        let mut q: Queue<Op, 64> = Queue::new();
-        let (p, mut c) = q.split();
+        let q: Ring<64> = Ring::new();
+        let (p, mut c) = q.split().unwrap();
         let mut s = Scheduler::new(p, 10);
         s.set_timing(0, 2.0, 1.0);
         s.step(0, true, 100);
@@ -338,8 +339,8 @@ mod tests {
 
     #[test]
     fn ticks_wrap() {
-        let mut q: Queue<Op, 64> = Queue::new();
-        let (p, mut c) = q.split();
+        let q: Ring<64> = Ring::new();
+        let (p, mut c) = q.split().unwrap();
         let mut s = Scheduler::new(p, 10);
         s.set_timing(0, 2.0, 1.0);
         let t = u32::MAX - 5;

@@ -161,7 +161,7 @@ pub(crate) mod tests {
         fn erase(&mut self, at: u32) -> Result<(), StorageError> {
             let mut b = self.bytes.borrow_mut();
             let at = at as usize;
-            if at % 256 != 0 || at + 256 > b.len() {
+            if at & 255 != 0 || at + 256 > b.len() {
                 return Err(StorageError::OutOfRange);
             }
             b[at..at + 256].fill(0xFF);
