@@ -88,12 +88,13 @@ pub fn run<B: Board>(
     let staging = Staging::new(board.flash(), layout.staging);
     let mut ep: Endpoint<_, _, DEFAULT_QUEUE> = Endpoint::new(node_cfg, store, staging, now);
     board.console(format_args!(
-        "motet: {} node on {}, firmware {}, uid {:016x}, address {}",
+        "motet: {} node on {}, firmware {}, uid {:016x}, address {} (endpoint {} bytes)",
         cfg.kind,
         B::NAME,
         cfg.version,
         ep.services().uid(),
-        ep.services().address()
+        ep.services().address(),
+        core::mem::size_of_val(&ep),
     ));
     let mut sched = Scheduler::new(queue, tpu);
     // What one slice can queue at the board's top rate: three operations a

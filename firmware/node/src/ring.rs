@@ -42,7 +42,8 @@ impl<const N: usize> Ring<N> {
         #[allow(clippy::let_unit_value)]
         let _ = Self::CHECK;
         Ring {
-            slots: [const { UnsafeCell::new(Op::new(0, crate::op::OpKind::StepLow, 0)) }; N],
+            // All zero bytes: a ring in a static lands in .bss, not in the image.
+            slots: [const { UnsafeCell::new(Op::new(0, crate::op::OpKind::StepHigh, 0)) }; N],
             head: AtomicU32::new(0),
             tail: AtomicU32::new(0),
             split: AtomicBool::new(false),

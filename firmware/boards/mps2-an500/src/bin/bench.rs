@@ -76,17 +76,6 @@ static __INTERRUPTS: [Vector; irq::LINES] = {
     v
 };
 
-/// Instructions the two timer reads around a measured section cost.
-fn overhead() -> u64 {
-    let mut best = u64::MAX;
-    for _ in 0..50 {
-        let a = timer::now();
-        let b = timer::now();
-        best = best.min(b.wrapping_sub(a) as u64 * INSTRUCTIONS_PER_TICK);
-    }
-    best
-}
-
 fn send<const Q: usize>(node: &mut Node<Q>, m: &HostMessage) {
     let mut buf = [0u8; 256];
     let Ok(bytes) = encode(m, &mut buf) else {
@@ -102,7 +91,6 @@ fn send<const Q: usize>(node: &mut Node<Q>, m: &HostMessage) {
 fn main() -> ! {
     timer::init();
     Uart::UART1.init(false);
-    let ovh = overhead();
     let Some((mut p, c)) = RING.split() else {
         exit()
     };
@@ -133,7 +121,7 @@ fn main() -> ! {
     let (ticks, calls) = unsafe { (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS)) };
     let per_irq = ticks * INSTRUCTIONS_PER_TICK / calls;
     line(format_args!(
-        "bench: step interrupt, one operation each: {per_irq} instructions per interrupt ({calls} interrupts; the timer reads around it: {ovh})"
+        "bench: step interrupt, one operation each: {per_irq} instructions per interrupt ({calls} interrupts)"
     ));
 
     // 2. Operations due at once, taken in one interrupt.
