@@ -141,7 +141,15 @@
 //! (rotation), cutter and length compensation (G40…G49), path modes (G61,
 //! G64), M6 tool change, M48…M53 overrides, M60, parameters and expressions
 //! (`#1`, `[...]`, `O` words), block delete `/`, U V W axes. Travel limits are
-//! not checked here (the planner does that).
+//! not checked here (`motet_host::check_job` does that).
+//!
+//! # Ranges
+//!
+//! Numbers are checked against `motet_planner::ranges` at their word: dwells
+//! (`G4 S` 0 to 86,400 s, `G4 P` in ms), feeds (F as mm/s from 0.001 to
+//! 100,000; in G93 0.001 to 1e7 per minute), coordinates, offsets and arc
+//! words (±1e6 mm, ±1e9 mm on an axis without travel), temperatures (−273.15
+//! to 2,000 °C). Power and fan `S` are clamped.
 
 mod arc;
 mod lex;

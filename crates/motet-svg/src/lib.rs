@@ -73,7 +73,13 @@
 //!
 //! usvg computes in `f32`: coordinates carry a relative error of about
 //! 1e-7 (0.1 µm at 1 m), exact for values representable in `f32` when no
-//! scaling is involved.
+//! scaling is involved. Coordinates within a few `f32` roundings of the
+//! page's edges are put on the edges, so strokes along the page border stay
+//! on a travel that starts where the page does.
+//!
+//! Documents nesting elements deeper than `motet_planner::ranges::SVG_DEPTH`
+//! (256 levels) are refused at the first element too deep, by a linear scan
+//! before anything parses them.
 
 use std::collections::HashMap;
 
