@@ -356,10 +356,7 @@ fn checked<'a>(line: &'a str, chain: &mut u32) -> Result<&'a str, String> {
     let Some((text, crc)) = line.rsplit_once(" *") else {
         return Err("record without a checksum (` *` and 8 hex digits)".into());
     };
-    let want = u32::from_str_radix(crc, 16)
-        .ok()
-        .filter(|_| crc.len() == 8)
-        .ok_or_else(|| format!("checksum `{crc}` is not 8 hex digits"))?;
+    let want = hex32(crc).ok_or_else(|| format!("checksum `{crc}` is not 8 hex digits"))?;
     let got = record_checksum(*chain, text);
     if got != want {
         return Err(format!(
@@ -386,7 +383,7 @@ fn parse_header<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Journal
             .ok_or_else(|| format!("`{w}` where the header has `{key}=`"))
     };
     let run = field("run")?;
-    let run = u32::from_str_radix(run, 16).map_err(|_| format!("run `{run}` is not hex"))?;
+    let run = hex32(run).ok_or_else(|| format!("run `{run}` is not 8 hex digits"))?;
     let machine = field("machine")?.parse::<Digest>()?;
     let job = field("job")?.parse::<Digest>()?;
     let t0 = finite(field("t0")?)?;
@@ -499,17 +496,30 @@ fn parse_lost(w: Option<&str>) -> Result<Vec<usize>, String> {
     }
 }
 
-fn num<T: std::str::FromStr>(w: Option<&str>, what: &str) -> Result<T, String> {
+// Every field must be written as the writer writes it (lowercase hex,
+// integers without signs or leading zeros, floats in their shortest
+// round-trip form): a record that reads the same but is written otherwise
+// was not written by motet.
+
+/// 8 lowercase hex digits.
+fn hex32(w: &str) -> Option<u32> {
+    let v = u32::from_str_radix(w, 16).ok()?;
+    (format!("{v:08x}") == w).then_some(v)
+}
+
+fn num<T: std::str::FromStr + std::fmt::Display>(w: Option<&str>, what: &str) -> Result<T, String> {
     let w = w.ok_or_else(|| format!("missing {what}"))?;
-    w.parse()
-        .map_err(|_| format!("{what} `{w}` is not a number"))
+    w.parse::<T>()
+        .ok()
+        .filter(|v| v.to_string() == w)
+        .ok_or_else(|| format!("{what} `{w}` is not a number as motet writes it"))
 }
 
 fn finite(w: &str) -> Result<f64, String> {
     w.parse::<f64>()
         .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("`{w}` is not a finite number"))
+        .filter(|v| v.is_finite() && format!("{v:?}") == w)
+        .ok_or_else(|| format!("`{w}` is not a finite number as motet writes it"))
 }
 
 fn point<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Point, String> {
@@ -673,21 +683,48 @@ mod tests {
                 "j:3: checksum",
             ),
             (unsigned(2, "seg 1 3 0 1"), "j:3: record without a checksum"),
+            // Read the same, written otherwise: not motet's.
+            (
+                unsigned(2, &{
+                    let (t, c) = lines[2].rsplit_once(" *").unwrap();
+                    format!("{t} *{}", c.to_uppercase())
+                }),
+                "j:3: checksum",
+            ),
+            (
+                with(2, &lines[2].replacen(" 1000.0 ", " 1e3 ", 1)),
+                "`1e3` is not a finite number as motet writes it",
+            ),
+            (
+                with(2, &lines[2].replacen("seg 1 ", "seg 01 ", 1)),
+                "segment index `01`",
+            ),
             (
                 with(0, &sign("motet-journal 1 run=1")),
                 "j:1: journal format 1",
             ),
             (with(0, &sign("hello")), "j:1: not a motet journal"),
             (
-                with(2, &sign("seg 7 3 0 1 0 0 0 0 0 0 | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign("seg 7 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
                 "j:3: segment 7 where segment 1 was due",
             ),
             (
-                with(2, &sign("seg 1 3 2000 1000 0 0 0 0 0 0 | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign(
+                        "seg 1 3 2000.0 1000.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0",
+                    ),
+                ),
                 "ends (1000 µs) before it starts",
             ),
             (
-                with(2, &sign("seg 1 3 0 1 0 0 0 0 0 NaN | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign("seg 1 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 NaN | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
                 "`NaN` is not a finite",
             ),
             (

@@ -584,6 +584,20 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         None
     }
 
+    /// When motion resumes if the machine stands still at host time `t`
+    /// (inside a dwell, or before the next committed segment starts).
+    fn still_until(&self, t: f64) -> Option<f64> {
+        for s in self.segments.iter().take(self.committed_len()) {
+            if t < s.t0 {
+                return Some(s.t0);
+            }
+            if t < s.t1() {
+                return (s.profile.length() <= 0.0).then(|| s.t1());
+            }
+        }
+        None
+    }
+
     fn set_position(&mut self, p: &Point) -> Result<(), Refusal> {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(Refusal::Malformed);
@@ -903,9 +917,16 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             if let Some((i, u)) = refresh {
                 if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
                     let speed = self.speed_at(u);
+                    let still = self.still_until(u);
                     let tool = &mut self.tools[i];
                     if let Some(v) = tool.refresh(u, speed) {
                         board.set_tool(tool.output(), v, u);
+                    }
+                    // Standing still (a dwell, a wait for the next segment),
+                    // the speed stays 0 and so does the output: no refresh
+                    // until motion resumes, however long the dwell.
+                    if let Some(t) = still {
+                        tool.defer(t);
                     }
                     continue;
                 }

@@ -78,6 +78,13 @@ impl ToolOutput {
         }
     }
 
+    /// Nothing moves before `t`: the next refresh need not come earlier.
+    pub fn defer(&mut self, t: f64) {
+        if self.next_update.is_finite() && t > self.next_update {
+            self.next_update = t;
+        }
+    }
+
     /// New motion arrived: a speed-following output that went idle resumes at `t`.
     pub fn wake(&mut self, t: f64) {
         if self.feed > 0.0 && !self.next_update.is_finite() {
