@@ -243,6 +243,15 @@ enum Cmd {
 }
 
 fn main() -> std::process::ExitCode {
+    // Output piped into a program that stops reading (`motet … | head`)
+    // ends motet quietly, as it ends any command-line tool, instead of a
+    // panic in the middle of a print.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default before any
+    // thread starts; nothing else handles SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     match dispatch(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
