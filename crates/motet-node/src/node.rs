@@ -857,7 +857,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // Stream inputs carry one frame's signals.
         self.inputs.streams = [graph::wire::Signals::NONE; MAX_HW];
         h.frames += 1;
-        h.next = Some(t + period);
+        // Where a period no longer changes an `f64` (a nonsensical clock
+        // model), the graph stops rather than run the same frame for good.
+        h.next = Some(if t + period > t {
+            t + period
+        } else {
+            f64::INFINITY
+        });
     }
 
     fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {
