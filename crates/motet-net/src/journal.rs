@@ -136,56 +136,26 @@ impl JournalWriter {
     }
 
     pub fn header(&mut self, h: &JournalHeader) -> Result<(), JournalError> {
-        self.record(&format!(
-            "motet-journal {JOURNAL_FORMAT} run={:08x} machine={} job={} t0={:?} min_move_s={:?} start={}",
-            h.run,
-            h.machine,
-            h.job,
-            h.t0,
-            h.min_move_s,
-            fmt_point(&h.start)
-        ))?;
+        self.record(&header_text(h))?;
         self.sync()
     }
 
     pub fn segment(&mut self, s: &JournalSegment) -> Result<(), JournalError> {
-        self.record(&format!(
-            "seg {} {} {:?} {:?} {} | {}",
-            s.index,
-            s.command,
-            s.t0,
-            s.t1,
-            fmt_point(&s.start),
-            fmt_point(&s.end)
-        ))
+        self.record(&segment_text(s))
     }
 
     pub fn seal(&mut self, s: JournalSeal) -> Result<(), JournalError> {
-        self.record(&format!("seal {} {} {} {}", s.end, s.tail, s.done, s.time))?;
+        self.record(&seal_text("seal", &s))?;
         self.sync()
     }
 
     pub fn stop(&mut self, s: &JournalStop) -> Result<(), JournalError> {
-        let lost = if s.lost.is_empty() {
-            "-".to_string()
-        } else {
-            s.lost
-                .iter()
-                .map(|k| k.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        let q = s.seal;
-        self.record(&format!(
-            "stop {} {} {} {} {lost}",
-            q.end, q.tail, q.done, q.time
-        ))?;
+        self.record(&stop_text(s))?;
         self.sync()
     }
 
     fn record(&mut self, text: &str) -> Result<(), JournalError> {
-        self.chain = record_checksum(self.chain, text);
-        let line = format!("{text} *{:08x}\n", self.chain);
+        let line = signed(&mut self.chain, text);
         self.out
             .write_all(line.as_bytes())
             .map_err(|source| JournalError::Io {
@@ -203,6 +173,54 @@ impl JournalWriter {
                 source,
             })
     }
+}
+
+fn header_text(h: &JournalHeader) -> String {
+    format!(
+        "motet-journal {JOURNAL_FORMAT} run={:08x} machine={} job={} t0={:?} min_move_s={:?} start={}",
+        h.run,
+        h.machine,
+        h.job,
+        h.t0,
+        h.min_move_s,
+        fmt_point(&h.start)
+    )
+}
+
+fn segment_text(s: &JournalSegment) -> String {
+    format!(
+        "seg {} {} {:?} {:?} {} | {}",
+        s.index,
+        s.command,
+        s.t0,
+        s.t1,
+        fmt_point(&s.start),
+        fmt_point(&s.end)
+    )
+}
+
+fn seal_text(kind: &str, s: &JournalSeal) -> String {
+    format!("{kind} {} {} {} {}", s.end, s.tail, s.done, s.time)
+}
+
+fn stop_text(s: &JournalStop) -> String {
+    let lost = if s.lost.is_empty() {
+        "-".to_string()
+    } else {
+        s.lost
+            .iter()
+            .map(|k| k.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    format!("{} {lost}", seal_text("stop", &s.seal))
+}
+
+/// The record's line (newline included), its checksum chained after `chain`
+/// (then moved on to it).
+fn signed(chain: &mut u32, text: &str) -> String {
+    *chain = record_checksum(*chain, text);
+    format!("{text} *{:08x}\n", *chain)
 }
 
 /// A journal read back and checked: every record's checksum, segment indices
@@ -319,6 +337,33 @@ impl Journal {
             }
         }
         Ok(j)
+    }
+
+    /// The journal as the writer writes it. Seals and the segments they
+    /// commit interleave by segment index, as they were written.
+    pub fn to_text(&self) -> String {
+        let mut chain = 0;
+        let mut out = String::new();
+        let Some(h) = &self.header else {
+            return out;
+        };
+        out += &signed(&mut chain, &header_text(h));
+        let mut next = 0usize;
+        for seal in &self.seals {
+            while next < seal.end as usize {
+                out += &signed(&mut chain, &segment_text(&self.segments[next]));
+                next += 1;
+            }
+            out += &signed(&mut chain, &seal_text("seal", seal));
+        }
+        while next < self.segments.len() {
+            out += &signed(&mut chain, &segment_text(&self.segments[next]));
+            next += 1;
+        }
+        if let Some(stop) = &self.stop {
+            out += &signed(&mut chain, &stop_text(stop));
+        }
+        out
     }
 
     /// The segment with index `i`.

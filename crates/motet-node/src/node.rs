@@ -9,7 +9,7 @@ use crate::graph::{
 use crate::tally::{StepTally, Tallying};
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
-use motet_trajectory::{Contingency, JointMap, Point, Profile, Segment, MAX_AXES};
+use motet_trajectory::{Contingency, JointMap, JointPath, Point, Profile, Segment, MAX_AXES};
 use motet_wire::message::{GraphInputKind, GraphMode};
 use motet_wire::stream::{BatchReader, StreamState};
 use motet_wire::{
@@ -51,6 +51,11 @@ pub const MAX_CHANNELS: usize = 8;
 pub const MAX_TOOLS: usize = 4;
 /// Largest |steps per unit| a channel accepts.
 pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
+/// Fastest a channel may step along a segment on average, steps per second.
+/// A node spends work on every step, so a segment asking for more (a huge
+/// distance in no time) would keep `poll` busy for good: refused instead.
+/// Far beyond any drive (and 100 units/s at [`MAX_STEPS_PER_UNIT`]).
+pub const MAX_STEP_RATE: f64 = 1e8;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Event {
@@ -651,6 +656,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             end,
             profile: Profile::from_params(p),
         };
+        if !self.steppable(&seg) {
+            return Err(Refusal::Malformed);
+        }
         // Checked above: the queue has room.
         let _ = self.segments.push_back(seg);
         self.tail = end;
@@ -698,6 +706,21 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             if !segment_is_finite(&m) {
                 return Err(Refusal::Malformed);
             }
+            // Axes a batch does not carry keep the node's tail throughout.
+            let (mut start, mut end) = (self.tail, self.tail);
+            for span in &m.axes {
+                start[span.axis as usize] = span.from;
+                end[span.axis as usize] = span.to;
+            }
+            let seg = Segment {
+                t0: m.t0,
+                start,
+                end,
+                profile: Profile::from_params(&m.profile),
+            };
+            if !self.steppable(&seg) {
+                return Err(Refusal::Malformed);
+            }
             n += 1;
         }
         if n == 0 {
@@ -713,6 +736,30 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         self.stream_state = state;
         Ok(())
+    }
+
+    /// Whether every channel can follow `seg` within [`MAX_STEP_RATE`] on
+    /// average over the segment. (The peak may be higher for a moment: a
+    /// polar angle turns through up to half a turn as a line passes its
+    /// centre, a bounded number of steps however fast.)
+    fn steppable(&self, seg: &Segment) -> bool {
+        let p = &seg.profile;
+        let length = p.length();
+        if length <= 0.0 {
+            return true;
+        }
+        let seconds = p.duration();
+        self.channels.iter().all(|ch| {
+            let c = ch.config();
+            let mut travel = JointPath::new(&c.map, seg, 0.0).max_rate(0.0, length) * length;
+            if let JointMap::PolarAngle { .. } = c.map {
+                // A straight line subtends less than half a turn.
+                travel = travel.min(180.0);
+            }
+            let steps = travel * c.steps_per_unit.abs();
+            // NaN is refused too; a segment that moves no joint always passes.
+            steps == 0.0 || steps <= MAX_STEP_RATE * seconds
+        })
     }
 
     pub fn status(&self) -> NodeStatus {
@@ -890,7 +937,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // Stream inputs carry one frame's signals.
         self.inputs.streams = [graph::wire::Signals::NONE; MAX_HW];
         h.frames += 1;
-        h.next = Some(t + period);
+        // Where a period no longer changes an `f64` (a nonsensical clock
+        // model), the graph stops rather than run the same frame for good.
+        h.next = Some(if t + period > t {
+            t + period
+        } else {
+            f64::INFINITY
+        });
     }
 
     fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {

@@ -94,6 +94,7 @@ use motet_planner::MoveKind;
 use usvg::roxmltree;
 use usvg::tiny_skia_path::PathSegment;
 
+mod arcs;
 mod depth;
 mod hatch;
 mod order;
@@ -283,6 +284,7 @@ pub fn parse_with_info(
 
     let usvg_opt = usvg_options();
     let (annotated, mut index, layers) = annotate(&doc);
+    arcs::check(&index)?;
     let tagged = match &annotated {
         Some(text) => usvg::Tree::from_str(text, &usvg_opt).ok(),
         None => None,
