@@ -129,7 +129,10 @@ fn journals() {
     let cmds = job.commands[..40].to_vec();
     let dir = std::env::temp_dir().join(format!("motet-seeds-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp folder");
-    for (name, kill_at) in [("run.journal", None), ("stopped.journal", Some(4_500_000u64))] {
+    for (name, kill_at) in [
+        ("run.journal", None),
+        ("stopped.journal", Some(4_500_000u64)),
+    ] {
         let jpath = dir.join(name);
         let (a, b) = motet_link::pair("host", "node");
         let mut lb = Loopback::with_journal(

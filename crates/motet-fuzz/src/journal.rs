@@ -16,7 +16,11 @@ pub fn journal(data: &[u8]) {
             } else {
                 text
             };
-            assert_eq!(j.to_text(), whole, "a journal that reads is not what motet writes");
+            assert_eq!(
+                j.to_text(),
+                whole,
+                "a journal that reads is not what motet writes"
+            );
             for (i, s) in j.segments.iter().enumerate() {
                 assert_eq!(s.index as usize, i, "segment indices not consecutive");
             }

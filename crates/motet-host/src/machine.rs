@@ -178,11 +178,29 @@ impl Machine {
             joints: self
                 .joints
                 .iter()
-                .filter(|j| j.max_velocity.is_some() || j.max_acceleration.is_some())
-                .map(|j| JointLimits {
-                    map: j.map,
-                    max_velocity: j.max_velocity.unwrap_or(f64::INFINITY),
-                    max_acceleration: j.max_acceleration.unwrap_or(f64::INFINITY),
+                .enumerate()
+                .filter_map(|(k, j)| {
+                    // No joint outruns its motors' step rate: a node refuses
+                    // a segment that asks more.
+                    let spu = self
+                        .actuators
+                        .iter()
+                        .filter(|a| a.joint == k)
+                        .map(|a| a.steps_per_unit.abs())
+                        .fold(0.0, f64::max);
+                    let step_cap = if spu > 0.0 {
+                        motet_wire::MAX_STEP_RATE / spu
+                    } else {
+                        f64::INFINITY
+                    };
+                    let max_velocity = j.max_velocity.unwrap_or(f64::INFINITY).min(step_cap);
+                    (max_velocity.is_finite() || j.max_acceleration.is_some()).then(|| {
+                        JointLimits {
+                            map: j.map,
+                            max_velocity,
+                            max_acceleration: j.max_acceleration.unwrap_or(f64::INFINITY),
+                        }
+                    })
                 })
                 .collect(),
             junction_deviation: self.junction_deviation,

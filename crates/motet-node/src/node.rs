@@ -52,10 +52,17 @@ pub const MAX_TOOLS: usize = 4;
 /// Largest |steps per unit| a channel accepts.
 pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
 /// Fastest a channel may step along a segment on average, steps per second.
-/// A node spends work on every step, so a segment asking for more (a huge
-/// distance in no time) would keep `poll` busy for good: refused instead.
-/// Far beyond any drive (and 100 units/s at [`MAX_STEPS_PER_UNIT`]).
-pub const MAX_STEP_RATE: f64 = 1e8;
+/// Most steps per second a channel takes (see [`motet_wire::MAX_STEP_RATE`]):
+/// a segment asking for more (a huge distance in no time) would keep `poll`
+/// busy for good, and is refused.
+pub use motet_wire::MAX_STEP_RATE;
+
+/// Most outputs (steps, tool changes, graph frames) one [`Node::poll`]
+/// hands out: a poll that has more due stops after them, at the last one's
+/// time, and the next poll goes on from there. A node is then never busy
+/// for long in one call, whatever it was sent, and a firmware main loop
+/// stays responsive to its link.
+pub const MAX_OUTPUTS_PER_POLL: u32 = 1 << 16;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Event {
@@ -656,9 +663,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             end,
             profile: Profile::from_params(p),
         };
-        if !self.steppable(&seg) {
-            return Err(Refusal::Malformed);
-        }
+        self.check_segment(&seg)?;
         // Checked above: the queue has room.
         let _ = self.segments.push_back(seg);
         self.tail = end;
@@ -718,9 +723,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 end,
                 profile: Profile::from_params(&m.profile),
             };
-            if !self.steppable(&seg) {
-                return Err(Refusal::Malformed);
-            }
+            self.check_segment(&seg)?;
             n += 1;
         }
         if n == 0 {
@@ -736,6 +739,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         self.stream_state = state;
         Ok(())
+    }
+
+    /// A segment the node can run: every channel within [`MAX_STEP_RATE`].
+    /// (A late one, after an underrun, is taken: its steps catch up, at most
+    /// [`MAX_OUTPUTS_PER_POLL`] a poll.)
+    fn check_segment(&self, seg: &Segment) -> Result<(), Refusal> {
+        if self.steppable(seg) {
+            Ok(())
+        } else {
+            Err(Refusal::Malformed)
+        }
     }
 
     /// Whether every channel can follow `seg` within [`MAX_STEP_RATE`] on
@@ -878,6 +892,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
     }
 
+    /// Host time up to which the node has run, µs (the last poll's `until`,
+    /// or its last output's time if that poll stopped at
+    /// [`MAX_OUTPUTS_PER_POLL`]).
+    pub fn time(&self) -> f64 {
+        self.now
+    }
+
     /// Keeps a tally of every output from now on (kept across `Reset`, which
     /// starts it again), reported on `TallyGet`.
     pub fn keep_tally(&mut self) {
@@ -890,19 +911,28 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     }
 
     fn poll_outputs<B: Board>(&mut self, until: f64, board: &mut B) {
+        let mut budget = MAX_OUTPUTS_PER_POLL;
         if let Some(ts) = self.tail_start.filter(|&t| t < until) {
-            self.poll_until(ts, board);
+            if !self.poll_until(ts, board, &mut budget) {
+                // Stopped short of the tail: the next poll gets there.
+                return;
+            }
             self.stop_on_tail(ts, board);
         }
-        self.poll_until(until, board);
+        self.poll_until(until, board, &mut budget);
     }
 
-    fn poll_until<B: Board>(&mut self, until: f64, board: &mut B) {
+    /// Runs to `until`; false when the budget ran out first (the node's time
+    /// is then that of its last output).
+    fn poll_until<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
         while let Some(t) = self.graph_next().filter(|&t| t < until) {
-            self.poll_trajectory(t, board);
+            if !self.poll_trajectory(t, board, budget) || *budget == 0 {
+                return false;
+            }
             self.graph_frame(t, board);
+            *budget -= 1;
         }
-        self.poll_trajectory(until, board);
+        self.poll_trajectory(until, board, budget)
     }
 
     fn graph_frame<B: Board>(&mut self, t: f64, board: &mut B) {
@@ -946,8 +976,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         });
     }
 
-    fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {
+    fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
         let end = self.committed_len();
+        // Time of the last output handed out.
+        let mut last = None;
         loop {
             let mut best: Option<(usize, f64)> = None;
             for (i, ch) in self.channels.iter_mut().enumerate() {
@@ -967,6 +999,23 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             // Ties: events, then refreshes, then steps.
             let step_time = best.map(|(_, t)| t);
+            let next = [step_time, event_time, refresh.map(|r| r.1)]
+                .into_iter()
+                .flatten()
+                .min_by(f64::total_cmp);
+            match (next, last) {
+                (None, _) => break,
+                (Some(_), Some(t)) if *budget == 0 => {
+                    // Everything before `t` is out; what is due at `t` or
+                    // after waits for the next poll.
+                    self.now = t;
+                    self.retire();
+                    return false;
+                }
+                _ => {}
+            }
+            *budget = budget.saturating_sub(1);
+            last = next;
             if let Some((i, u)) = refresh {
                 if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
                     let speed = self.speed_at(u);
@@ -999,6 +1048,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         self.now = until;
         self.retire();
+        true
     }
 
     fn fire_event<B: Board>(&mut self, board: &mut B) {

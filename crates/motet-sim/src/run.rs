@@ -314,7 +314,12 @@ impl SimMachine {
                 tools: &spec.tools,
                 out: &mut self.outputs,
             };
+            // The plant takes every node's outputs up to `until` in one go:
+            // a poll that stops at its output budget is continued.
             node.poll(until, &mut c);
+            while node.time() < until {
+                node.poll(until, &mut c);
+            }
         }
         self.plant.apply(&mut self.outputs);
         self.now = until;

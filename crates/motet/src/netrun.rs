@@ -254,7 +254,7 @@ fn drive(
             "tally": tallies[k].map(|t| serde_json::json!({
                 "steps": t.steps,
                 "tool_changes": t.tool_changes,
-                "crc": format!("{:08x}", t.crc),
+                "hash": format!("{:016x}", t.hash),
             })),
         })).collect::<Vec<_>>(),
     });
