@@ -2,8 +2,8 @@
 //! machine. Used by the command line and by scripts alike.
 
 use flate2::read::GzDecoder;
-use motet_host::{check_job, Machine};
-use motet_planner::{Command, Located, SourceError};
+use motet_host::{check_job, Clamps, Machine};
+use motet_planner::{Command, Located, Planner, SourceError};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -55,6 +55,11 @@ pub struct Job {
     pub commands: Vec<Located<Command>>,
     /// `file:line:column: message` for things accepted but not acted on.
     pub warnings: Vec<String>,
+    /// Coordinates beyond travel by less than half a step, clamped onto it.
+    pub clamps: Clamps,
+    /// How long the job takes as planned, seconds; set by [`load_job`]
+    /// (see [`plan_check`]).
+    pub planned_s: Option<f64>,
 }
 
 impl JobKind {
@@ -105,11 +110,35 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, JobError> {
     Ok(raw)
 }
 
-/// Reads, parses and checks a job file for `machine`. Nothing moves on error.
+/// Reads, parses, checks and plans a job file for `machine` (the plan is
+/// only checked, and its duration kept). Nothing moves on error.
 pub fn load_job(machine: &Machine, path: &Path, opts: &JobOptions) -> Result<Job, JobError> {
     let kind = JobKind::of(path)?;
     let data = read_bytes(path)?;
-    parse_job(machine, path, kind, &data, opts)
+    let mut job = parse_job(machine, path, kind, &data, opts)?;
+    job.planned_s = Some(plan_check(machine, &job)?);
+    Ok(job)
+}
+
+/// Plans the whole job without running it: every command the planner
+/// refuses (a job longer than [`motet_planner::ranges::JOB_S`], a polar move
+/// through the centre) is an error at its place before anything moves.
+/// Returns the planned duration, seconds. Planning is deterministic, so the
+/// run plans the same.
+pub fn plan_check(machine: &Machine, job: &Job) -> Result<f64, JobError> {
+    let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
+    for c in &job.commands {
+        planner.push(&c.item).map_err(|e| JobError::Source {
+            file: job.path.display().to_string(),
+            error: SourceError {
+                loc: c.loc,
+                message: e.to_string(),
+            },
+        })?;
+        while planner.pop().is_some() {}
+    }
+    planner.finish();
+    Ok(planner.clock() * 1e-6)
 }
 
 /// Parses and checks job bytes of a known kind; `path` names it in errors.
@@ -160,11 +189,14 @@ pub fn parse_job(
             vec![],
         ),
     };
-    check_job(machine, &commands).map_err(located)?;
+    let mut commands = commands;
+    let clamps = check_job(machine, &mut commands).map_err(located)?;
     Ok(Job {
         path: path.to_path_buf(),
         kind,
         commands,
         warnings,
+        clamps,
+        planned_s: None,
     })
 }

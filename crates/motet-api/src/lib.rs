@@ -24,6 +24,7 @@
 pub mod job;
 mod machine;
 
-pub use job::{job_name, load_job, Job, JobError, JobKind, JobOptions};
+pub use job::{job_name, load_job, plan_check, Job, JobError, JobKind, JobOptions};
 pub use machine::{ApiError, Event, Machine};
+pub use motet_planner::PlanError;
 pub use motet_sim::Report;

@@ -1,6 +1,7 @@
 //! The scriptable machine.
 
-use motet_host::{check_move, MachineError};
+use motet_host::{check_move, clamp_move, Clamps, MachineError};
+use motet_planner::ranges::{self, number};
 use motet_planner::{Command, Move, MoveKind, PlanError, Planned, Planner};
 use motet_render::{render_png, render_svg, RenderSpec, Stroke};
 use motet_sim::{Report, SimError, SimMachine};
@@ -19,11 +20,14 @@ pub enum ApiError {
     UnknownTool { name: String, tools: String },
     #[error("{0}")]
     Unreachable(String),
-    #[error("feed must be a positive number of units per second (got {0})")]
+    /// A feed outside [`ranges::VELOCITY`].
+    #[error("feed must be {}, got {}", ranges::VELOCITY, number(*.0))]
     BadFeed(f64),
-    #[error("dwell must be a non-negative number of seconds (got {0})")]
+    /// A dwell outside [`ranges::DWELL_S`].
+    #[error("dwell must be {}, got {}", ranges::DWELL_S, number(*.0))]
     BadDwell(f64),
-    #[error("tool value must be between 0 and 1 (got {0})")]
+    /// A tool value outside [`ranges::TOOL_VALUE`].
+    #[error("tool value must be {}, got {}", ranges::TOOL_VALUE, number(f64::from(*.0)))]
     BadToolValue(f32),
     #[error(transparent)]
     Plan(#[from] PlanError),
@@ -73,6 +77,8 @@ pub struct Machine {
     end: f64,
     started: Instant,
     strokes: Vec<Stroke>,
+    /// Targets within half a step beyond travel, clamped onto it.
+    clamps: Clamps,
 }
 
 impl Machine {
@@ -100,6 +106,7 @@ impl Machine {
             end: 0.0,
             started: Instant::now(),
             strokes: Vec::new(),
+            clamps: Clamps::default(),
         })
     }
 
@@ -168,7 +175,7 @@ impl Machine {
 
     /// Sets a tool output: pen 1 down / 0 up, laser or spindle power 0..=1.
     pub fn set_tool(&mut self, tool: &str, value: f32) -> Result<(), ApiError> {
-        if !(0.0..=1.0).contains(&value) {
+        if !ranges::TOOL_VALUE.contains(f64::from(value)) {
             return Err(ApiError::BadToolValue(value));
         }
         let index = self
@@ -188,7 +195,7 @@ impl Machine {
 
     /// Stands still for `seconds` after the motion queued before it.
     pub fn dwell(&mut self, seconds: f64) -> Result<(), ApiError> {
-        if !(seconds.is_finite() && seconds >= 0.0) {
+        if !ranges::DWELL_S.contains(seconds) {
             return Err(ApiError::BadDwell(seconds));
         }
         self.push(Command::Dwell { seconds })
@@ -218,6 +225,8 @@ impl Machine {
             check_move(self.description(), &self.target, &first.target)
                 .map_err(ApiError::Unreachable)?;
         }
+        self.clamps.moves += job.clamps.moves;
+        self.clamps.max_mm = self.clamps.max_mm.max(job.clamps.max_mm);
         for c in &job.commands {
             self.push(c.item)?;
         }
@@ -263,12 +272,15 @@ impl Machine {
 
     /// The report of everything run so far.
     pub fn report(&self) -> Report {
-        self.sim.report(
+        let mut r = self.sim.report(
             "script",
             self.calls,
             self.end,
             self.started.elapsed().as_secs_f64(),
-        )
+        );
+        r.clamped_moves = self.clamps.moves;
+        r.max_clamp_mm = self.clamps.max_mm;
+        r
     }
 
     /// Writes `path.png`, `path.svg` and `report.json` of everything executed so
@@ -324,8 +336,9 @@ impl Machine {
             .collect()
     }
 
-    /// The machine point a call asks for, checked before anything is queued.
-    fn resolve(&self, spec: &[(&str, f64)], relative: bool) -> Result<Point, ApiError> {
+    /// The machine point a call asks for, checked before anything is queued
+    /// (within half a step beyond travel: clamped onto it, and counted).
+    fn resolve(&self, spec: &[(&str, f64)], relative: bool) -> Result<(Point, f64), ApiError> {
         let m = self.description();
         let mut to = self.target;
         for (name, v) in spec {
@@ -337,19 +350,32 @@ impl Machine {
                 })?;
             to[i] = if relative { to[i] + v } else { *v };
         }
-        check_move(m, &self.target, &to).map_err(ApiError::Unreachable)?;
-        Ok(to)
+        let clamped = clamp_move(m, &self.target, &mut to).map_err(ApiError::Unreachable)?;
+        Ok((to, clamped))
     }
 
-    fn queue_move(&mut self, to: Point, feed: f64, kind: MoveKind) -> Result<(), ApiError> {
-        if kind == MoveKind::Feed && !(feed.is_finite() && feed > 0.0) {
+    /// Queues a move to a resolved target; `clamped`: how far it was
+    /// clamped onto the travel (counted once the move is accepted).
+    fn queue_move(
+        &mut self,
+        (to, clamped): (Point, f64),
+        feed: f64,
+        kind: MoveKind,
+    ) -> Result<(), ApiError> {
+        if kind == MoveKind::Feed && !ranges::VELOCITY.contains(feed) {
             return Err(ApiError::BadFeed(feed));
         }
-        self.push(Command::Move(Move {
+        let queued = self.push(Command::Move(Move {
             target: to,
             feed,
             kind,
-        }))
+        }));
+        // Accepted (an interruption comes after): the clamp counts.
+        if clamped > 0.0 && matches!(queued, Ok(()) | Err(ApiError::Interrupted)) {
+            self.clamps.moves += 1;
+            self.clamps.max_mm = self.clamps.max_mm.max(clamped);
+        }
+        queued
     }
 
     /// Plans a command and streams whatever became final. Once the planner

@@ -1,6 +1,6 @@
 //! Driving machines call by call.
 
-use motet_api::{ApiError, Event, Machine};
+use motet_api::{ApiError, Event, Machine, PlanError};
 use std::sync::{Arc, Mutex};
 
 fn machine(name: &str) -> Machine {
@@ -87,11 +87,31 @@ fn refused_calls_leave_queued_motion_untouched() {
         ),
         (
             Box::new(|m| m.move_to(&[("x", 10.0)], Some(-1.0))),
-            "feed must be a positive",
+            "feed must be from 0.001 to 100000 units/s, got -1",
+        ),
+        (
+            Box::new(|m| m.move_to(&[("x", 10.0)], Some(1e-300))),
+            "feed must be from 0.001 to 100000 units/s, got 1e-300",
+        ),
+        (
+            Box::new(|m| m.jog(&[("x", 1.0)], Some(f64::INFINITY))),
+            "feed must be from 0.001 to 100000 units/s, got inf",
         ),
         (
             Box::new(|m| m.move_to(&[("x", f64::NAN)], None)),
+            "x=NaN: not a number",
+        ),
+        (
+            Box::new(|m| m.move_to(&[("x", 1e308)], None)),
             "beyond the axis's travel",
+        ),
+        (
+            Box::new(|m| m.jog(&[("x", 1e308), ("y", 1e308)], None)),
+            "beyond the axis's travel",
+        ),
+        (
+            Box::new(|m| m.set_tool("laser", 2.0)),
+            "tool value must be from 0 to 1, got 2",
         ),
         (
             Box::new(|m| m.jog(&[("z", -1.0)], None)),
@@ -101,7 +121,14 @@ fn refused_calls_leave_queued_motion_untouched() {
             Box::new(|m| m.set_tool("laser", 1.0)),
             "unknown tool `laser`",
         ),
-        (Box::new(|m| m.dwell(-2.0)), "dwell must be"),
+        (
+            Box::new(|m| m.dwell(-2.0)),
+            "dwell must be from 0 to 86400 s, got -2",
+        ),
+        (
+            Box::new(|m| m.dwell(1e14)),
+            "dwell must be from 0 to 86400 s, got 1e14",
+        ),
     ];
     for (call, want) in bad {
         let err = call(&mut m).unwrap_err().to_string();
@@ -319,4 +346,67 @@ fn save_makes_its_folder_but_no_missing_parent() {
     m.save(base.join("out")).unwrap();
     assert!(base.join("out/path.png").exists());
     std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn a_day_long_dwell_runs_and_the_clock_jumps_over_it() {
+    // The longest dwell there is, then wait(): the simulated clock jumps over
+    // the idle day (a per-speed laser output stays quiet through it too).
+    let mut m = machine("laser.toml");
+    m.move_to(&[("x", 10.0)], Some(50.0)).unwrap();
+    m.dwell(86_400.0).unwrap();
+    m.move_to(&[("x", 20.0)], Some(50.0)).unwrap();
+    m.wait().unwrap();
+    let t = m.time();
+    assert!((86_400.0..86_401.0).contains(&t), "{t}");
+    assert!((get(&m.position(), "x") - 20.0).abs() < 0.01);
+    let r = m.report();
+    assert!(r.speed_factor.is_finite() && r.duration_s.is_finite());
+}
+
+#[test]
+fn a_session_plans_at_most_thirty_days_between_waits() {
+    let mut m = machine("plotter.toml");
+    m.move_to(&[("x", 10.0)], None).unwrap();
+    for _ in 0..29 {
+        m.dwell(86_400.0).unwrap();
+    }
+    let before = m.target();
+    let err = m.dwell(86_400.0).unwrap_err();
+    assert!(
+        matches!(err, ApiError::Plan(PlanError::TooLong { .. })),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("motet plans at most 720 h"),
+        "{err}"
+    );
+    assert_eq!(m.target(), before);
+    // What was queued still runs; after the wait a new plan starts.
+    m.wait().unwrap();
+    m.dwell(60.0).unwrap();
+}
+
+#[test]
+fn targets_within_half_a_step_of_travel_are_clamped_and_counted() {
+    let mut m = machine("plotter.toml");
+    // Half a step of the plotter's belts is 0.0044 mm.
+    m.move_to(&[("x", 10.0), ("y", 10.0)], None).unwrap();
+    m.move_to(&[("x", -0.0031)], None).unwrap();
+    assert_eq!(get(&m.target(), "x"), 0.0);
+    m.jog(&[("y", -10.002)], None).unwrap();
+    assert_eq!(get(&m.target(), "y"), 0.0);
+    let err = m.move_to(&[("x", -0.005)], None).unwrap_err();
+    assert!(
+        err.to_string().contains("beyond the axis's travel"),
+        "{err}"
+    );
+    m.wait().unwrap();
+    let r = m.report();
+    assert_eq!(r.clamped_moves, 2);
+    assert!(
+        (r.max_clamp_mm - 0.0031).abs() < 1e-12,
+        "{}",
+        r.max_clamp_mm
+    );
 }

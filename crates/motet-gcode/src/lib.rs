@@ -141,11 +141,20 @@
 //! (rotation), cutter and length compensation (G40…G49), path modes (G61,
 //! G64), M6 tool change, M48…M53 overrides, M60, parameters and expressions
 //! (`#1`, `[...]`, `O` words), block delete `/`, U V W axes. Travel limits are
-//! not checked here (the planner does that).
+//! not checked here (`motet_host::check_job` does that).
+//!
+//! # Ranges
+//!
+//! Numbers are checked against `motet_planner::ranges` at their word: dwells
+//! (`G4 S` 0 to 86,400 s, `G4 P` in ms), feeds (F as mm/s from 0.001 to
+//! 100,000; in G93 0.001 to 1e7 per minute), coordinates, offsets and arc
+//! words (±1e6 mm, ±1e9 mm on an axis without travel), temperatures (−273.15
+//! to 2,000 °C). Power and fan `S` are clamped.
 
 mod arc;
 mod lex;
 
+use motet_planner::ranges::{self, ValueRange};
 use motet_planner::{
     AuxChannel, Command, JobTarget, Located, Move, MoveKind, SourceError, SourceLoc, ToolKind,
 };
@@ -981,6 +990,44 @@ impl<'t> Interp<'t> {
             .ok_or_else(|| self.error(p.at, format!("{letter} without a number")))
     }
 
+    /// `v` (the value of word `p`) if it is in `range`; else an error at
+    /// the word.
+    fn in_range(
+        &self,
+        p: Param,
+        range: ValueRange,
+        what: &str,
+        v: f64,
+    ) -> Result<f64, SourceError> {
+        range
+            .check(what, v)
+            .map_err(|e| self.error(p.at, e.to_string()))
+    }
+
+    /// An axis word's value in machine units (mm, or degrees for A B C),
+    /// in its range: [`ranges::COORDINATE`], or [`ranges::RIDING_COORDINATE`]
+    /// for an axis without travel limits (an extruder).
+    fn axis_value(&self, p: Param, slot: usize) -> Result<f64, SourceError> {
+        let letter = AXIS_LETTERS[slot] as char;
+        let v = self.value(p, letter)? * self.slot_scale(slot);
+        let riding = self.letter_axis[slot]
+            .and_then(|i| self.target.axes.get(i))
+            .is_some_and(|a| !a.travel.iter().all(|t| t.is_finite()));
+        let range = match (riding, slot > SLOT_E) {
+            (true, _) => ranges::RIDING_COORDINATE,
+            (false, true) => ranges::COORDINATE.scaled(1.0, "°"),
+            (false, false) => ranges::COORDINATE,
+        };
+        self.in_range(p, range, &letter.to_string(), v)
+    }
+
+    /// A length word (arc offsets and radius) in mm, within
+    /// [`ranges::COORDINATE`].
+    fn length_value(&self, p: Param, letter: char) -> Result<f64, SourceError> {
+        let v = self.value(p, letter)? * self.length_scale();
+        self.in_range(p, ranges::COORDINATE, &letter.to_string(), v)
+    }
+
     fn length_scale(&self) -> f64 {
         if self.inch {
             INCH
@@ -1039,10 +1086,20 @@ impl<'t> Interp<'t> {
             if !(v.is_finite() && v > 0.0) {
                 return Err(self.error(p.at, "feed rate must be positive"));
             }
-            if !self.inverse_time {
+            if self.inverse_time {
+                self.in_range(p, ranges::INVERSE_TIME_F, "F (inverse time, G93)", v)?;
+            } else {
                 let f = v * self.length_scale() / 60.0;
-                if !(f.is_finite() && f > 0.0) {
-                    return Err(self.error(p.at, "feed rate must be positive"));
+                if !ranges::VELOCITY.contains(f) {
+                    return Err(self.error(
+                        p.at,
+                        format!(
+                            "F{} is a feed of {} units/s; feeds must be {}",
+                            ranges::number(v),
+                            ranges::number(f),
+                            ranges::VELOCITY
+                        ),
+                    ));
                 }
                 self.feed = Some(f);
             }
@@ -1089,15 +1146,19 @@ impl<'t> Interp<'t> {
                         self.error(s.at, "G4 takes P (milliseconds) or S (seconds), not both")
                     )
                 }
-                (Some(p), None) => self.value(p, 'P')? / 1000.0,
-                (None, Some(s)) => self.value(s, 'S')?,
+                (Some(p), None) => {
+                    let ms = ranges::DWELL_S.scaled(1000.0, "ms");
+                    let v = self.value(p, 'P')?;
+                    self.in_range(p, ms, "G4 P (dwell)", v)? / 1000.0
+                }
+                (None, Some(s)) => {
+                    let v = self.value(s, 'S')?;
+                    self.in_range(s, ranges::DWELL_S, "G4 S (dwell)", v)?
+                }
                 (None, None) => {
                     return Err(self.error(at, "G4 needs P (milliseconds) or S (seconds)"))
                 }
             };
-            if !(seconds >= 0.0 && seconds.is_finite()) {
-                return Err(self.error(at, "dwell time must not be negative"));
-            }
             self.emit(at, Command::Dwell { seconds });
         } else if let (Some(p), false) = (w.p, lenient) {
             let g10 = matches!(w.nonmodal, Some((NonModal::G10, _))) && w.l.is_some();
@@ -1331,9 +1392,9 @@ impl<'t> Interp<'t> {
                     ))
                 }
             };
-            if !(-300.0..=2000.0).contains(&v) {
-                return Err(self.error(at, format!("{name}: temperature {v} out of range")));
-            }
+            ranges::TEMPERATURE_C
+                .check(format_args!("{name}: temperature"), v)
+                .map_err(|e| self.error(at, e.to_string()))?;
             Ok(v as f32)
         };
         let (channel, value, wait) = match pc {
@@ -1425,7 +1486,7 @@ impl<'t> Interp<'t> {
         }
         for (slot, p) in w.axes.iter().enumerate() {
             if let (Some(p), Some(i)) = (*p, self.letter_axis[slot]) {
-                let v = self.value(p, AXIS_LETTERS[slot] as char)? * self.slot_scale(slot);
+                let v = self.axis_value(p, slot)?;
                 let rest = self.offset[i] - self.g92[i];
                 let g = self.machine[i] - v - rest;
                 if !g.is_finite() {
@@ -1473,7 +1534,7 @@ impl<'t> Interp<'t> {
         };
         for (slot, q) in w.axes.iter().enumerate() {
             if let (Some(q), Some(i)) = (*q, self.letter_axis[slot]) {
-                let v = self.value(q, AXIS_LETTERS[slot] as char)? * self.slot_scale(slot);
+                let v = self.axis_value(q, slot)?;
                 let o = if l20 {
                     let rest = self.offset[i] - self.wcs[self.cs][i] - self.g92[i];
                     self.machine[i] - self.g92[i] - rest - v
@@ -1549,7 +1610,7 @@ impl<'t> Interp<'t> {
                 if skip_bare && p.value.is_none() {
                     continue;
                 }
-                let v = self.value(p, AXIS_LETTERS[slot] as char)? * self.slot_scale(slot);
+                let v = self.axis_value(p, slot)?;
                 let rel = if slot == SLOT_E {
                     self.e_relative
                 } else {
@@ -1722,7 +1783,6 @@ impl<'t> Interp<'t> {
         let (la, lb) = (IJK[oa], IJK[ob]);
         let start = self.machine;
         let end = self.axis_target(w, false, false)?;
-        let scale = self.length_scale();
         let (sx, sy) = (start[x], start[y]);
         let (ex, ey) = (end[x], end[y]);
         let arc = if let Some(rp) = w.r {
@@ -1732,7 +1792,7 @@ impl<'t> Interp<'t> {
                     format!("{name} takes either R or {la}/{lb}, not both"),
                 ));
             }
-            let r = self.value(rp, 'R')? * scale;
+            let r = self.length_value(rp, 'R')?;
             let (dx, dy) = (ex - sx, ey - sy);
             let d2 = dx * dx + dy * dy;
             let d = d2.sqrt();
@@ -1795,7 +1855,7 @@ impl<'t> Interp<'t> {
             }
             let centre = |p: Option<Param>, letter: char, axis: usize, s: f64| {
                 let v = match p {
-                    Some(p) => Some(self.value(p, letter)? * scale),
+                    Some(p) => Some(self.length_value(p, letter)?),
                     None => None,
                 };
                 Ok::<f64, SourceError>(if self.arc_relative {

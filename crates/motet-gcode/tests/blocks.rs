@@ -583,7 +583,12 @@ fn printer_and_auxiliary_codes() {
         ("M104", 1, 1, "M104 needs S (temperature)"),
         ("M109 T0", 1, 1, "M109 needs S (temperature) or R"),
         ("M104 R200", 1, 1, "M104 needs S"),
-        ("M140 S99999", 1, 1, "out of range"),
+        (
+            "M140 S99999",
+            1,
+            1,
+            "temperature must be from -273.15 to 2000 °C, got 99999",
+        ),
         ("M106 P-1 S5", 1, 1, "M106: bad P-1"),
         ("M104 S200 T1.5", 1, 1, "M104: bad T1.5"),
         ("M104 S", 1, 6, "S without a number"),

@@ -267,7 +267,22 @@ fn bad_snippets_give_located_errors() {
         ("G1 X1 F60 R5", 1, 11, "R is only used with G2/G3"),
         ("G0 X5 P3", 1, 7, "P is only used with G4"),
         ("G4", 1, 1, "G4 needs P (milliseconds) or S (seconds)"),
-        ("G4 P-5", 1, 1, "dwell time must not be negative"),
+        ("G4 P-5", 1, 4, "G4 P (dwell) must be from 0 to 8.64e7 ms, got -5"),
+        // Extreme values: each word out of its range in motet_planner::ranges.
+        ("G4 S20000000000000", 1, 4, "G4 S (dwell) must be from 0 to 86400 s, got 2e13"),
+        ("G4 S86401", 1, 4, "G4 S (dwell) must be from 0 to 86400 s, got 86401"),
+        ("G4 P86400001", 1, 4, "G4 P (dwell) must be from 0 to 8.64e7 ms, got 8.6400001e7"),
+        ("G1 X1 F0.01", 1, 7, "F0.01 is a feed of 0.00016666666666666666 units/s; feeds must be from 0.001 to 100000 units/s"),
+        ("G1 X1 F99999999", 1, 7, "feeds must be from 0.001 to 100000 units/s"),
+        ("G20\nG1 X1 F1000000", 2, 7, "F1000000 is a feed of 423333.3333333333 units/s"),
+        ("G93 G1 X1 F100000000", 1, 11, "F (inverse time, G93) must be from 0.001 to 1e7 per minute, got 1e8"),
+        ("G0 X2000000", 1, 4, "X must be from -1000000 to 1000000 mm, got 2000000"),
+        ("G20\nG0 Y50000", 2, 4, "Y must be from -1000000 to 1000000 mm, got 1270000"),
+        ("G92 Z-1000001", 1, 5, "Z must be from -1000000 to 1000000 mm, got -1000001"),
+        ("G10 L2 P1 X1000001", 1, 11, "X must be from -1000000 to 1000000 mm"),
+        ("G0 E1000001", 1, 4, "E must be from -1000000 to 1000000 mm"),
+        ("G2 X1 I1000000000 F60", 1, 7, "I must be from -1000000 to 1000000 mm, got 1e9"),
+        ("G2 X1 R-2000000 F60", 1, 7, "R must be from -1000000 to 1000000 mm, got -2000000"),
         ("G4 P1 S1", 1, 7, "not both"),
         ("G1 F0 X1", 1, 4, "feed rate must be positive"),
         ("G1 F-5", 1, 4, "feed rate must be positive"),
@@ -338,8 +353,24 @@ fn bad_snippets_give_located_errors() {
 }
 
 #[test]
+fn an_extruder_without_travel_counts_up_to_a_billion_mm() {
+    // An extruder's position counts all the filament it ever pushed.
+    let mut t = printer();
+    t.axes[3].travel = [f64::NEG_INFINITY, f64::INFINITY];
+    let p = run_with("G1 E999999999 F60", &t, false).unwrap();
+    assert_eq!(p.commands.len(), 1);
+    let e = run_with("G1 E1000000001 F60", &t, false).unwrap_err();
+    assert!(e.message.contains("E must be from -1e9 to 1e9 mm"), "{e}");
+    assert_eq!((e.loc.line, e.loc.column), (1, 4));
+}
+
+#[test]
 fn huge_arc_is_an_error_not_a_hang() {
-    match run("G0 X0 Y0\nG2 X0 Y0 I1000000000 F60") {
+    // The largest radius at the finest tolerance would need more chords than
+    // an arc may have.
+    let mut fine = printer();
+    fine.tolerance = 1e-4;
+    match run_with("G0 X0 Y0\nG2 X0 Y0 I1000000 F60", &fine, false) {
         Ok(p) => panic!("expected an error, got {} commands", p.commands.len()),
         Err(e) => assert!(e.message.contains("chords"), "{e}"),
     }

@@ -1,33 +1,90 @@
 //! Checks a job against the machine before anything moves.
 
 use crate::machine::Machine;
+use motet_planner::ranges::rounded;
 use motet_planner::{Command, Located, SourceError};
 use motet_trajectory::{KinematicsKind, Point};
 
-/// Refuses moves beyond travel and moves a polar machine cannot make, naming the
-/// first offending command's place.
-pub fn check_job(machine: &Machine, commands: &[Located<Command>]) -> Result<(), SourceError> {
-    let mut pos = machine.start;
-    for c in commands {
-        let Command::Move(m) = &c.item else { continue };
-        check_move(machine, &pos, &m.target).map_err(|message| SourceError {
-            loc: c.loc,
-            message,
-        })?;
-        pos = m.target;
-    }
-    Ok(())
+/// Coordinates a job check brought back onto the travel's ends: beyond it,
+/// but by less than half a step of the motors moving that axis, so that no
+/// motor could have told the difference.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Clamps {
+    /// Moves with at least one coordinate clamped.
+    pub moves: usize,
+    /// The farthest a clamped coordinate was beyond travel, mm (or degrees).
+    pub max_mm: f64,
 }
 
-/// Whether the machine can move straight from `from` to `to`; the reason if not.
+impl Clamps {
+    fn add(&mut self, distance: f64) {
+        if distance > 0.0 {
+            self.moves += 1;
+            self.max_mm = self.max_mm.max(distance);
+        }
+    }
+}
+
+/// Clamps coordinates within half a step of travel onto it, and refuses moves
+/// beyond travel and moves a polar machine cannot make, naming the first
+/// offending command's place. Returns what was clamped.
+pub fn check_job(
+    machine: &Machine,
+    commands: &mut [Located<Command>],
+) -> Result<Clamps, SourceError> {
+    let mut clamps = Clamps::default();
+    let mut pos = machine.start;
+    for c in commands.iter_mut() {
+        let loc = c.loc;
+        let Command::Move(m) = &mut c.item else {
+            continue;
+        };
+        let d = clamp_move(machine, &pos, &mut m.target)
+            .map_err(|message| SourceError { loc, message })?;
+        clamps.add(d);
+        pos = m.target;
+    }
+    Ok(clamps)
+}
+
+/// [`check_move`] after clamping `to` onto the travel where it is beyond it
+/// by less than [`Machine::half_step`]; returns the largest clamp (0 if none).
+pub fn clamp_move(machine: &Machine, from: &Point, to: &mut Point) -> Result<f64, String> {
+    let mut largest = 0.0f64;
+    for (i, a) in machine.axes.iter().enumerate() {
+        let [lo, hi] = a.travel;
+        let v = to[i];
+        let beyond = if v < lo { lo - v } else { v - hi };
+        if beyond > 0.0 && beyond < machine.half_step(i) {
+            to[i] = v.clamp(lo, hi);
+            largest = largest.max(beyond);
+        }
+    }
+    check_move(machine, from, to)?;
+    Ok(largest)
+}
+
+/// Whether the machine can move straight from `from` to `to`; the reason if
+/// not. A coordinate may be beyond travel by less than half a step (what
+/// [`clamp_move`] would clamp).
 pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), String> {
     for (i, a) in machine.axes.iter().enumerate() {
         let v = to[i];
-        let eps = 1e-6 * (1.0 + v.abs());
-        if !v.is_finite() || v < a.travel[0] - eps || v > a.travel[1] + eps {
+        let [lo, hi] = a.travel;
+        if !v.is_finite() {
+            return Err(format!("move to {}={v}: not a number", a.name));
+        }
+        let beyond = if v < lo { lo - v } else { v - hi };
+        let half = machine.half_step(i);
+        if beyond >= half {
             return Err(format!(
-                "move to {}={:.4} is beyond the axis's travel [{}, {}]",
-                a.name, v, a.travel[0], a.travel[1]
+                "move to {}={} is {} beyond the axis's travel [{}, {}] (half a step is {})",
+                a.name,
+                rounded(v),
+                rounded(beyond),
+                rounded(lo),
+                rounded(hi),
+                rounded(half)
             ));
         }
     }

@@ -1,6 +1,7 @@
 //! The virtual machine: a validated machine description.
 
 use crate::machine_file::{ElementFile, MachineFile};
+use motet_planner::ranges::{self, ValueRange};
 use motet_planner::{
     AxisInfo, AxisLimits, JobTarget, JointLimits, Limits, ToolInfo, ToolKind, ToolTiming,
 };
@@ -8,11 +9,6 @@ use motet_trajectory::{
     Element, ElementChain, JointMap, KinematicsKind, Point, ProfileKind, Unit, MAX_AXES,
 };
 use std::ops::Range;
-
-/// Limits the node runtime enforces, mirrored so a machine file fails early.
-mod motet_node_limits {
-    pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
-}
 use std::path::{Path, PathBuf};
 
 /// A problem in a machine file, with its place (line 0: the whole file, as
@@ -158,6 +154,19 @@ impl Source<'_> {
             message: message.into(),
         }
     }
+
+    /// `v` if it is in `range`, else an error at `span` that names `what`.
+    fn in_range(
+        &self,
+        span: Range<usize>,
+        range: ValueRange,
+        what: impl std::fmt::Display,
+        v: f64,
+    ) -> Result<f64, MachineError> {
+        range
+            .check(what, v)
+            .map_err(|e| self.err(span, e.to_string()))
+    }
 }
 
 impl Machine {
@@ -201,11 +210,29 @@ impl Machine {
             joints: self
                 .joints
                 .iter()
-                .filter(|j| j.max_velocity.is_some() || j.max_acceleration.is_some())
-                .map(|j| JointLimits {
-                    map: j.map,
-                    max_velocity: j.max_velocity.unwrap_or(f64::INFINITY),
-                    max_acceleration: j.max_acceleration.unwrap_or(f64::INFINITY),
+                .enumerate()
+                .filter_map(|(k, j)| {
+                    // No joint outruns its motors' step rate: a node refuses
+                    // a segment that asks more.
+                    let spu = self
+                        .actuators
+                        .iter()
+                        .filter(|a| a.joint == k)
+                        .map(|a| a.steps_per_unit.abs())
+                        .fold(0.0, f64::max);
+                    let step_cap = if spu > 0.0 {
+                        motet_wire::MAX_STEP_RATE / spu
+                    } else {
+                        f64::INFINITY
+                    };
+                    let max_velocity = j.max_velocity.unwrap_or(f64::INFINITY).min(step_cap);
+                    (max_velocity.is_finite() || j.max_acceleration.is_some()).then(|| {
+                        JointLimits {
+                            map: j.map,
+                            max_velocity,
+                            max_acceleration: j.max_acceleration.unwrap_or(f64::INFINITY),
+                        }
+                    })
                 })
                 .collect(),
             junction_deviation: self.junction_deviation,
@@ -254,6 +281,37 @@ impl Machine {
     pub fn axis(&self, name: &str) -> Option<usize> {
         self.axes.iter().position(|a| a.name == name)
     }
+
+    /// How far axis `axis` may move before one of the motors it drives
+    /// moves half a step (the smallest over its motors), in axis units. A
+    /// polar angle's step is taken at `min_radius`, where it is shortest.
+    pub fn half_step(&self, axis: usize) -> f64 {
+        let mut half = f64::INFINITY;
+        for a in &self.actuators {
+            let spu = a.steps_per_unit.abs();
+            let per_unit = match self.joints[a.joint].map {
+                JointMap::Linear { coeffs } => coeffs.get(axis).map_or(0.0, |c| c.abs()),
+                JointMap::PolarRadius { x, y } if [x, y].contains(&(axis as u8)) => 1.0,
+                // Degrees per mm of x or y at the closest allowed radius.
+                JointMap::PolarAngle { x, y } if [x, y].contains(&(axis as u8)) => {
+                    if self.min_radius > 0.0 {
+                        1.0f64.to_degrees() / self.min_radius
+                    } else {
+                        f64::INFINITY
+                    }
+                }
+                _ => 0.0,
+            };
+            if per_unit > 0.0 {
+                half = half.min(0.5 / (spu * per_unit));
+            }
+        }
+        if half.is_finite() {
+            half
+        } else {
+            0.0
+        }
+    }
 }
 
 fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, MachineError> {
@@ -280,24 +338,25 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             ))
         }
     };
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    for (v, what) in [
-        (&m.junction_deviation, "junction_deviation"),
-        (&m.tolerance, "tolerance"),
+    for (v, range, what) in [
+        (
+            &m.junction_deviation,
+            ranges::JUNCTION_DEVIATION_MM,
+            "junction_deviation",
+        ),
+        (&m.tolerance, ranges::TOLERANCE_MM, "tolerance"),
+        (&m.min_radius, ranges::MIN_RADIUS_MM, "min_radius"),
     ] {
-        if !positive(*v.get_ref()) {
-            return Err(src.err(
-                v.span(),
-                format!("[motion] {what} must be a positive number"),
-            ));
-        }
+        src.in_range(
+            v.span(),
+            range,
+            format_args!("[motion] {what}"),
+            *v.get_ref(),
+        )?;
     }
-    if !(*m.min_radius.get_ref() >= 0.0 && m.min_radius.get_ref().is_finite()) {
-        return Err(src.err(
-            m.min_radius.span(),
-            "[motion] min_radius must not be negative",
-        ));
-    }
+    let lookahead = ranges::LOOKAHEAD
+        .check_count("[motion] lookahead", *m.lookahead.get_ref())
+        .map_err(|e| src.err(m.lookahead.span(), e.to_string()))?;
 
     // Axes, in file order of their names (BTreeMap: alphabetical) would scramble
     // x, y, z: order them by the conventional letters first.
@@ -340,28 +399,35 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                         format!("axis {name}: travel must be [min, max] with min < max"),
                     ));
                 }
+                for v in [lo, hi] {
+                    src.in_range(
+                        t.span(),
+                        ranges::COORDINATE,
+                        format_args!("axis {name}: travel"),
+                        v,
+                    )?;
+                }
                 [lo, hi]
             }
             None if !path => [f64::NEG_INFINITY, f64::INFINITY],
             None => return Err(src.err(span, format!("axis {name}: missing field `travel`"))),
         };
-        for (v, what) in [
-            (&a.max_velocity, "max_velocity"),
-            (&a.max_acceleration, "max_acceleration"),
+        for (v, range, what) in [
+            (Some(&a.max_velocity), ranges::VELOCITY, "max_velocity"),
+            (
+                Some(&a.max_acceleration),
+                ranges::ACCELERATION,
+                "max_acceleration",
+            ),
+            (a.max_jerk.as_ref(), ranges::JERK, "max_jerk"),
         ] {
-            if !positive(*v.get_ref()) {
-                return Err(src.err(
+            if let Some(v) = v {
+                src.in_range(
                     v.span(),
-                    format!("axis {name}: {what} must be a positive number"),
-                ));
-            }
-        }
-        if let Some(j) = &a.max_jerk {
-            if !positive(*j.get_ref()) {
-                return Err(src.err(
-                    j.span(),
-                    format!("axis {name}: max_jerk must be a positive number"),
-                ));
+                    range,
+                    format_args!("axis {name}: {what}"),
+                    *v.get_ref(),
+                )?;
             }
         }
         axes.push(Axis {
@@ -456,6 +522,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         driven[joint] = true;
         let mut elements = Vec::new();
         for e in a.chain.get_ref() {
+            check_element(src, name, e)?;
             let el = match e.get_ref() {
                 ElementFile::Pulley(p) => {
                     let circumference = match (p.pitch_diameter, p.teeth, p.belt_pitch) {
@@ -491,28 +558,29 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
                 format!("actuator {name}: impossible element chain: {e}"),
             )
         })?;
-        // Each element is sane, yet extreme values can overflow or underflow.
-        let spu = chain.steps_per_unit.abs();
-        if !(1e-6..=motet_node_limits::MAX_STEPS_PER_UNIT).contains(&spu) {
-            return Err(src.err(
-                a.chain.span(),
-                format!(
-                    "actuator {name}: the chain gives {} steps per unit of its joint; a node takes 1e-6 to 1e6",
-                    chain.steps_per_unit
-                ),
-            ));
-        }
-        for (v, what) in [
-            (&a.max_velocity, "max_velocity"),
-            (&a.max_acceleration, "max_acceleration"),
+        // Each element is in its range, yet together they can still give
+        // more steps than a node follows, or fewer than make sense.
+        src.in_range(
+            a.chain.span(),
+            ranges::STEPS_PER_UNIT,
+            format_args!("actuator {name}: the chain's steps per unit of its joint"),
+            chain.steps_per_unit.abs(),
+        )?;
+        for (v, range, what) in [
+            (&a.max_velocity, ranges::VELOCITY, "max_velocity"),
+            (
+                &a.max_acceleration,
+                ranges::ACCELERATION,
+                "max_acceleration",
+            ),
         ] {
             if let Some(v) = v {
-                if !positive(*v.get_ref()) {
-                    return Err(src.err(
-                        v.span(),
-                        format!("actuator {name}: {what} must be a positive number"),
-                    ));
-                }
+                src.in_range(
+                    v.span(),
+                    range,
+                    format_args!("actuator {name}: {what}"),
+                    *v.get_ref(),
+                )?;
             }
         }
         if let Some(v) = a.max_velocity.as_ref().map(|v| *v.get_ref()) {
@@ -612,14 +680,15 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
             ToolKind::Spindle => 1.0,
             ToolKind::Laser => 0.0,
         };
-        let settle = t.settle.as_ref().map_or(default_settle, |s| *s.get_ref());
-        if !(settle.is_finite() && settle >= 0.0) {
-            let span = t.settle.as_ref().map_or(t.kind.span(), |s| s.span());
-            return Err(src.err(
-                span,
-                format!("tool {name}: settle must be a non-negative number of seconds"),
-            ));
-        }
+        let settle = match &t.settle {
+            Some(s) => src.in_range(
+                s.span(),
+                ranges::SETTLE_S,
+                format_args!("tool {name}: settle"),
+                *s.get_ref(),
+            )?,
+            None => default_settle,
+        };
         let on_value = t.on_value.as_ref().map_or(1.0, |v| *v.get_ref());
         if on_value.is_nan() {
             let span = t.on_value.as_ref().map_or(t.kind.span(), |v| v.span());
@@ -643,19 +712,28 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
     for (name, n) in &raw.nodes {
         let node_span = n.span();
         let n = n.get_ref();
+        let queue = match &n.queue {
+            Some(q) => ranges::NODE_QUEUE
+                .check_count(format_args!("node {name}: queue"), *q.get_ref())
+                .map_err(|e| src.err(q.span(), e.to_string()))?,
+            None => 64,
+        };
+        let frame_us = match &n.frame_us {
+            Some(f) => src.in_range(
+                f.span(),
+                ranges::FRAME_US,
+                format_args!("node {name}: frame_us"),
+                *f.get_ref(),
+            )?,
+            None => 40.0,
+        };
         let mut spec = NodeSpec {
             name: name.clone(),
             actuators: vec![],
             tools: vec![],
-            queue: n.queue.unwrap_or(64),
-            frame_us: n.frame_us.unwrap_or(40.0),
+            queue,
+            frame_us,
         };
-        if !((2..=64).contains(&spec.queue) && spec.frame_us.is_finite() && spec.frame_us > 0.0) {
-            return Err(src.err(
-                node_span.clone(),
-                format!("node {name}: queue must be 2..=64 and frame_us positive"),
-            ));
-        }
         for a in &n.actuators {
             let i = actuators
                 .iter()
@@ -776,10 +854,8 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         },
         |d| *d.get_ref(),
     );
-    if !positive(draw_feed) {
-        let span = m.draw_feed.as_ref().map_or(0..0, |d| d.span());
-        return Err(src.err(span, "[motion] draw_feed must be positive"));
-    }
+    let span = m.draw_feed.as_ref().map_or(0..0, |d| d.span());
+    src.in_range(span, ranges::VELOCITY, "[motion] draw_feed", draw_feed)?;
 
     // A node holding the horizon's segments can always be given a window it
     // can stop inside; a longer horizon than the smallest queue cannot be.
@@ -812,7 +888,46 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         draw_feed,
         start,
         min_radius: *m.min_radius.get_ref(),
-        lookahead: m.lookahead.max(2),
+        lookahead,
         stop_horizon,
     })
+}
+
+/// The values of one chain element, each in its range.
+fn check_element(
+    src: &Source,
+    actuator: &str,
+    e: &toml::Spanned<ElementFile>,
+) -> Result<(), MachineError> {
+    let span = e.span();
+    let check = |range: ValueRange, what: &str, v: f64| {
+        src.in_range(
+            span.clone(),
+            range,
+            format_args!("actuator {actuator}: {what}"),
+            v,
+        )
+        .map(|_| ())
+    };
+    match e.get_ref() {
+        ElementFile::Pulley(p) => {
+            if let Some(d) = p.pitch_diameter {
+                check(ranges::ELEMENT_MM, "pulley pitch_diameter", d)?;
+            }
+            if let Some(t) = p.teeth {
+                check(ranges::TEETH, "pulley teeth", f64::from(t))?;
+            }
+            if let Some(b) = p.belt_pitch {
+                check(ranges::ELEMENT_MM, "pulley belt_pitch", b)?;
+            }
+            Ok(())
+        }
+        ElementFile::Leadscrew { lead } => check(ranges::ELEMENT_MM, "leadscrew lead", *lead),
+        ElementFile::Gear { ratio } => check(ranges::GEAR_RATIO, "gear ratio", *ratio),
+        ElementFile::Stepper { step_angle } => {
+            check(ranges::STEP_ANGLE_DEG, "stepper step_angle", *step_angle)
+        }
+        ElementFile::Microstep(n) => check(ranges::MICROSTEPS, "microstep", f64::from(*n)),
+        ElementFile::Invert => Ok(()),
+    }
 }

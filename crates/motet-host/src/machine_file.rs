@@ -44,7 +44,7 @@ pub struct MotionFile {
     #[serde(default = "default_min_radius")]
     pub min_radius: Spanned<f64>,
     #[serde(default = "default_lookahead")]
-    pub lookahead: usize,
+    pub lookahead: Spanned<i64>,
     /// Moves within which the machine can always come to rest (0: off).
     #[serde(default = "default_stop_horizon")]
     pub stop_horizon: Spanned<i64>,
@@ -84,8 +84,8 @@ fn default_tolerance() -> Spanned<f64> {
 fn default_min_radius() -> Spanned<f64> {
     Spanned::new(0..0, 1.0)
 }
-fn default_lookahead() -> usize {
-    4096
+fn default_lookahead() -> Spanned<i64> {
+    Spanned::new(0..0, 4096)
 }
 /// Half the default node queue of 64: a node can always be given a window it
 /// can stop inside, with room to spare for the next.
@@ -172,8 +172,8 @@ pub struct NodeFile {
     pub tools: Vec<Spanned<String>>,
     /// Segment queue capacity the node is built with.
     #[serde(default)]
-    pub queue: Option<usize>,
+    pub queue: Option<Spanned<i64>>,
     /// Frame period, µs.
     #[serde(default)]
-    pub frame_us: Option<f64>,
+    pub frame_us: Option<Spanned<f64>>,
 }

@@ -1,7 +1,9 @@
 //! `check_job`: moves beyond travel and polar moves too close to the centre are
-//! refused with the offending command's place; everything else passes.
+//! refused with the offending command's place; coordinates beyond travel by
+//! less than half a step are clamped onto it and counted; everything else
+//! passes unchanged.
 
-use motet_host::{check_job, Machine};
+use motet_host::{check_job, Clamps, Machine};
 use motet_planner::{Command, Located, Move, MoveKind, SourceLoc};
 use std::path::PathBuf;
 
@@ -25,10 +27,20 @@ struct Case {
     what: &'static str,
     machine: &'static str,
     steps: &'static [Step],
-    /// `None`: accepted. `Some((step index, message part))`: refused at that step.
-    refused: Option<(usize, &'static str)>,
+    outcome: Outcome,
 }
 
+#[derive(Clone, Copy)]
+enum Outcome {
+    /// Accepted as it is.
+    Accepted,
+    /// Accepted with this many moves clamped, by at most this much.
+    Clamped(usize, f64),
+    /// Refused at this step, with this part in the message.
+    Refused(usize, &'static str),
+}
+
+use Outcome::{Accepted, Clamped, Refused};
 use Step::{Dwell, Move as M, Tool};
 
 const NAN: f64 = f64::NAN;
@@ -39,160 +51,191 @@ const CASES: &[Case] = &[
         what: "printer: corners of the travel are reachable",
         machine: "printer.toml",
         steps: &[M(&[("x", 220.0)]), M(&[("y", 220.0)]), M(&[("z", 250.0)]), M(&[("x", 0.0), ("y", 0.0), ("z", 0.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
-        what: "printer: rounding just past the end is tolerated",
+        what: "printer: rounding just past the end is clamped",
         machine: "printer.toml",
         steps: &[M(&[("x", 220.0 + 1e-7)]), M(&[("z", -1e-9)])],
-        refused: None,
+        outcome: Clamped(2, (220.0 + 1e-7) - 220.0),
     },
     Case {
         what: "printer: x beyond max",
         machine: "printer.toml",
         steps: &[M(&[("x", 10.0)]), Dwell, M(&[("x", 230.0)]), M(&[("x", 240.0)])],
-        refused: Some((2, "move to x=230.0000 is beyond the axis's travel [0, 220]")),
+        outcome: Refused(2, "move to x=230 is 10 beyond the axis's travel [0, 220] (half a step is 0.00625)"),
     },
     Case {
         what: "printer: z below min",
         machine: "printer.toml",
         steps: &[M(&[("x", 10.0), ("z", 5.0)]), M(&[("z", -0.1)])],
-        refused: Some((1, "move to z=-0.1000 is beyond the axis's travel [0, 250]")),
+        outcome: Refused(1, "move to z=-0.1 is 0.1 beyond the axis's travel [0, 250] (half a step is 0.00125)"),
     },
     Case {
         what: "printer: y just too far",
         machine: "printer.toml",
         steps: &[M(&[("y", 220.01)])],
-        refused: Some((0, "y=220.0100")),
+        outcome: Refused(0, "y=220.01 is 0.01 beyond"),
     },
     Case {
         what: "printer: extruder without travel is unlimited",
         machine: "printer.toml",
         steps: &[M(&[("e", 1.0e6)]), M(&[("x", 100.0), ("e", -1.0e6)]), Tool, M(&[("e", 0.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "printer: extruder must still be a number",
         machine: "printer.toml",
         steps: &[M(&[("e", 5.0)]), M(&[("e", NAN)])],
-        refused: Some((1, "e=NaN")),
+        outcome: Refused(1, "e=NaN: not a number"),
     },
     Case {
         what: "printer: NaN on a limited axis",
         machine: "printer.toml",
         steps: &[M(&[("x", NAN)])],
-        refused: Some((0, "x=NaN")),
+        outcome: Refused(0, "x=NaN: not a number"),
     },
     Case {
         what: "printer: infinity on a limited axis",
         machine: "printer.toml",
         steps: &[M(&[("y", f64::INFINITY)])],
-        refused: Some((0, "y=inf")),
+        outcome: Refused(0, "y=inf: not a number"),
     },
     Case {
         what: "printer: cartesian moves through the origin are fine",
         machine: "printer.toml",
         steps: &[M(&[("x", 100.0), ("y", 100.0)]), M(&[("x", 0.0), ("y", 0.0)]), M(&[("x", 1.0), ("y", 0.5)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "plotter: negative x",
         machine: "plotter.toml",
         steps: &[Tool, M(&[("x", 100.0), ("y", 100.0)]), Tool, M(&[("x", -1.0)])],
-        refused: Some((3, "x=-1.0000 is beyond the axis's travel [0, 300]")),
+        outcome: Refused(3, "x=-1 is 1 beyond the axis's travel [0, 300]"),
     },
     Case {
         what: "plotter: whole sheet",
         machine: "plotter.toml",
         steps: &[M(&[("x", 300.0), ("y", 218.0)]), M(&[("x", 0.0)]), M(&[("y", 0.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "laser: y beyond its 300 mm",
         machine: "laser.toml",
         steps: &[M(&[("x", 400.0), ("y", 300.0)]), M(&[("y", 301.0)])],
-        refused: Some((1, "y=301.0000")),
+        outcome: Refused(1, "y=301 is 1 beyond"),
     },
     Case {
         what: "gestalt: z may go negative down to -20",
         machine: "gestalt-3axis.toml",
         steps: &[M(&[("z", -20.0)]), M(&[("z", 30.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "gestalt: z below -20",
         machine: "gestalt-3axis.toml",
         steps: &[M(&[("z", -20.5)])],
-        refused: Some((0, "z=-20.5000 is beyond the axis's travel [-20, 30]")),
+        outcome: Refused(0, "z=-20.5 is 0.5 beyond the axis's travel [-20, 30]"),
+    },
+    // ---- within half a step of travel: clamped -----------------------------------
+    Case {
+        what: "plotter: a stroke 0.0031 mm left of the sheet (half a step is 0.0044 mm)",
+        machine: "plotter.toml",
+        steps: &[M(&[("x", 10.0), ("y", 10.0)]), M(&[("x", -0.0031)]), M(&[("y", 20.0)]), M(&[("x", 10.0)])],
+        outcome: Clamped(2, 0.0031),
+    },
+    Case {
+        what: "plotter: y a hair below the sheet",
+        machine: "plotter.toml",
+        steps: &[M(&[("y", -1e-5), ("x", 5.0)]), M(&[("x", 10.0)])],
+        outcome: Clamped(2, 1e-5),
+    },
+    Case {
+        what: "plotter: half a step beyond is refused",
+        machine: "plotter.toml",
+        steps: &[M(&[("x", 300.0045)])],
+        outcome: Refused(0, "x=300.005 is 0.0045 beyond the axis's travel [0, 300] (half a step is 0.00441786)"),
+    },
+    Case {
+        what: "printer: z 0.001 below the bed (half a step of its leadscrew is 0.00125)",
+        machine: "printer.toml",
+        steps: &[M(&[("z", -0.001)])],
+        outcome: Clamped(1, 0.001),
+    },
+    Case {
+        what: "clay: the radius's half step counts on the plane's axes",
+        machine: "clay-printer.toml",
+        steps: &[M(&[("x", 150.0 + 1e-4)])],
+        outcome: Clamped(1, 1e-4),
     },
     // ---- polar centre (clay printer: min_radius 2 mm, starts at x = 100) -------------
     Case {
         what: "clay: quarter turn stays far from the centre",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 0.0), ("y", 100.0)]), M(&[("x", -100.0), ("y", 0.0)]), M(&[("x", 0.0), ("y", -100.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "clay: straight through the centre",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", -100.0)])],
-        refused: Some((0, "passes 0.000 mm from the polar centre")),
+        outcome: Refused(0, "passes 0.000 mm from the polar centre"),
     },
     Case {
         what: "clay: chord passing 1.95 mm from the centre",
         machine: "clay-printer.toml",
         // Line from (100, 0) to (-100, 3.9): distance 390 / |(-200, 3.9)| ≈ 1.950.
         steps: &[M(&[("z", 5.0)]), M(&[("x", -100.0), ("y", 3.9)])],
-        refused: Some((1, "passes 1.950 mm from the polar centre; the turntable cannot follow closer than min_radius = 2 mm")),
+        outcome: Refused(1, "passes 1.950 mm from the polar centre; the turntable cannot follow closer than min_radius = 2 mm"),
     },
     Case {
         what: "clay: chord passing 2.05 mm from the centre",
         machine: "clay-printer.toml",
         // 410 / |(-200, 4.1)| ≈ 2.0496.
         steps: &[M(&[("x", -100.0), ("y", 4.1)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "clay: ending inside min_radius",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 1.0)])],
-        refused: Some((0, "passes 1.000 mm")),
+        outcome: Refused(0, "passes 1.000 mm"),
     },
     Case {
         what: "clay: ending exactly at min_radius",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 2.0)]), M(&[("y", 5.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "clay: chord between two points on the min_radius circle cuts inside it",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 2.0)]), M(&[("x", 0.0), ("y", 2.0)])],
-        refused: Some((1, "passes 1.414 mm")),
+        outcome: Refused(1, "passes 1.414 mm"),
     },
     Case {
         what: "clay: the second move crosses the centre",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 0.0), ("y", 50.0)]), Dwell, M(&[("y", -50.0)])],
-        refused: Some((2, "from the polar centre")),
+        outcome: Refused(2, "from the polar centre"),
     },
     Case {
         what: "clay: moving away from the centre along a ray is fine",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", 3.0)]), M(&[("x", 150.0)]), M(&[("x", 2.5), ("y", 0.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "clay: z and e alone do not move in the plane",
         machine: "clay-printer.toml",
         steps: &[M(&[("z", 10.0)]), M(&[("e", 100.0)]), M(&[("z", 0.0), ("e", -5.0)])],
-        refused: None,
+        outcome: Accepted,
     },
     Case {
         what: "clay: travel is checked before the centre",
         machine: "clay-printer.toml",
         steps: &[M(&[("x", -151.0)])],
-        refused: Some((0, "x=-151.0000 is beyond")),
+        outcome: Refused(0, "x=-151 is 1 beyond"),
     },
 ];
 
@@ -234,15 +277,31 @@ fn loc(i: usize) -> SourceLoc {
 
 fn check(c: &Case) -> Result<(), String> {
     let m = machine(c.machine);
-    let commands = job(&m, c.steps);
-    match (check_job(&m, &commands), c.refused) {
-        (Ok(()), None) => Ok(()),
-        (Ok(()), Some((i, _))) => Err(format!(
-            "{}: accepted, expected refusal at step {i}",
-            c.what
-        )),
-        (Err(e), None) => Err(format!("{}: refused: {e}", c.what)),
-        (Err(e), Some((i, part))) => {
+    let original = job(&m, c.steps);
+    let mut commands = original.clone();
+    match (check_job(&m, &mut commands), c.outcome) {
+        (Ok(clamps), Accepted) if clamps == Clamps::default() && commands == original => Ok(()),
+        (Ok(clamps), Clamped(n, max)) => {
+            let inside = commands.iter().all(|c| match c.item {
+                Command::Move(mv) => m
+                    .axes
+                    .iter()
+                    .enumerate()
+                    .all(|(i, a)| a.travel[0] <= mv.target[i] && mv.target[i] <= a.travel[1]),
+                _ => true,
+            });
+            if clamps.moves == n && (clamps.max_mm - max).abs() <= 1e-9 * max && inside {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{}: clamped {clamps:?} (all within travel: {inside}), expected {n} moves by {max}",
+                    c.what
+                ))
+            }
+        }
+        (Ok(clamps), _) => Err(format!("{}: accepted with {clamps:?}", c.what)),
+        (Err(e), Accepted | Clamped(..)) => Err(format!("{}: refused: {e}", c.what)),
+        (Err(e), Refused(i, part)) => {
             if e.loc != loc(i) {
                 Err(format!(
                     "{}: refused at {}, expected {} ({e})",
@@ -280,8 +339,11 @@ fn jobs_are_checked_against_the_machine() {
 fn an_empty_job_and_a_job_without_moves_pass() {
     for file in ["printer.toml", "clay-printer.toml"] {
         let m = machine(file);
-        assert_eq!(check_job(&m, &[]), Ok(()));
-        assert_eq!(check_job(&m, &job(&m, &[Dwell, Tool, Dwell])), Ok(()));
+        assert_eq!(check_job(&m, &mut []), Ok(Clamps::default()));
+        assert_eq!(
+            check_job(&m, &mut job(&m, &[Dwell, Tool, Dwell])),
+            Ok(Clamps::default())
+        );
     }
 }
 
@@ -290,7 +352,7 @@ fn rapids_are_checked_like_feeds() {
     let m = machine("printer.toml");
     let mut target = m.start;
     target[0] = 500.0;
-    let commands = [Located {
+    let mut commands = [Located {
         loc: SourceLoc { line: 3, column: 0 },
         item: Command::Move(Move {
             target,
@@ -298,10 +360,10 @@ fn rapids_are_checked_like_feeds() {
             kind: MoveKind::Rapid,
         }),
     }];
-    let err = check_job(&m, &commands).unwrap_err();
+    let err = check_job(&m, &mut commands).unwrap_err();
     assert_eq!(err.loc, SourceLoc { line: 3, column: 0 });
     assert_eq!(
         err.to_string(),
-        "3: move to x=500.0000 is beyond the axis's travel [0, 220]"
+        "3: move to x=500 is 280 beyond the axis's travel [0, 220] (half a step is 0.00625)"
     );
 }

@@ -362,11 +362,32 @@ fn check(e: &Expect) -> Vec<String> {
             format!("limits: axis {}", a.name),
         );
     }
+    // Declared joint limits, and for every stepped joint a velocity no
+    // faster than its motors' top step rate.
+    let mut want_joints: Vec<(&str, f64, f64)> = Vec::new();
+    for (k, j) in m.joints.iter().enumerate() {
+        let spu = m
+            .actuators
+            .iter()
+            .filter(|a| a.joint == k)
+            .map(|a| a.steps_per_unit.abs())
+            .fold(0.0, f64::max);
+        let cap = if spu > 0.0 {
+            motet_wire::MAX_STEP_RATE / spu
+        } else {
+            f64::INFINITY
+        };
+        match e.joint_limits.iter().find(|d| d.0 == j.name) {
+            Some(&(name, v, acc)) => want_joints.push((name, v.min(cap), acc)),
+            None if cap.is_finite() => want_joints.push((&j.name, cap, f64::INFINITY)),
+            None => {}
+        }
+    }
     want(
-        l.joints.len() == e.joint_limits.len(),
+        l.joints.len() == want_joints.len(),
         format!("limits: {} joint limits", l.joints.len()),
     );
-    for (lj, (joint, v, acc)) in l.joints.iter().zip(e.joint_limits) {
+    for (lj, (joint, v, acc)) in l.joints.iter().zip(&want_joints) {
         let j = m.joints.iter().find(|j| j.name == *joint).expect("joint");
         want(
             lj.map == j.map && lj.max_velocity == *v && lj.max_acceleration == *acc,

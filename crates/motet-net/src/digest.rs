@@ -39,8 +39,12 @@ impl FromStr for Digest {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Digest, String> {
-        let bad = || format!("`{s}` is not a SHA-256 (64 hex digits)");
-        if s.len() != 64 || !s.is_ascii() {
+        let bad = || format!("`{s}` is not a SHA-256 (64 lowercase hex digits)");
+        if s.len() != 64
+            || !s
+                .bytes()
+                .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
+        {
             return Err(bad());
         }
         let mut d = [0u8; 32];
@@ -77,7 +81,8 @@ mod tests {
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
         assert_eq!(d.to_string().parse::<Digest>(), Ok(d));
-        for bad in ["", "ab", &"g".repeat(64), &"é".repeat(32)] {
+        let upper = d.to_string().to_uppercase();
+        for bad in ["", "ab", &"g".repeat(64), &"é".repeat(32), &upper] {
             assert!(bad.parse::<Digest>().is_err(), "{bad}");
         }
     }

@@ -136,56 +136,26 @@ impl JournalWriter {
     }
 
     pub fn header(&mut self, h: &JournalHeader) -> Result<(), JournalError> {
-        self.record(&format!(
-            "motet-journal {JOURNAL_FORMAT} run={:08x} machine={} job={} t0={:?} min_move_s={:?} start={}",
-            h.run,
-            h.machine,
-            h.job,
-            h.t0,
-            h.min_move_s,
-            fmt_point(&h.start)
-        ))?;
+        self.record(&header_text(h))?;
         self.sync()
     }
 
     pub fn segment(&mut self, s: &JournalSegment) -> Result<(), JournalError> {
-        self.record(&format!(
-            "seg {} {} {:?} {:?} {} | {}",
-            s.index,
-            s.command,
-            s.t0,
-            s.t1,
-            fmt_point(&s.start),
-            fmt_point(&s.end)
-        ))
+        self.record(&segment_text(s))
     }
 
     pub fn seal(&mut self, s: JournalSeal) -> Result<(), JournalError> {
-        self.record(&format!("seal {} {} {} {}", s.end, s.tail, s.done, s.time))?;
+        self.record(&seal_text("seal", &s))?;
         self.sync()
     }
 
     pub fn stop(&mut self, s: &JournalStop) -> Result<(), JournalError> {
-        let lost = if s.lost.is_empty() {
-            "-".to_string()
-        } else {
-            s.lost
-                .iter()
-                .map(|k| k.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        let q = s.seal;
-        self.record(&format!(
-            "stop {} {} {} {} {lost}",
-            q.end, q.tail, q.done, q.time
-        ))?;
+        self.record(&stop_text(s))?;
         self.sync()
     }
 
     fn record(&mut self, text: &str) -> Result<(), JournalError> {
-        self.chain = record_checksum(self.chain, text);
-        let line = format!("{text} *{:08x}\n", self.chain);
+        let line = signed(&mut self.chain, text);
         self.out
             .write_all(line.as_bytes())
             .map_err(|source| JournalError::Io {
@@ -203,6 +173,54 @@ impl JournalWriter {
                 source,
             })
     }
+}
+
+fn header_text(h: &JournalHeader) -> String {
+    format!(
+        "motet-journal {JOURNAL_FORMAT} run={:08x} machine={} job={} t0={:?} min_move_s={:?} start={}",
+        h.run,
+        h.machine,
+        h.job,
+        h.t0,
+        h.min_move_s,
+        fmt_point(&h.start)
+    )
+}
+
+fn segment_text(s: &JournalSegment) -> String {
+    format!(
+        "seg {} {} {:?} {:?} {} | {}",
+        s.index,
+        s.command,
+        s.t0,
+        s.t1,
+        fmt_point(&s.start),
+        fmt_point(&s.end)
+    )
+}
+
+fn seal_text(kind: &str, s: &JournalSeal) -> String {
+    format!("{kind} {} {} {} {}", s.end, s.tail, s.done, s.time)
+}
+
+fn stop_text(s: &JournalStop) -> String {
+    let lost = if s.lost.is_empty() {
+        "-".to_string()
+    } else {
+        s.lost
+            .iter()
+            .map(|k| k.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    format!("{} {lost}", seal_text("stop", &s.seal))
+}
+
+/// The record's line (newline included), its checksum chained after `chain`
+/// (then moved on to it).
+fn signed(chain: &mut u32, text: &str) -> String {
+    *chain = record_checksum(*chain, text);
+    format!("{text} *{:08x}\n", *chain)
 }
 
 /// A journal read back and checked: every record's checksum, segment indices
@@ -321,6 +339,33 @@ impl Journal {
         Ok(j)
     }
 
+    /// The journal as the writer writes it. Seals and the segments they
+    /// commit interleave by segment index, as they were written.
+    pub fn to_text(&self) -> String {
+        let mut chain = 0;
+        let mut out = String::new();
+        let Some(h) = &self.header else {
+            return out;
+        };
+        out += &signed(&mut chain, &header_text(h));
+        let mut next = 0usize;
+        for seal in &self.seals {
+            while next < seal.end as usize {
+                out += &signed(&mut chain, &segment_text(&self.segments[next]));
+                next += 1;
+            }
+            out += &signed(&mut chain, &seal_text("seal", seal));
+        }
+        while next < self.segments.len() {
+            out += &signed(&mut chain, &segment_text(&self.segments[next]));
+            next += 1;
+        }
+        if let Some(stop) = &self.stop {
+            out += &signed(&mut chain, &stop_text(stop));
+        }
+        out
+    }
+
     /// The segment with index `i`.
     pub fn segment(&self, i: u32) -> Option<&JournalSegment> {
         self.segments.get(i as usize)
@@ -356,10 +401,7 @@ fn checked<'a>(line: &'a str, chain: &mut u32) -> Result<&'a str, String> {
     let Some((text, crc)) = line.rsplit_once(" *") else {
         return Err("record without a checksum (` *` and 8 hex digits)".into());
     };
-    let want = u32::from_str_radix(crc, 16)
-        .ok()
-        .filter(|_| crc.len() == 8)
-        .ok_or_else(|| format!("checksum `{crc}` is not 8 hex digits"))?;
+    let want = hex32(crc).ok_or_else(|| format!("checksum `{crc}` is not 8 hex digits"))?;
     let got = record_checksum(*chain, text);
     if got != want {
         return Err(format!(
@@ -386,7 +428,7 @@ fn parse_header<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Journal
             .ok_or_else(|| format!("`{w}` where the header has `{key}=`"))
     };
     let run = field("run")?;
-    let run = u32::from_str_radix(run, 16).map_err(|_| format!("run `{run}` is not hex"))?;
+    let run = hex32(run).ok_or_else(|| format!("run `{run}` is not 8 hex digits"))?;
     let machine = field("machine")?.parse::<Digest>()?;
     let job = field("job")?.parse::<Digest>()?;
     let t0 = finite(field("t0")?)?;
@@ -499,17 +541,30 @@ fn parse_lost(w: Option<&str>) -> Result<Vec<usize>, String> {
     }
 }
 
-fn num<T: std::str::FromStr>(w: Option<&str>, what: &str) -> Result<T, String> {
+// Every field must be written as the writer writes it (lowercase hex,
+// integers without signs or leading zeros, floats in their shortest
+// round-trip form): a record that reads the same but is written otherwise
+// was not written by motet.
+
+/// 8 lowercase hex digits.
+fn hex32(w: &str) -> Option<u32> {
+    let v = u32::from_str_radix(w, 16).ok()?;
+    (format!("{v:08x}") == w).then_some(v)
+}
+
+fn num<T: std::str::FromStr + std::fmt::Display>(w: Option<&str>, what: &str) -> Result<T, String> {
     let w = w.ok_or_else(|| format!("missing {what}"))?;
-    w.parse()
-        .map_err(|_| format!("{what} `{w}` is not a number"))
+    w.parse::<T>()
+        .ok()
+        .filter(|v| v.to_string() == w)
+        .ok_or_else(|| format!("{what} `{w}` is not a number as motet writes it"))
 }
 
 fn finite(w: &str) -> Result<f64, String> {
     w.parse::<f64>()
         .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("`{w}` is not a finite number"))
+        .filter(|v| v.is_finite() && format!("{v:?}") == w)
+        .ok_or_else(|| format!("`{w}` is not a finite number as motet writes it"))
 }
 
 fn point<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Point, String> {
@@ -673,21 +728,48 @@ mod tests {
                 "j:3: checksum",
             ),
             (unsigned(2, "seg 1 3 0 1"), "j:3: record without a checksum"),
+            // Read the same, written otherwise: not motet's.
+            (
+                unsigned(2, &{
+                    let (t, c) = lines[2].rsplit_once(" *").unwrap();
+                    format!("{t} *{}", c.to_uppercase())
+                }),
+                "j:3: checksum",
+            ),
+            (
+                with(2, &lines[2].replacen(" 1000.0 ", " 1e3 ", 1)),
+                "`1e3` is not a finite number as motet writes it",
+            ),
+            (
+                with(2, &lines[2].replacen("seg 1 ", "seg 01 ", 1)),
+                "segment index `01`",
+            ),
             (
                 with(0, &sign("motet-journal 1 run=1")),
                 "j:1: journal format 1",
             ),
             (with(0, &sign("hello")), "j:1: not a motet journal"),
             (
-                with(2, &sign("seg 7 3 0 1 0 0 0 0 0 0 | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign("seg 7 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
                 "j:3: segment 7 where segment 1 was due",
             ),
             (
-                with(2, &sign("seg 1 3 2000 1000 0 0 0 0 0 0 | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign(
+                        "seg 1 3 2000.0 1000.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0",
+                    ),
+                ),
                 "ends (1000 µs) before it starts",
             ),
             (
-                with(2, &sign("seg 1 3 0 1 0 0 0 0 0 NaN | 0 0 0 0 0 0")),
+                with(
+                    2,
+                    &sign("seg 1 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 NaN | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
                 "`NaN` is not a finite",
             ),
             (

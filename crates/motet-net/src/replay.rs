@@ -108,7 +108,7 @@ pub fn replay(
             n.node.tally().map(Tally::from).unwrap_or(Tally {
                 steps: [0; 8],
                 tool_changes: 0,
-                crc: 0,
+                hash: 0,
             })
         })
         .collect())

@@ -161,7 +161,7 @@ pub struct StopInfo {
 pub struct Tally {
     pub steps: [u32; 8],
     pub tool_changes: u32,
-    pub crc: u32,
+    pub hash: u64,
 }
 
 impl From<&motet_node::StepTally> for Tally {
@@ -169,7 +169,7 @@ impl From<&motet_node::StepTally> for Tally {
         Tally {
             steps: t.steps,
             tool_changes: t.tool_changes,
-            crc: t.crc(),
+            hash: t.hash,
         }
     }
 }
@@ -540,12 +540,12 @@ impl NetRun {
                     Incoming::Motion(NodeMessage::Tally {
                         steps,
                         tool_changes,
-                        crc,
+                        hash,
                     }) => {
                         self.tallies[k] = Some(Some(Tally {
                             steps,
                             tool_changes,
-                            crc,
+                            hash,
                         }))
                     }
                     Incoming::Motion(NodeMessage::Refused { reason }) => {

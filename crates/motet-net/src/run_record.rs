@@ -3,7 +3,7 @@
 //! again and can check that nothing changed.
 
 use crate::digest::Digest;
-use motet_planner::{Command, Located};
+use motet_planner::{ranges, Command, Located};
 use motet_trajectory::{Point, MAX_AXES};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -105,6 +105,16 @@ impl RunRecord {
             path: p.clone(),
             message,
         })?;
+        for (key, range, v) in [
+            ("time_scale", ranges::TIME_SCALE, r.time_scale),
+            ("lead_ms", ranges::LEAD_MS, r.lead_ms),
+            ("sync_ms", ranges::SYNC_MS, r.sync_ms),
+        ] {
+            range.check(key, v).map_err(|e| RecordError::Parse {
+                path: p.clone(),
+                message: e.to_string(),
+            })?;
+        }
         if let Some(c) = &r.continues {
             if c.from.len() != MAX_AXES || c.to.len() != MAX_AXES {
                 return Err(RecordError::Parse {
@@ -171,4 +181,64 @@ fn point(v: &[f64]) -> Point {
         *d = *s;
     }
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record() -> RunRecord {
+        RunRecord {
+            format: RECORD_FORMAT,
+            run: "0000abcd".into(),
+            machine: "/m.toml".into(),
+            machine_sha256: Digest::of(b"m"),
+            job: "/j.svg".into(),
+            job_sha256: Digest::of(b"j"),
+            allow_unknown: false,
+            time_scale: 1.0,
+            lead_ms: 100.0,
+            sync_ms: 400.0,
+            continues: None,
+            nodes: vec![],
+        }
+    }
+
+    #[test]
+    fn a_record_reads_back_and_bad_ones_say_what() {
+        let dir = std::env::temp_dir().join(format!("motet-record-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        record().save(&dir).unwrap();
+        assert_eq!(RunRecord::load(&dir).unwrap(), record());
+        let text = std::fs::read_to_string(dir.join("resume.toml")).unwrap();
+        let cases = [
+            ("lead_ms = 100.0", "lead_ms = 1e12", "lead_ms must be from"),
+            (
+                "time_scale = 1.0",
+                "time_scale = -1.0",
+                "time_scale must be from",
+            ),
+            (
+                "format = 2",
+                "format = 1",
+                "format 1: this motet resumes runs of format 2",
+            ),
+            (
+                "run = \"0000abcd\"",
+                "run = \"0\"",
+                "run `0` is not a run number",
+            ),
+            (
+                "allow_unknown = false",
+                "allow_unknown = false\nextra = 1",
+                "unknown field",
+            ),
+        ];
+        for (from, to, want) in cases {
+            std::fs::write(dir.join("resume.toml"), text.replace(from, to)).unwrap();
+            let e = RunRecord::load(&dir).unwrap_err().to_string();
+            assert!(e.contains("resume.toml") && e.contains(want), "{to}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -669,11 +669,12 @@ fn a_given_position_is_checked_against_travel() {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 96, ..Default::default() })]
 
-    /// Any byte of the journal, the job or the machine file flipped, or any
-    /// field of the journal that the plan fixes (a segment's command, times
-    /// and coordinates, a window's end and tail, the header) changed and
-    /// every record signed again: refused. Nothing changed: the same
-    /// resumption, exactly.
+    /// Any byte of the journal, the job or the machine file flipped:
+    /// refused. Any field of the journal that the plan fixes (a segment's
+    /// command, times and coordinates, a window's end and tail, the header)
+    /// changed and every record signed again: refused, unless the plan is
+    /// bit for bit what it was (then the same resumption). Nothing changed:
+    /// the same resumption, exactly.
     #[test]
     fn an_altered_journal_job_or_machine_file_is_refused(
         which in 0usize..4,
@@ -722,7 +723,18 @@ proptest! {
             }
         }
         let got = e.attempt(None);
-        prop_assert!(got.is_err(), "altered ({which}) and resumed: {:?}", got.map(|r| r.command));
+        if which < 3 {
+            prop_assert!(got.is_err(), "flipped ({which}) and resumed at {:?}", got.map(|r| r.command));
+        } else {
+            // A plan input changed so little that not one segment of the plan
+            // moves (the shortest move time by one ulp, with no move that
+            // short) changes nothing: the same resumption. Anything else is
+            // refused.
+            prop_assert!(
+                got.as_ref().is_err() || got.as_ref().ok() == Some(&want),
+                "edited and resumed differently, at {:?}", got.map(|r| r.command)
+            );
+        }
         prop_assert_eq!(base.attempt(None).unwrap(), want);
     }
 }

@@ -287,7 +287,9 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         let new_base = self.node.queued() == 0 && t < self.ran_until - NEW_TIME_BASE_US;
         if t > self.ran_until || new_base {
             self.node.poll(t, board);
-            self.ran_until = t;
+            // Short of `t` if the node had more due than one poll hands
+            // out: the next poll goes on.
+            self.ran_until = self.node.time();
         }
         self.report_state();
     }

@@ -24,7 +24,7 @@ pub use channel::Channel;
 pub use endpoint::{Endpoint, EndpointStats};
 pub use node::{
     Node, NodeGraph, NodeStatus, DEFAULT_QUEUE, GRAPH_COMPONENTS, GRAPH_MAPPINGS, MAX_CHANNELS,
-    MAX_STEPS_PER_UNIT, MAX_TOOLS,
+    MAX_OUTPUTS_PER_POLL, MAX_STEPS_PER_UNIT, MAX_STEP_RATE, MAX_TOOLS,
 };
 pub use service::{Action, Handled, NodeConfig, Services};
 pub use storage::{Flash, Persisted, RamFlash, RamStore, StorageError, Store};

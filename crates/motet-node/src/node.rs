@@ -9,7 +9,7 @@ use crate::graph::{
 use crate::tally::{StepTally, Tallying};
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
-use motet_trajectory::{Contingency, JointMap, Point, Profile, Segment, MAX_AXES};
+use motet_trajectory::{Contingency, JointMap, JointPath, Point, Profile, Segment, MAX_AXES};
 use motet_wire::message::{GraphInputKind, GraphMode};
 use motet_wire::stream::{BatchReader, StreamState};
 use motet_wire::{
@@ -51,6 +51,18 @@ pub const MAX_CHANNELS: usize = 8;
 pub const MAX_TOOLS: usize = 4;
 /// Largest |steps per unit| a channel accepts.
 pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
+/// Fastest a channel may step along a segment on average, steps per second.
+/// Most steps per second a channel takes (see [`motet_wire::MAX_STEP_RATE`]):
+/// a segment asking for more (a huge distance in no time) would keep `poll`
+/// busy for good, and is refused.
+pub use motet_wire::MAX_STEP_RATE;
+
+/// Most outputs (steps, tool changes, graph frames) one [`Node::poll`]
+/// hands out: a poll that has more due stops after them, at the last one's
+/// time, and the next poll goes on from there. A node is then never busy
+/// for long in one call, whatever it was sent, and a firmware main loop
+/// stays responsive to its link.
+pub const MAX_OUTPUTS_PER_POLL: u32 = 1 << 16;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Event {
@@ -594,6 +606,20 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         None
     }
 
+    /// When motion resumes if the machine stands still at host time `t`
+    /// (inside a dwell, or before the next committed segment starts).
+    fn still_until(&self, t: f64) -> Option<f64> {
+        for s in self.segments.iter().take(self.committed_len()) {
+            if t < s.t0 {
+                return Some(s.t0);
+            }
+            if t < s.t1() {
+                return (s.profile.length() <= 0.0).then(|| s.t1());
+            }
+        }
+        None
+    }
+
     fn set_position(&mut self, p: &Point) -> Result<(), Refusal> {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(Refusal::Malformed);
@@ -647,6 +673,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             end,
             profile: Profile::from_params(p),
         };
+        self.check_segment(&seg)?;
         // Checked above: the queue has room.
         let _ = self.segments.push_back(seg);
         self.tail = end;
@@ -694,6 +721,19 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             if !segment_is_finite(&m) {
                 return Err(Refusal::Malformed);
             }
+            // Axes a batch does not carry keep the node's tail throughout.
+            let (mut start, mut end) = (self.tail, self.tail);
+            for span in &m.axes {
+                start[span.axis as usize] = span.from;
+                end[span.axis as usize] = span.to;
+            }
+            let seg = Segment {
+                t0: m.t0,
+                start,
+                end,
+                profile: Profile::from_params(&m.profile),
+            };
+            self.check_segment(&seg)?;
             n += 1;
         }
         if n == 0 {
@@ -709,6 +749,41 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         self.stream_state = state;
         Ok(())
+    }
+
+    /// A segment the node can run: every channel within [`MAX_STEP_RATE`].
+    /// (A late one, after an underrun, is taken: its steps catch up, at most
+    /// [`MAX_OUTPUTS_PER_POLL`] a poll.)
+    fn check_segment(&self, seg: &Segment) -> Result<(), Refusal> {
+        if self.steppable(seg) {
+            Ok(())
+        } else {
+            Err(Refusal::Malformed)
+        }
+    }
+
+    /// Whether every channel can follow `seg` within [`MAX_STEP_RATE`] on
+    /// average over the segment. (The peak may be higher for a moment: a
+    /// polar angle turns through up to half a turn as a line passes its
+    /// centre, a bounded number of steps however fast.)
+    fn steppable(&self, seg: &Segment) -> bool {
+        let p = &seg.profile;
+        let length = p.length();
+        if length <= 0.0 {
+            return true;
+        }
+        let seconds = p.duration();
+        self.channels.iter().all(|ch| {
+            let c = ch.config();
+            let mut travel = JointPath::new(&c.map, seg, 0.0).max_rate(0.0, length) * length;
+            if let JointMap::PolarAngle { .. } = c.map {
+                // A straight line subtends less than half a turn.
+                travel = travel.min(180.0);
+            }
+            let steps = travel * c.steps_per_unit.abs();
+            // NaN is refused too; a segment that moves no joint always passes.
+            steps == 0.0 || steps <= MAX_STEP_RATE * seconds
+        })
     }
 
     pub fn status(&self) -> NodeStatus {
@@ -827,6 +902,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
     }
 
+    /// Host time up to which the node has run, µs (the last poll's `until`,
+    /// or its last output's time if that poll stopped at
+    /// [`MAX_OUTPUTS_PER_POLL`]).
+    pub fn time(&self) -> f64 {
+        self.now
+    }
+
     /// Keeps a tally of every output from now on (kept across `Reset`, which
     /// starts it again), reported on `TallyGet`.
     pub fn keep_tally(&mut self) {
@@ -839,19 +921,28 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     }
 
     fn poll_outputs<B: Board>(&mut self, until: f64, board: &mut B) {
+        let mut budget = MAX_OUTPUTS_PER_POLL;
         if let Some(ts) = self.tail_start.filter(|&t| t < until) {
-            self.poll_until(ts, board);
+            if !self.poll_until(ts, board, &mut budget) {
+                // Stopped short of the tail: the next poll gets there.
+                return;
+            }
             self.stop_on_tail(ts, board);
         }
-        self.poll_until(until, board);
+        self.poll_until(until, board, &mut budget);
     }
 
-    fn poll_until<B: Board>(&mut self, until: f64, board: &mut B) {
+    /// Runs to `until`; false when the budget ran out first (the node's time
+    /// is then that of its last output).
+    fn poll_until<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
         while let Some(t) = self.graph_next().filter(|&t| t < until) {
-            self.poll_trajectory(t, board);
+            if !self.poll_trajectory(t, board, budget) || *budget == 0 {
+                return false;
+            }
             self.graph_frame(t, board);
+            *budget -= 1;
         }
-        self.poll_trajectory(until, board);
+        self.poll_trajectory(until, board, budget)
     }
 
     fn graph_frame<B: Board>(&mut self, t: f64, board: &mut B) {
@@ -886,11 +977,19 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // Stream inputs carry one frame's signals.
         self.inputs.streams = [graph::wire::Signals::NONE; MAX_HW];
         h.frames += 1;
-        h.next = Some(t + period);
+        // Where a period no longer changes an `f64` (a nonsensical clock
+        // model), the graph stops rather than run the same frame for good.
+        h.next = Some(if t + period > t {
+            t + period
+        } else {
+            f64::INFINITY
+        });
     }
 
-    fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B) {
+    fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
         let end = self.committed_len();
+        // Time of the last output handed out.
+        let mut last = None;
         loop {
             let mut best: Option<(usize, f64)> = None;
             for (i, ch) in self.channels.iter_mut().enumerate() {
@@ -910,12 +1009,36 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             // Ties: events, then refreshes, then steps.
             let step_time = best.map(|(_, t)| t);
+            let next = [step_time, event_time, refresh.map(|r| r.1)]
+                .into_iter()
+                .flatten()
+                .min_by(f64::total_cmp);
+            match (next, last) {
+                (None, _) => break,
+                (Some(_), Some(t)) if *budget == 0 => {
+                    // Everything before `t` is out; what is due at `t` or
+                    // after waits for the next poll.
+                    self.now = t;
+                    self.retire();
+                    return false;
+                }
+                _ => {}
+            }
+            *budget = budget.saturating_sub(1);
+            last = next;
             if let Some((i, u)) = refresh {
                 if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
                     let speed = self.speed_at(u);
+                    let still = self.still_until(u);
                     let tool = &mut self.tools[i];
                     if let Some(v) = tool.refresh(u, speed) {
                         board.set_tool(tool.output(), v, u);
+                    }
+                    // Standing still (a dwell, a wait for the next segment),
+                    // the speed stays 0 and so does the output: no refresh
+                    // until motion resumes, however long the dwell.
+                    if let Some(t) = still {
+                        tool.defer(t);
                     }
                     continue;
                 }
@@ -935,6 +1058,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         self.now = until;
         self.retire();
+        true
     }
 
     fn fire_event<B: Board>(&mut self, board: &mut B) {

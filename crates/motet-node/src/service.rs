@@ -457,9 +457,6 @@ impl<S: Store, F: Flash> Services<S, F> {
         if (size as usize) < MIN_HEADER_LEN {
             return Handled::error(ServiceError::BadImage(ImageError::Truncated));
         }
-        if size as usize == MIN_HEADER_LEN {
-            return Handled::error(ServiceError::BadImage(ImageError::EmptyPayload));
-        }
         let capacity = self.flash.capacity();
         if size > capacity {
             return Handled::error(ServiceError::TooLarge { capacity });

@@ -1,23 +1,37 @@
 //! A running account of what a node's outputs did: steps per channel, tool
-//! changes, and a CRC-32C over every output with its exact time. Two nodes
-//! that ran the same trajectory the same way have the same tally, so a board
-//! (or an emulated one) can be checked against the simulator without sending
+//! changes, and a hash over every output with its exact time. Two nodes that
+//! ran the same trajectory the same way have the same tally, so a board (or
+//! an emulated one) can be checked against the simulator without sending
 //! every step back.
+//!
+//! The hash takes each output as two 64-bit words (what and the time's
+//! bits), each mixed in by an xor, a multiply by a large odd constant and an
+//! xor-shift: a few instructions a step even on a 32-bit core, where a
+//! byte-wise CRC would cost as much as the step's solve.
 
 use crate::board::Board;
 use crate::node::MAX_CHANNELS;
-use motet_wire::frame::Crc32c;
 use motet_wire::NodeMessage;
+
+/// Where the hash starts, and the constant it multiplies by (both odd, with
+/// bits spread across the word).
+const SEED: u64 = 0x6d6f_7465_745f_7461;
+const MUL: u64 = 0x9e37_79b9_7f4a_7c15;
+
+fn mix(h: u64, w: u64) -> u64 {
+    let h = (h ^ w).wrapping_mul(MUL);
+    h ^ (h >> 29)
+}
 
 // `NodeMessage::Tally` carries one count per channel.
 const _: () = assert!(MAX_CHANNELS == 8);
 
-/// Steps per channel, tool changes and the CRC of all of them in order.
-#[derive(Clone, Copy, Debug)]
+/// Steps per channel, tool changes and the hash of all of them in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepTally {
     pub steps: [u32; MAX_CHANNELS],
     pub tool_changes: u32,
-    crc: Crc32c,
+    pub hash: u64,
 }
 
 impl Default for StepTally {
@@ -25,33 +39,27 @@ impl Default for StepTally {
         StepTally {
             steps: [0; MAX_CHANNELS],
             tool_changes: 0,
-            crc: Crc32c::new(),
+            hash: SEED,
         }
     }
 }
 
 impl StepTally {
-    /// A step: channel, direction and the time's bits go into the CRC.
+    /// A step: the word `channel | forward << 8`, then the time's bits.
     pub fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
         if let Some(c) = self.steps.get_mut(channel as usize) {
             *c = c.wrapping_add(1);
         }
-        self.crc.update(&[channel, forward as u8]);
-        self.crc.update(&at_us.to_bits().to_le_bytes());
+        let what = channel as u64 | (forward as u64) << 8;
+        self.hash = mix(mix(self.hash, what), at_us.to_bits());
     }
 
-    /// A tool change: output (with the top bit set, so it never reads as a
-    /// step), value and time.
+    /// A tool change: the word `output | 1 << 16 | value's bits << 32` (the
+    /// bit 16 sets it apart from any step), then the time's bits.
     pub fn tool(&mut self, output: u8, value: f32, at_us: f64) {
         self.tool_changes = self.tool_changes.wrapping_add(1);
-        self.crc.update(&[0x80 | output]);
-        self.crc.update(&value.to_bits().to_le_bytes());
-        self.crc.update(&at_us.to_bits().to_le_bytes());
-    }
-
-    /// The CRC so far.
-    pub fn crc(&self) -> u32 {
-        self.crc.finish()
+        let what = output as u64 | 1 << 16 | (value.to_bits() as u64) << 32;
+        self.hash = mix(mix(self.hash, what), at_us.to_bits());
     }
 
     /// As the node reports it.
@@ -59,7 +67,7 @@ impl StepTally {
         NodeMessage::Tally {
             steps: self.steps,
             tool_changes: self.tool_changes,
-            crc: self.crc(),
+            hash: self.hash,
         }
     }
 }
@@ -79,5 +87,61 @@ impl<B: Board> Board for Tallying<'_, B> {
     fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
         self.tally.tool(output, value, at_us);
         self.inner.set_tool(output, value, at_us);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Outputs that differ in any one thing (channel, direction, time by one
+    /// ulp, order, a tool for a step) give different hashes.
+    #[test]
+    fn any_difference_changes_the_hash() {
+        let run = |f: &dyn Fn(&mut StepTally)| {
+            let mut t = StepTally::default();
+            f(&mut t);
+            t.hash
+        };
+        let base = run(&|t| {
+            t.step(0, true, 100.0);
+            t.step(1, false, 100.5);
+            t.tool(0, 0.5, 101.0);
+        });
+        let variants: [&dyn Fn(&mut StepTally); 6] = [
+            &|t| {
+                t.step(2, true, 100.0);
+                t.step(1, false, 100.5);
+                t.tool(0, 0.5, 101.0);
+            },
+            &|t| {
+                t.step(0, false, 100.0);
+                t.step(1, false, 100.5);
+                t.tool(0, 0.5, 101.0);
+            },
+            &|t| {
+                t.step(0, true, f64::from_bits(100f64.to_bits() + 1));
+                t.step(1, false, 100.5);
+                t.tool(0, 0.5, 101.0);
+            },
+            &|t| {
+                t.step(1, false, 100.5);
+                t.step(0, true, 100.0);
+                t.tool(0, 0.5, 101.0);
+            },
+            &|t| {
+                t.step(0, true, 100.0);
+                t.step(1, false, 100.5);
+                t.tool(0, 0.25, 101.0);
+            },
+            &|t| {
+                t.step(0, true, 100.0);
+                t.step(1, false, 100.5);
+                t.step(0, false, 101.0);
+            },
+        ];
+        for (i, v) in variants.iter().enumerate() {
+            assert_ne!(run(*v), base, "variant {i}");
+        }
     }
 }

@@ -54,7 +54,7 @@ impl ToolOutput {
         let out = self.scaled(speed);
         self.last = out;
         self.next_update = if feed > 0.0 && speed.is_some() {
-            time + PER_SPEED_UPDATE_US
+            after_period(time)
         } else {
             f64::INFINITY
         };
@@ -65,7 +65,7 @@ impl ToolOutput {
     /// queued at or after it). Returns a new board value if it changed.
     pub fn refresh(&mut self, time: f64, speed: Option<f64>) -> Option<f32> {
         self.next_update = if speed.is_some() {
-            time + PER_SPEED_UPDATE_US
+            after_period(time)
         } else {
             f64::INFINITY
         };
@@ -75,6 +75,13 @@ impl ToolOutput {
             Some(out)
         } else {
             None
+        }
+    }
+
+    /// Nothing moves before `t`: the next refresh need not come earlier.
+    pub fn defer(&mut self, t: f64) {
+        if self.next_update.is_finite() && t > self.next_update {
+            self.next_update = t;
         }
     }
 
@@ -91,5 +98,46 @@ impl ToolOutput {
         }
         let ratio = (speed.unwrap_or(0.0) / self.feed as f64).clamp(0.0, 1.0);
         self.value * ratio as f32
+    }
+}
+
+/// The next refresh after `time`; none where a period no longer changes an
+/// `f64` (beyond 2⁶³ µs, reached only through a nonsensical clock model):
+/// a refresh due at the same time again would keep `poll` busy for good.
+fn after_period(time: f64) -> f64 {
+    let next = time + PER_SPEED_UPDATE_US;
+    if next > time {
+        next
+    } else {
+        f64::INFINITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Found by fuzzing: with host time past 2⁶³ µs a refresh was due again
+    /// at the same time, and `poll` never returned.
+    #[test]
+    fn refreshes_always_move_on() {
+        for time in [0.0, 1e6, 1e15, 1e17, 1e20, 1e300] {
+            let mut t = ToolOutput::new(ToolConfig {
+                output: 0,
+                track: 0,
+            });
+            t.set(1.0, 10.0, time, Some(5.0));
+            let next = t.next_update();
+            assert!(
+                next.is_none_or(|n| n > time),
+                "set at {time}: next {next:?}"
+            );
+            t.refresh(time, Some(5.0));
+            let next = t.next_update();
+            assert!(
+                next.is_none_or(|n| n > time),
+                "refresh at {time}: next {next:?}"
+            );
+        }
     }
 }

@@ -314,6 +314,61 @@ fn full_event_queue_refuses() {
     );
 }
 
+/// A segment whose steps no channel could take in its time (found by
+/// fuzzing: a channel of coefficient 4.8e232 kept `poll` stepping for good)
+/// is refused with nothing changed; the same move in a sane time is taken.
+#[test]
+fn segments_too_fast_to_step_are_refused() {
+    let cases = [
+        // (map, steps per unit, move along x, duration in s, taken)
+        (JointMap::axis(0), 100.0, 1e7, 1.0, false),
+        (JointMap::axis(0), 100.0, 1e7, 1e4, true),
+        (JointMap::axis(0), 1e6, 1.0, 1e-3, false),
+        (JointMap::axis(0), 1e6, 1.0, 1.0, true),
+        (
+            JointMap::Linear {
+                coeffs: [1.0, -4.8e232, 0.0, 0.0, 0.0, 0.0],
+            },
+            100.0,
+            0.0,
+            1.0,
+            false,
+        ),
+    ];
+    for (i, &(map, spu, dx, seconds, taken)) in cases.iter().enumerate() {
+        let mut node = Node::<4>::new();
+        send(&mut node, &HostMessage::Reset);
+        assert_eq!(
+            send(
+                &mut node,
+                &HostMessage::ConfigureChannel(channel(0, map, spu))
+            ),
+            None
+        );
+        let (start, mut end) = ([0.0f64; MAX_AXES], [0.0f64; MAX_AXES]);
+        end[0] = dx;
+        // Along y for the case that moves x by nothing: the huge coefficient.
+        if dx == 0.0 {
+            end[1] = 1.0;
+        }
+        let length = (end[0] - start[0]).abs().max((end[1] - start[1]).abs());
+        let v = length / seconds;
+        let seg = motet_trajectory::Segment {
+            t0: 0.0,
+            start,
+            end,
+            profile: motet_trajectory::Profile::new(length, v, v, v, 1.0, 0.0),
+        };
+        let msg = bytes(&HostMessage::Segment(segment_msg(&seg, 0, 0b11)));
+        let case = format!("case {i}: {map:?} at {spu} steps/unit, {length} in {seconds} s");
+        if taken {
+            assert_eq!(node.handle(&msg), None, "{case}");
+        } else {
+            refuse(&mut node, &msg, Refusal::Malformed, &case);
+        }
+    }
+}
+
 fn status_reply<const Q: usize>(node: &mut Node<Q>) -> NodeStatus {
     match send(node, &HostMessage::Status) {
         Some(NodeMessage::Status {

@@ -225,3 +225,64 @@ fn events_without_motion() {
     );
     assert_eq!(node.next_deadline(), None);
 }
+
+/// A laser whose power follows the speed stays quiet through a dwell, and
+/// the node's next deadline jumps over it: a dwell costs the same work
+/// whether it lasts a second or a day.
+#[test]
+fn a_per_speed_output_sleeps_through_a_dwell() {
+    let job = |dwell: f64| {
+        vec![
+            Command::ToolPerSpeed {
+                tool: 1,
+                value: 0.8,
+                feed: 50.0,
+            },
+            feed(70.0, 0.0, 1.0, 50.0),
+            Command::Dwell { seconds: dwell },
+            feed(80.0, 5.0, 1.0, 50.0),
+            Command::Tool {
+                tool: 1,
+                value: 0.0,
+            },
+        ]
+    };
+    let machine = cartesian();
+    let mut polls = Vec::new();
+    for dwell in [1.0, 600.0, 86_400.0] {
+        let planned = plan(limits(ProfileKind::Trapezoid), START, &job(dwell));
+        let dwell_seg = segments(&planned)
+            .into_iter()
+            .find(|s| s.profile.length() == 0.0)
+            .expect("a dwell segment");
+        let mut node = Node::<8>::new();
+        let r = run(&mut node, &machine.stream(&planned), Drive::Jump);
+        // Nothing changes while the machine stands still, once the refresh
+        // after the stop has set the power to zero.
+        let settled = dwell_seg.t0 + motet_node::tool::PER_SPEED_UPDATE_US;
+        let during: Vec<&Out> = r
+            .out
+            .iter()
+            .filter(|o| o.time() > settled && o.time() < dwell_seg.t1())
+            .collect();
+        assert!(during.is_empty(), "dwell {dwell} s: {during:?}");
+        // The laser ramps with the speed on both moves and ends off.
+        let laser: Vec<f32> = r
+            .out
+            .iter()
+            .filter_map(|o| match *o {
+                Out::Tool {
+                    output: 1, value, ..
+                } => Some(value),
+                _ => None,
+            })
+            .collect();
+        assert!(laser.len() > 10, "dwell {dwell} s: {laser:?}");
+        assert_eq!(laser.last(), Some(&0.0));
+        polls.push(r.polls);
+    }
+    assert!(
+        polls.iter().all(|&p| p.abs_diff(polls[0]) <= 2),
+        "polls grow with the dwell: {polls:?}"
+    );
+}

@@ -12,8 +12,10 @@ pub use command::{AuxChannel, Command, Located, Move, MoveKind, SourceError, Sou
 pub use target::{AxisInfo, JobTarget, ToolInfo, ToolKind};
 pub mod limits;
 pub mod planner;
+pub mod ranges;
 pub mod strokes;
 
 pub use limits::{AxisLimits, JointLimits, Limits, ToolTiming};
 pub use planner::{AuxEvent, PlanError, Planned, Planner, ToolEvent};
+pub use ranges::{OutOfRange, ValueRange};
 pub use strokes::{StrokeEmitter, StrokeSettings};

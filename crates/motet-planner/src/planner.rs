@@ -10,6 +10,7 @@
 
 use crate::command::{AuxChannel, Command, Move, MoveKind};
 use crate::limits::Limits;
+use crate::ranges::{self, OutOfRange};
 use motet_trajectory::kinematics::JointPath;
 use motet_trajectory::point::distance_masked;
 use motet_trajectory::profile::{fastest, reachable_speed};
@@ -66,12 +67,34 @@ pub enum PlanError {
     NotFinite { axis: usize },
     #[error("feed must be a positive number (got {0})")]
     BadFeed(f64),
-    #[error("dwell must be a non-negative number of seconds (got {0})")]
-    BadDwell(f64),
+    #[error(transparent)]
+    OutOfRange(#[from] OutOfRange),
     #[error("tool {0} is not on this machine")]
     UnknownTool(u8),
     #[error("the move cannot be made within the joint limits (it passes through a kinematic singularity, such as the polar centre)")]
     Singular,
+    /// The plan would last longer than [`ranges::JOB_S`].
+    #[error("{}", too_long(*at_least_s))]
+    TooLong { at_least_s: f64 },
+}
+
+fn too_long(at_least_s: f64) -> String {
+    let limit = format!(
+        "motet plans at most {} h ({} days)",
+        ranges::JOB_S.max / 3600.0,
+        ranges::JOB_S.max / 86_400.0
+    );
+    if at_least_s.is_finite() {
+        let h = (at_least_s / 3600.0).ceil();
+        let h = if h < 1e7 {
+            format!("{h}")
+        } else {
+            format!("{h:.1e}")
+        };
+        format!("the job would last at least {h} h by here; {limit}")
+    } else {
+        format!("the job would last for ever by here; {limit}")
+    }
 }
 
 /// A move waiting for its speeds.
@@ -80,6 +103,8 @@ struct Pending {
     start: Point,
     end: Point,
     length: f64,
+    /// Length over speed cap, µs: the least time the move can take.
+    min_us: f64,
     /// Direction per unit length, all axes (used for junctions).
     unit: Point,
     v_cap: f64,
@@ -111,6 +136,12 @@ pub struct Planner {
     emitted_exit: f64,
     /// Host time at the end of everything emitted, µs.
     clock: f64,
+    /// Host time the plan started at, µs: the plan may run [`ranges::JOB_S`]
+    /// from here.
+    t_start: f64,
+    /// The least time the queued moves can take (length over speed cap), µs:
+    /// with `clock`, a lower bound of where the plan ends.
+    queued_min_us: f64,
     /// Where everything emitted ends.
     emitted_pos: Point,
     out: VecDeque<Planned>,
@@ -131,6 +162,8 @@ impl Planner {
             tail: start,
             emitted_exit: 0.0,
             clock: t0,
+            t_start: t0,
+            queued_min_us: 0.0,
             emitted_pos: start,
             out: VecDeque::new(),
             loose_events: Vec::new(),
@@ -157,9 +190,8 @@ impl Planner {
         match *cmd {
             Command::Move(ref m) => self.push_move(m),
             Command::Dwell { seconds } => {
-                if !(seconds.is_finite() && seconds >= 0.0) {
-                    return Err(PlanError::BadDwell(seconds));
-                }
+                ranges::DWELL_S.check("dwell", seconds)?;
+                self.fits(seconds * 1e6)?;
                 self.flush();
                 self.emit_loose_events();
                 if seconds > 0.0 {
@@ -218,6 +250,7 @@ impl Planner {
             .get(tool as usize)
             .ok_or(PlanError::UnknownTool(tool))?;
         if timing.stop {
+            self.fits(timing.settle * 1e6)?;
             self.flush();
             self.emit_loose_events();
             let time = self.clock;
@@ -257,6 +290,7 @@ impl Planner {
             if !v.is_finite() {
                 return Err(PlanError::NotFinite { axis });
             }
+            ranges::RIDING_COORDINATE.check(format_args!("coordinate {axis}"), *v)?;
         }
         let feed = match m.kind {
             MoveKind::Rapid => f64::INFINITY,
@@ -285,6 +319,9 @@ impl Planner {
         if !(v_cap > 0.0 && accel > 0.0 && accel.is_finite()) {
             return Err(PlanError::Singular);
         }
+        // No faster than its cap: a lower bound of the time the move takes.
+        let min_us = length / v_cap * 1e6;
+        self.fits(min_us)?;
         let entry_cap = match self.queue.back() {
             Some(prev) if !self.stopped => self.junction_speed(prev, &unit, v_cap, accel),
             _ => 0.0,
@@ -292,10 +329,12 @@ impl Planner {
         self.stopped = false;
         self.tail = end;
         let events = std::mem::take(&mut self.loose_events);
+        self.queued_min_us += min_us;
         self.queue.push_back(Pending {
             start,
             end,
             length,
+            min_us,
             unit,
             v_cap,
             accel,
@@ -314,6 +353,21 @@ impl Planner {
             self.emit_front_as_is();
         }
         Ok(())
+    }
+
+    /// Refuses a command that would make the plan last longer than
+    /// [`ranges::JOB_S`] (checked before anything changes, so a refused
+    /// command leaves the plan as it was). Past that, time stamps would
+    /// lose the resolution the nodes need.
+    fn fits(&self, extra_us: f64) -> Result<(), PlanError> {
+        let end = self.clock + self.queued_min_us + extra_us - self.t_start;
+        if end <= ranges::JOB_S.max * 1e6 {
+            Ok(())
+        } else {
+            Err(PlanError::TooLong {
+                at_least_s: end * 1e-6,
+            })
+        }
     }
 
     /// Speed cap, acceleration and jerk for a move along `unit`.
@@ -487,6 +541,11 @@ impl Planner {
             .queue
             .pop_front()
             .expect("emit_front on an empty queue");
+        self.queued_min_us = if self.queue.is_empty() {
+            0.0
+        } else {
+            (self.queued_min_us - m.min_us).max(0.0)
+        };
         for e in &m.events {
             self.emit_loose(*e);
         }

@@ -162,4 +162,6 @@ def test_a_signal_handler_using_the_busy_machine_gets_a_clear_error():
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, old)
-    assert m.time > 0  # usable again
+    # Usable again: the call is over, so the machine answers (the alarm may
+    # have come while the job was still being read, before any motion).
+    assert m.time >= 0 and m.target is not None

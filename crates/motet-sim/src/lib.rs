@@ -9,5 +9,5 @@ pub mod plant;
 pub mod report;
 pub mod run;
 
-pub use report::Report;
+pub use report::{format_duration, Report};
 pub use run::{simulate, SimError, SimMachine, SimResult, NODE_QUEUE};

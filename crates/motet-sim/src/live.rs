@@ -234,7 +234,14 @@ impl LiveSource {
                 self.open = true;
                 self.ever_opened = true;
             }
-            Event::Closed => self.open = false,
+            Event::Closed => {
+                self.open = false;
+                // A reader is read once: its close is its end (without
+                // waiting for the thread to let go of the channel).
+                if self.local.is_none() {
+                    self.ended = true;
+                }
+            }
             Event::Set { at, sets } => {
                 let at = match at {
                     At::Stamp(s) => {

@@ -65,35 +65,64 @@ pub struct Report {
     pub max_step_time_error_us: f64,
     /// Times a node ran dry while moving (0 when the host keeps up).
     pub underruns: u32,
+    /// Moves with a coordinate beyond travel by less than half a step,
+    /// clamped onto it when the job was checked.
+    pub clamped_moves: usize,
+    /// The farthest such a coordinate was beyond travel, mm (0 if none).
+    pub max_clamp_mm: f64,
     /// Wall-clock seconds for planning plus simulation.
     pub wall_s: f64,
-    /// Simulated seconds per wall-clock second.
+    /// Simulated seconds per wall-clock second (wall time counted as at
+    /// least a microsecond, so the figure stays finite).
     pub speed_factor: f64,
+}
+
+/// A duration as `1h02m03.45s`; durations that are not finite numbers
+/// (which the planner never produces) as `?`.
+pub fn format_duration(seconds: f64) -> String {
+    if !seconds.is_finite() {
+        return "?".into();
+    }
+    let sign = if seconds < 0.0 { "-" } else { "" };
+    // Hundredths, rounded once, so 59.999 s is 1m00.00s and not 0m60.00s.
+    let cs = (seconds.abs() * 100.0).round();
+    let h = (cs / 360_000.0).floor();
+    let m = ((cs - h * 360_000.0) / 6_000.0).floor();
+    let s = (cs - h * 360_000.0 - m * 6_000.0) / 100.0;
+    format!("{sign}{h:.0}h{m:02.0}m{s:05.2}s")
+}
+
+/// A number for the summary: `?` when it is not finite.
+fn finite(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        "?".into()
+    }
 }
 
 impl Report {
     /// A few lines for the terminal.
     pub fn summary(&self) -> String {
         let mut s = String::new();
-        let dur = self.duration_s;
-        let hms = format!(
-            "{}h{:02}m{:05.2}s",
-            (dur / 3600.0) as u64,
-            ((dur % 3600.0) / 60.0) as u64,
-            dur % 60.0
-        );
+        let hms = format_duration(self.duration_s);
         s += &format!(
             "{} on {}: {} ({} commands, {} segments)\n",
             self.job, self.machine, hms, self.commands, self.segments
         );
         s += &format!(
-            "  path: {:.1} mm with the tool on, {:.1} mm travel\n",
-            self.tool_on_distance_mm, self.travel_distance_mm
+            "  path: {} mm with the tool on, {} mm travel\n",
+            finite(self.tool_on_distance_mm, 1),
+            finite(self.travel_distance_mm, 1)
         );
         for a in &self.axes {
             s += &format!(
-                "  axis {:<2} peak {:>8.2}/{:<8} u/s  {:>9.1}/{:<8} u/s²\n",
-                a.name, a.peak_velocity, a.max_velocity, a.peak_acceleration, a.max_acceleration
+                "  axis {:<2} peak {:>8}/{:<8} u/s  {:>9}/{:<8} u/s²\n",
+                a.name,
+                finite(a.peak_velocity, 2),
+                motet_planner::ranges::number(a.max_velocity),
+                finite(a.peak_acceleration, 1),
+                motet_planner::ranges::number(a.max_acceleration)
             );
         }
         for a in &self.actuators {
@@ -103,13 +132,65 @@ impl Report {
             );
         }
         s += &format!(
-            "  executed vs commanded: {:.4} mm max ({:.3} steps); step timing error {:.4} µs max\n",
-            self.max_path_deviation_mm, self.max_deviation_steps, self.max_step_time_error_us
+            "  executed vs commanded: {} mm max ({} steps); step timing error {} µs max\n",
+            finite(self.max_path_deviation_mm, 4),
+            finite(self.max_deviation_steps, 3),
+            finite(self.max_step_time_error_us, 4)
         );
+        if self.clamped_moves > 0 {
+            s += &format!(
+                "  {} move(s) clamped onto the travel, by {} mm at most (less than half a step)\n",
+                self.clamped_moves,
+                motet_planner::ranges::number(self.max_clamp_mm)
+            );
+        }
         s += &format!(
-            "  simulated in {:.2} s wall ({:.0}x real time)",
-            self.wall_s, self.speed_factor
+            "  simulated in {} s wall ({}x real time)",
+            finite(self.wall_s, 2),
+            finite(self.speed_factor, 0)
         );
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_print_as_hours_minutes_seconds_or_not_at_all() {
+        for (s, want) in [
+            (0.0, "0h00m00.00s"),
+            (59.999, "0h01m00.00s"),
+            (3600.0, "1h00m00.00s"),
+            (93_610.5, "26h00m10.50s"),
+            (30.0 * 86_400.0, "720h00m00.00s"),
+            (1e-300, "0h00m00.00s"),
+            (-61.0, "-0h01m01.00s"),
+            (f64::NAN, "?"),
+            (f64::INFINITY, "?"),
+        ] {
+            assert_eq!(format_duration(s), want, "{s}");
+        }
+    }
+
+    #[test]
+    fn a_summary_never_prints_nan_or_infinity() {
+        let r = Report {
+            duration_s: f64::NAN,
+            tool_on_distance_mm: f64::INFINITY,
+            speed_factor: f64::INFINITY,
+            max_deviation_steps: f64::NAN,
+            axes: vec![AxisReport {
+                name: "x".into(),
+                peak_velocity: f64::NAN,
+                max_velocity: 1e-300,
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let s = r.summary();
+        assert!(!s.contains("NaN") && !s.contains("inf"), "{s}");
+        assert!(s.contains("1e-300"), "{s}");
     }
 }

@@ -270,12 +270,10 @@ impl SimMachine {
                 .fold(0.0, f64::max),
             actuators,
             underruns: self.underruns(),
+            clamped_moves: 0,
+            max_clamp_mm: 0.0,
             wall_s: wall,
-            speed_factor: if wall > 0.0 {
-                duration_s / wall
-            } else {
-                f64::INFINITY
-            },
+            speed_factor: duration_s / wall.max(1e-6),
         }
     }
 
@@ -289,9 +287,18 @@ impl SimMachine {
         self.nodes.iter().map(|n| n.status().underruns).sum()
     }
 
-    /// First frame boundary strictly after `t`.
+    /// First frame boundary strictly after `t`. Far from zero a frame can
+    /// be finer than an `f64` resolves there; then the next representable
+    /// time, so that the clock always moves on and whatever is due at `t`
+    /// runs.
     fn frame_after(&self, t: f64) -> f64 {
-        ((t / self.frame).floor() + 1.0) * self.frame
+        let f = ((t / self.frame).floor() + 1.0) * self.frame;
+        if f > t || !t.is_finite() {
+            f
+        } else {
+            // Times are not negative: the next larger f64 is one bit up.
+            f64::from_bits(t.max(0.0).to_bits() + 1)
+        }
     }
 
     /// Runs every node up to `until` and applies their outputs to the plant.
@@ -307,7 +314,12 @@ impl SimMachine {
                 tools: &spec.tools,
                 out: &mut self.outputs,
             };
+            // The plant takes every node's outputs up to `until` in one go:
+            // a poll that stops at its output budget is continued.
             node.poll(until, &mut c);
+            while node.time() < until {
+                node.poll(until, &mut c);
+            }
         }
         self.plant.apply(&mut self.outputs);
         self.now = until;

@@ -73,7 +73,13 @@
 //!
 //! usvg computes in `f32`: coordinates carry a relative error of about
 //! 1e-7 (0.1 µm at 1 m), exact for values representable in `f32` when no
-//! scaling is involved.
+//! scaling is involved. Coordinates within a few `f32` roundings of the
+//! page's edges are put on the edges, so strokes along the page border stay
+//! on a travel that starts where the page does.
+//!
+//! Documents nesting elements deeper than `motet_planner::ranges::SVG_DEPTH`
+//! (256 levels) are refused at the first element too deep, by a linear scan
+//! before anything parses them.
 
 use std::collections::HashMap;
 
@@ -88,6 +94,8 @@ use motet_planner::MoveKind;
 use usvg::roxmltree;
 use usvg::tiny_skia_path::PathSegment;
 
+mod arcs;
+mod depth;
 mod hatch;
 mod order;
 
@@ -100,8 +108,9 @@ pub const MM_PER_PX: f64 = 25.4 / 96.0;
 pub const MIN_TOLERANCE: f64 = 1e-6;
 /// Tolerance used when the target's tolerance is not a positive number, mm.
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
-/// Largest coordinate magnitude accepted after transforms, in mm.
-pub const MAX_COORD: f64 = 1e7;
+/// Largest coordinate magnitude accepted after transforms, in mm
+/// ([`motet_planner::ranges::COORDINATE`]).
+pub const MAX_COORD: f64 = motet_planner::ranges::COORDINATE.max;
 /// Prefix of the ids given to elements that have none.
 const GENERATED_ID: &str = "motet-svg-";
 /// Inkscape's XML namespace (layer labels).
@@ -258,11 +267,13 @@ pub fn parse_with_info(
     }
 
     let text = decode(data)?;
+    depth::check_text(text)?;
     let xml_opt = roxmltree::ParsingOptions {
         allow_dtd: true,
         ..Default::default()
     };
     let doc = roxmltree::Document::parse_with_options(text, xml_opt).map_err(xml_error)?;
+    depth::check_tree(&doc)?;
     let root_loc = {
         let p = doc.text_pos_at(doc.root_element().range().start);
         SourceLoc {
@@ -273,6 +284,7 @@ pub fn parse_with_info(
 
     let usvg_opt = usvg_options();
     let (annotated, mut index, layers) = annotate(&doc);
+    arcs::check(&index)?;
     let tagged = match &annotated {
         Some(text) => usvg::Tree::from_str(text, &usvg_opt).ok(),
         None => None,
@@ -299,7 +311,10 @@ pub fn parse_with_info(
         index: &index,
         layers: &layers,
         tolerance,
-        doc_height: tree.size().height() as f64 * MM_PER_PX,
+        doc_size: [
+            tree.size().width() as f64 * MM_PER_PX,
+            tree.size().height() as f64 * MM_PER_PX,
+        ],
         opts,
         last_loc: None,
         pens: Vec::new(),
@@ -627,6 +642,22 @@ fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemI
         prefix.push('_');
     }
 
+    // Each element's layer from its parent's, in document order (parents
+    // first): linear, where walking up from every element is not.
+    let mut layer_by_node: Vec<Option<usize>> = Vec::new();
+    let mut layer_at = |node: roxmltree::Node| {
+        let layer = match node.parent_element() {
+            Some(p) if p == root => layer_of.get(&node.id()).copied(),
+            Some(p) => layer_by_node.get(p.id().get_usize()).copied().flatten(),
+            None => None,
+        };
+        let i = node.id().get_usize();
+        if layer_by_node.len() <= i {
+            layer_by_node.resize(i + 1, None);
+        }
+        layer_by_node[i] = layer;
+        layer
+    };
     let root_start = doc.root_element().range().start;
     let mut inserts: Vec<(usize, String)> = Vec::new();
     // Running position, so that locating all elements is linear.
@@ -655,10 +686,7 @@ fn annotate(doc: &roxmltree::Document) -> (Option<String>, HashMap<String, ElemI
                 .attribute("d")
                 .filter(|d| node.tag_name().name() == "path" && d.contains(['a', 'A']))
                 .map(str::to_string),
-            layer: node
-                .ancestors()
-                .find(|a| a.parent_element() == Some(root))
-                .and_then(|top| layer_of.get(&top.id()).copied()),
+            layer: layer_at(node),
         };
         if let Some(id) = node.attribute("id") {
             index.entry(id.to_string()).or_insert(info);
@@ -721,7 +749,8 @@ struct Walker<'a> {
     /// Names of the top-level groups.
     layers: &'a [String],
     tolerance: f64,
-    doc_height: f64,
+    /// The page's width and height, mm.
+    doc_size: [f64; 2],
     opts: &'a SvgOptions,
     /// Location of the last path drawn, for nodes usvg made up (markers).
     last_loc: Option<SourceLoc>,
@@ -843,17 +872,15 @@ impl Walker<'_> {
             layer,
         );
         let mut rings: Vec<Vec<[f64; 2]>> = Vec::new();
+        let doc_h = self.doc_size[1];
         for sp in subpaths {
             let pts: Vec<[f64; 2]> = sp
                 .points
                 .iter()
                 .map(|p| {
-                    let y = if self.opts.flip_y {
-                        self.doc_height - p.y
-                    } else {
-                        p.y
-                    };
-                    [ox + p.x, oy + y]
+                    let y = if self.opts.flip_y { doc_h - p.y } else { p.y };
+                    let [x, y] = on_page_edges([p.x, y], self.doc_size);
+                    [ox + x, oy + y]
                 })
                 .collect();
             if pts.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
@@ -920,6 +947,27 @@ impl Walker<'_> {
         self.pen_index.insert(name, self.pens.len() - 1);
         self.pens.len() - 1
     }
+}
+
+/// A page point (mm, origin at the corner the machine's origin goes to)
+/// with coordinates within rounding of the page's edges put on them. usvg
+/// computes in `f32`, the page size and the transforms each rounded on
+/// their own, so a stroke along the bottom of a page can come out a few
+/// `f32` steps beyond it (-0.00001 mm): off the page, and off a travel
+/// that starts where the page does.
+fn on_page_edges(p: [f64; 2], size: [f64; 2]) -> [f64; 2] {
+    // A few f32 roundings of the page size.
+    let eps = 8.0 * f64::from(f32::EPSILON) * size[0].max(size[1]).max(1.0);
+    let snap = |v: f64, len: f64| {
+        if v.abs() <= eps {
+            0.0
+        } else if (v - len).abs() <= eps {
+            len
+        } else {
+            v
+        }
+    };
+    [snap(p[0], size[0]), snap(p[1], size[1])]
 }
 
 fn kp(p: usvg::tiny_skia_path::Point) -> KPoint {

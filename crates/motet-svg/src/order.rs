@@ -301,9 +301,100 @@ fn rotate_loops(start: [f64; 2], shapes: &[Shape], tour: &mut [Placed]) {
     }
 }
 
+/// Nearest-point queries over points with ids, with removal. Points that
+/// coincide are one entry of the tree holding all their ids: a drawing with
+/// thousands of shapes on the same spot (duplicated layers, a stamp) costs a
+/// query per shape, not a walk over every copy.
+pub(crate) struct KdTree {
+    tree: PointTree,
+    /// Ids at each distinct point, ascending.
+    members: Vec<Vec<u32>>,
+    /// First member of each distinct point that may still be alive.
+    cursor: Vec<usize>,
+    /// Alive members of each distinct point.
+    left: Vec<u32>,
+    /// Distinct point of each id (ids are 0..n when used with `remove`).
+    point_of: Vec<u32>,
+    dead: Vec<bool>,
+}
+
+impl KdTree {
+    pub(crate) fn new(mut items: Vec<([f64; 2], u32)>) -> Self {
+        items.sort_by_key(|i| i.1);
+        let mut index: std::collections::HashMap<(u64, u64), u32> = Default::default();
+        let mut points: Vec<([f64; 2], u32)> = Vec::new();
+        let mut members: Vec<Vec<u32>> = Vec::new();
+        let mut point_of = vec![u32::MAX; items.len()];
+        for &(p, id) in &items {
+            let key = (p[0].to_bits(), p[1].to_bits());
+            let u = *index.entry(key).or_insert_with(|| {
+                points.push((p, points.len() as u32));
+                members.push(Vec::new());
+                (points.len() - 1) as u32
+            });
+            members[u as usize].push(id);
+            if let Some(slot) = point_of.get_mut(id as usize) {
+                *slot = u;
+            }
+        }
+        KdTree {
+            tree: PointTree::new(points),
+            cursor: vec![0; members.len()],
+            left: members.iter().map(|m| m.len() as u32).collect(),
+            members,
+            point_of,
+            dead: vec![false; items.len()],
+        }
+    }
+
+    /// Remove the point with this id (ids must be 0..n, each once).
+    pub(crate) fn remove(&mut self, id: u32) {
+        let (Some(&u), Some(dead)) = (
+            self.point_of.get(id as usize),
+            self.dead.get_mut(id as usize),
+        ) else {
+            return;
+        };
+        if *dead || u == u32::MAX {
+            return;
+        }
+        *dead = true;
+        let u = u as usize;
+        self.left[u] -= 1;
+        if self.left[u] == 0 {
+            self.tree.remove(u as u32);
+        }
+    }
+
+    /// Id of the nearest alive point (the lowest id among coinciding ones).
+    pub(crate) fn nearest(&mut self, q: [f64; 2]) -> Option<u32> {
+        let u = self.tree.nearest(q)? as usize;
+        let m = &self.members[u];
+        let c = &mut self.cursor[u];
+        while *c < m.len() && self.dead.get(m[*c] as usize).copied().unwrap_or(false) {
+            *c += 1;
+        }
+        m.get(*c).copied()
+    }
+
+    /// Ids of up to `k` nearest points (alive or not), nearest first.
+    pub(crate) fn k_nearest(&self, q: [f64; 2], k: usize) -> Vec<u32> {
+        let mut out = Vec::with_capacity(k);
+        for u in self.tree.k_nearest(q, k) {
+            for &id in &self.members[u as usize] {
+                if out.len() == k {
+                    return out;
+                }
+                out.push(id);
+            }
+        }
+        out
+    }
+}
+
 /// Static 2-d tree over points with removal (alive counts per subtree), laid
 /// out implicitly: the node of range `lo..hi` sits at `(lo + hi) / 2`.
-pub(crate) struct KdTree {
+struct PointTree {
     pts: Vec<[f64; 2]>,
     ids: Vec<u32>,
     /// Alive points in the subtree whose node is at this slot.
@@ -313,8 +404,8 @@ pub(crate) struct KdTree {
     slot_of: Vec<u32>,
 }
 
-impl KdTree {
-    pub(crate) fn new(mut items: Vec<([f64; 2], u32)>) -> Self {
+impl PointTree {
+    fn new(mut items: Vec<([f64; 2], u32)>) -> Self {
         let n = items.len();
         build(&mut items, 0);
         let mut alive = vec![0u32; n];
@@ -325,7 +416,7 @@ impl KdTree {
                 *s = slot as u32;
             }
         }
-        KdTree {
+        PointTree {
             pts: items.iter().map(|i| i.0).collect(),
             ids: items.iter().map(|i| i.1).collect(),
             alive,
@@ -335,7 +426,7 @@ impl KdTree {
     }
 
     /// Remove the point with this id (ids must be 0..n, each once).
-    pub(crate) fn remove(&mut self, id: u32) {
+    fn remove(&mut self, id: u32) {
         let Some(&slot) = self.slot_of.get(id as usize) else {
             return;
         };
@@ -359,7 +450,7 @@ impl KdTree {
     }
 
     /// Id of the nearest alive point.
-    pub(crate) fn nearest(&self, q: [f64; 2]) -> Option<u32> {
+    fn nearest(&self, q: [f64; 2]) -> Option<u32> {
         let mut best = (f64::INFINITY, None);
         self.nearest_in(q, 0, self.pts.len(), 0, &mut best);
         best.1
@@ -400,7 +491,7 @@ impl KdTree {
     }
 
     /// Ids of up to `k` nearest points (alive or not), nearest first.
-    pub(crate) fn k_nearest(&self, q: [f64; 2], k: usize) -> Vec<u32> {
+    fn k_nearest(&self, q: [f64; 2], k: usize) -> Vec<u32> {
         let mut best: Vec<(f64, u32)> = Vec::with_capacity(k + 1);
         self.k_nearest_in(q, k, 0, self.pts.len(), 0, &mut best);
         best.into_iter().map(|b| b.1).collect()
@@ -458,4 +549,52 @@ fn count(alive: &mut [u32], lo: usize, hi: usize) {
     alive[mid] = (hi - lo) as u32;
     count(alive, lo, mid);
     count(alive, mid + 1, hi);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brute force: the nearest alive id, the lowest among equals.
+    fn brute(pts: &[[f64; 2]], alive: &[bool], q: [f64; 2]) -> Option<u32> {
+        (0..pts.len())
+            .filter(|&i| alive[i])
+            .min_by(|&a, &b| {
+                dist2(q, pts[a])
+                    .total_cmp(&dist2(q, pts[b]))
+                    .then(a.cmp(&b))
+            })
+            .map(|i| i as u32)
+    }
+
+    proptest::proptest! {
+        /// With many coinciding points (a few distinct spots, each many
+        /// times), queries and removals answer as a brute-force search does.
+        #[test]
+        fn coinciding_points_answer_like_brute_force(
+            spots in proptest::collection::vec((0u8..4, 0u8..4), 1..200),
+            queries in proptest::collection::vec((0u8..8, 0u8..8, 0usize..200), 1..60),
+        ) {
+            let pts: Vec<[f64; 2]> = spots.iter().map(|&(x, y)| [x as f64, y as f64]).collect();
+            let mut tree = KdTree::new(pts.iter().enumerate().map(|(i, p)| (*p, i as u32)).collect());
+            let mut alive = vec![true; pts.len()];
+            for (x, y, kill) in queries {
+                let q = [x as f64 * 0.5, y as f64 * 0.5];
+                let got = tree.nearest(q);
+                let want = brute(&pts, &alive, q);
+                proptest::prop_assert_eq!(
+                    got.map(|i| dist2(q, pts[i as usize])),
+                    want.map(|i| dist2(q, pts[i as usize]))
+                );
+                if let Some(g) = got {
+                    // The lowest alive id at the point found.
+                    let low = (0..pts.len()).find(|&i| alive[i] && pts[i] == pts[g as usize]);
+                    proptest::prop_assert_eq!(Some(g as usize), low);
+                }
+                let k = kill % pts.len();
+                tree.remove(k as u32);
+                alive[k] = false;
+            }
+        }
+    }
 }

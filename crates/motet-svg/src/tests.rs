@@ -1649,3 +1649,92 @@ proptest! {
         }
     }
 }
+
+/// Page sizes and viewBoxes whose f32 transforms put strokes along the page's
+/// edges a few f32 steps beyond them (-0.00001 mm) before those were put
+/// back on the edges.
+#[test]
+fn strokes_on_the_page_edges_stay_on_the_page() {
+    for (w_mm, vb_w) in [
+        (33.0, 7.0),
+        (99.0, 1.0),
+        (99.0, 7.0),
+        (99.0, 10.0),
+        (123.0, 17.0),
+        (123.0, 1000.0),
+        (151.0, 3.0),
+        (151.0, 96.0),
+        (151.0, 283.46),
+        (210.0, 793.7),
+    ] {
+        let (h_mm, vb_h) = (w_mm * 0.7, vb_w * 0.7);
+        let svg = format!(
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w_mm}mm" height="{h_mm}mm" viewBox="0 0 {vb_w} {vb_h}">
+            <path d="M0 {vb_h} L{vb_w} {vb_h} L{vb_w} 0 L0 0 Z" fill="none" stroke="black"/></svg>"#
+        );
+        for opts in [SvgOptions::default(), no_flip()] {
+            let lines = polylines(&run(&svg, &opts));
+            let pts: Vec<[f64; 2]> = lines.concat();
+            let lo = |k: usize| pts.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+            let hi = |k: usize| pts.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+            let name = format!("{w_mm} mm over {vb_w} (flip {})", opts.flip_y);
+            assert_eq!((lo(0), lo(1)), (0.0, 0.0), "{name}");
+            assert!(
+                (hi(0) - w_mm).abs() < EPS && (hi(1) - h_mm).abs() < EPS,
+                "{name}"
+            );
+        }
+    }
+}
+
+#[test]
+fn deep_nesting_is_refused_with_its_depth_in_linear_time() {
+    // 200,000 nested groups: refused at the first group too deep, without
+    // reading the rest.
+    let n = 200_000;
+    let svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10mm\" height=\"10mm\">\n{}<path d=\"M0 0 L1 1\" stroke=\"black\"/>{}</svg>",
+        "<g>".repeat(n),
+        "</g>".repeat(n)
+    );
+    let e = parse(svg.as_bytes(), &target(), &SvgOptions::default()).unwrap_err();
+    assert!(
+        e.message.contains("elements nest more than 256 deep here"),
+        "{e}"
+    );
+    // The svg element is level 1; the 256th group is level 257.
+    assert_eq!((e.loc.line, e.loc.column), (2, 255 * 3 + 1), "{e}");
+    // As deep as allowed still draws.
+    let ok = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10mm\" height=\"10mm\">{}<path d=\"M0 0 L1 1\" stroke=\"black\"/>{}</svg>",
+        "<g>".repeat(254),
+        "</g>".repeat(254)
+    );
+    assert_eq!(polylines(&run(&ok, &SvgOptions::default())).len(), 1);
+}
+
+#[test]
+fn entities_cannot_nest_deeper_than_the_text_shows() {
+    // Each entity opens 100 groups around the one before; the text itself
+    // nests one level.
+    let g100 = |inner: &str| format!("{}{inner}{}", "<g>".repeat(100), "</g>".repeat(100));
+    let doc = |body: &str| {
+        format!(
+            "<!DOCTYPE svg [<!ENTITY e \"{}\"><!ENTITY f \"{}\"><!ENTITY h \"{}\">]>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10mm\" height=\"10mm\">{body}</svg>",
+            g100("<path d='M0 0 L1 1' stroke='black'/>"),
+            g100("&e;"),
+            g100("&f;")
+        )
+    };
+    // 1 + 200 + the path: fits.
+    assert_eq!(
+        polylines(&run(&doc("&f;"), &SvgOptions::default())).len(),
+        1
+    );
+    // 1 + 300: refused.
+    let e = parse(doc("&h;").as_bytes(), &target(), &SvgOptions::default()).unwrap_err();
+    assert!(
+        e.message.contains("elements nest more than 256 deep"),
+        "{e}"
+    );
+}

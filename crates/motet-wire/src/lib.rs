@@ -19,7 +19,8 @@ pub mod sync;
 pub use service::{ServiceError, ServiceReply, ServiceRequest};
 
 pub use message::{
-    AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig, MAX_MESSAGE,
+    AxisSpan, ChannelConfig, HostMessage, NodeMessage, Refusal, SegmentMsg, ToolConfig,
+    MAX_MESSAGE, MAX_STEP_RATE,
 };
 pub use stream::{SegmentBatch, StreamConfig};
 

@@ -5,6 +5,13 @@ use heapless::Vec;
 use motet_trajectory::{JointMap, Point, ProfileParams, MAX_AXES};
 use serde::{Deserialize, Serialize};
 
+/// Most steps per second a node takes on one channel, on average over a
+/// segment: a node refuses a segment asking more (`Malformed`), and the host
+/// plans within it (every joint's speed is held to this over its steps per
+/// unit). A node spends work on every step; far beyond any step/direction
+/// driver, it bounds what one message can make a node do.
+pub const MAX_STEP_RATE: f64 = 2e6;
+
 /// Largest encoded message, bytes. Fits a USB full-speed bulk packet pair and
 /// CAN-FD's 64-byte frames after fragmentation.
 pub const MAX_MESSAGE: usize = 192;
@@ -291,14 +298,13 @@ pub enum NodeMessage {
         at: Point,
     },
     /// What the node's outputs did since its last `Reset`: steps per channel,
-    /// tool changes, and the CRC-32C of every step (channel, direction,
-    /// time's f64 bits, little endian) and tool change (0x80 | output, value's
-    /// f32 bits, time's bits) in order. Equal tallies: the same outputs at the
+    /// tool changes, and a 64-bit hash of every output and its time's bits in
+    /// order (`motet_node::tally`). Equal tallies: the same outputs at the
     /// same times.
     Tally {
         steps: [u32; 8],
         tool_changes: u32,
-        crc: u32,
+        hash: u64,
     },
 }
 
@@ -447,7 +453,7 @@ mod tests {
             NodeMessage::Tally {
                 steps: [0, 1, u32::MAX, 3, 4, 5, 6, 7],
                 tool_changes: 9,
-                crc: 0xdead_beef,
+                hash: 0xdead_beef_0123_4567,
             },
         ];
         for m in replies {

@@ -120,7 +120,7 @@ fn documented_sizes() {
             NodeMessage::Tally {
                 steps: [0; 8],
                 tool_changes: 0,
-                crc: 0,
+                hash: 0,
             },
             11,
         ),
@@ -128,9 +128,9 @@ fn documented_sizes() {
             NodeMessage::Tally {
                 steps: [u32::MAX; 8],
                 tool_changes: u32::MAX,
-                crc: u32::MAX,
+                hash: u64::MAX,
             },
-            51,
+            56,
         ),
         (
             NodeMessage::Refused {

@@ -25,7 +25,8 @@ fn interactive(machine_path: &Path) -> Result<()> {
         )?;
         longest = longest.max(t.elapsed().as_secs_f64());
     }
-    let calls = start.elapsed().as_secs_f64();
+    // Measured times are never 0, so every rate below is a finite number.
+    let calls = start.elapsed().as_secs_f64().max(1e-9);
     m.wait()?;
     let r = m.report();
     println!(
@@ -58,6 +59,7 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         loaded = Some(job);
     }
     let loaded = loaded.expect("at least one parse");
+    let parse_best = parse_best.max(1e-9);
     let moves = loaded.commands.len();
     println!(
         "job: {} ({} lines, {:.1} MB, {} commands)",
@@ -90,7 +92,7 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         while let Some(x) = p.pop() {
             n += matches!(x, Planned::Segment(_)) as usize;
         }
-        best = best.min(t.elapsed().as_secs_f64());
+        best = best.min(t.elapsed().as_secs_f64().max(1e-9));
         segments = n;
         duration = p.clock() * 1e-6;
     }
@@ -121,13 +123,14 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
             &mut |_, _| {},
         )?;
         let steps: u64 = r.report.actuators.iter().map(|a| a.steps).sum();
+        let wall = r.report.wall_s.max(1e-6);
         println!(
             "simulation: {:.0} s of motion in {:.2} s wall: {:.0}x real time; {} steps ({:.1} M steps/s)",
             r.report.duration_s,
             r.report.wall_s,
             r.report.speed_factor,
             steps,
-            steps as f64 / r.report.wall_s / 1e6
+            steps as f64 / wall / 1e6
         );
         println!(
             "accuracy: step-time error {:.4} µs max, executed path within {:.4} mm ({:.3} steps) of the commanded path",

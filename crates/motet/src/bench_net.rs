@@ -17,6 +17,7 @@ use motet_net::pairing_file::format_uid;
 use motet_net::resume::{prove, Evidence};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
 use motet_net::{NetConfig, Phase, RunIdentity};
+use motet_planner::ranges;
 use motet_wire::frame::{self, Flags, Header, MAX_FRAME};
 use motet_wire::service::{ServiceReply, ServiceRequest};
 use motet_wire::{encode, MAX_MESSAGE};
@@ -29,19 +30,19 @@ pub struct Args {
     #[arg(long, default_value = "bench/data/prusaslicer-twisted-vase.gcode.gz")]
     job: PathBuf,
     /// Replace every actuator chain's microstep value.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::flags::count::<u32>(ranges::MICROSTEPS))]
     microsteps: Option<u32>,
     /// Seconds of motion to measure [default: the whole job].
-    #[arg(long)]
+    #[arg(long, value_parser = crate::flags::number(ranges::JOB_S))]
     seconds: Option<f64>,
     /// Extra delay of every frame, uniform in 0..=J µs, both ways.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = crate::flags::count::<u64>(ranges::JITTER_US))]
     jitter_us: u64,
     /// Rate of each fault (corrupt, drop, duplicate, delay, reorder) per frame.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::flags::number(ranges::FAULT_RATE))]
     faults: f64,
     /// Clock exchanges with each node, ms apart [default: the run's default].
-    #[arg(long)]
+    #[arg(long, value_parser = crate::flags::number(ranges::SYNC_MS))]
     sync_ms: Option<f64>,
     /// Kill the host after this many seconds of motion, let the nodes come
     /// to rest, and time what `motet resume` checks before it moves: the
@@ -188,6 +189,9 @@ pub fn bench_net(args: Args) -> Result<()> {
     };
     let start = streaming_at.context("the run never started streaming")?;
     let motion = (lb.now - start) as f64 * 1e-6;
+    if motion <= 0.0 {
+        bail!("{}: the job has no motion to measure", args.job.display());
+    }
     println!(
         "run: {} of motion streamed in {:.1} s wall ({:?})",
         fmt_s(motion),

@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use motet_api::job::{parse_job, read_bytes};
 use motet_api::{JobKind, JobOptions};
 use motet_host::{Distributor, Machine};
-use motet_planner::{Planned, Planner};
+use motet_planner::{ranges, Planned, Planner};
 use motet_wire::frame::OVERHEAD;
 use motet_wire::{encode, HostMessage, MAX_MESSAGE};
 use std::path::PathBuf;
@@ -17,7 +17,7 @@ pub struct Args {
     /// Job (G-code, optionally .gz, or SVG).
     job: PathBuf,
     /// Replace every actuator chain's microstep value.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::flags::count::<u32>(ranges::MICROSTEPS))]
     microsteps: Option<u32>,
 }
 
@@ -106,6 +106,9 @@ pub fn bench_wire(args: Args) -> Result<()> {
         },
     )?;
     let (batched, plain, seconds, segments) = measure(&machine, &job.commands)?;
+    if seconds <= 0.0 {
+        anyhow::bail!("{}: the job has no motion to measure", args.job.display());
+    }
     println!(
         "job: {} — {:.0} s of motion, {} segments ({:.1}/s)",
         args.job.display(),

@@ -94,7 +94,10 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         .as_ref()
         .map_or(default_s, |j| default_s.max(j.end_us * 1e-6 + 0.5));
     let seconds = a.seconds.unwrap_or(default_s);
-    if !(seconds.is_finite() && seconds > 0.0) {
+    // Every frame of a graph runs: the length comes from --seconds, or else
+    // from the trace or the job, and is held to the same range either way.
+    motet_planner::ranges::DANCE_S.check("the dance's length in seconds (--seconds)", seconds)?;
+    if seconds <= 0.0 {
         anyhow::bail!("--seconds must be positive");
     }
     let name = a

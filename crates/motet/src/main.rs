@@ -7,12 +7,14 @@ mod bench_wire;
 mod dance;
 mod elf;
 mod error_text;
+mod flags;
 mod netrun;
 mod node;
 mod nodes;
 mod run;
 
 use clap::{Parser, Subcommand};
+use motet_planner::ranges;
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -34,7 +36,7 @@ enum NodesCmd {
         #[arg(long = "link", required = true)]
         links: Vec<String>,
         /// Seconds to wait for answers.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::WAIT_S))]
         wait: f64,
     },
     /// Give each node of a machine an address and write the pairing file beside it.
@@ -47,7 +49,7 @@ enum NodesCmd {
         #[arg(long)]
         button: bool,
         /// Seconds to wait for a button press.
-        #[arg(long, default_value_t = 60.0)]
+        #[arg(long, default_value_t = 60.0, value_parser = flags::number(ranges::WAIT_S))]
         wait: f64,
     },
     /// State of each paired node of a machine.
@@ -56,7 +58,7 @@ enum NodesCmd {
     Identify {
         machine: PathBuf,
         node: String,
-        #[arg(long, default_value_t = 5.0)]
+        #[arg(long, default_value_t = 5.0, value_parser = flags::number(ranges::WAIT_S))]
         seconds: f64,
     },
     /// Upload a firmware image to a paired node (write, read back, verify, start).
@@ -106,16 +108,16 @@ enum Cmd {
         nodes: netrun::NodesMode,
         /// With --nodes spawn|paired: run time this many times faster than
         /// real time (nodes started by hand need the same --time-scale).
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
         time_scale: f64,
         /// With --nodes spawn|paired: least time the committed trajectory
         /// reaches ahead, ms (at least 2×RTT is used anyway).
-        #[arg(long, default_value_t = 100.0)]
+        #[arg(long, default_value_t = 100.0, value_parser = flags::number(ranges::LEAD_MS))]
         lead_ms: f64,
         /// With --nodes spawn|paired: clock exchanges with each node, ms
         /// apart. Faster tracks clocks more closely on jittery links at the
         /// cost of wire traffic (about 70 bytes per exchange).
-        #[arg(long, default_value_t = 400.0)]
+        #[arg(long, default_value_t = 400.0, value_parser = flags::number(ranges::SYNC_MS))]
         sync_ms: f64,
     },
     /// Continue a networked job that stopped, from where every node came to
@@ -160,16 +162,16 @@ enum Cmd {
         #[arg(long)]
         uid: Option<String>,
         /// Crystal error of the node's clock, parts per million.
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = flags::number(ranges::PPM))]
         ppm: f64,
         /// Run the node's clock this many times faster than real time.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
         time_scale: f64,
         /// Press the pairing button as soon as the node is asked to pair.
         #[arg(long)]
         auto_press: bool,
         /// Exit after this many seconds without a frame from a host.
-        #[arg(long)]
+        #[arg(long, value_parser = flags::number(ranges::WAIT_S))]
         idle_exit: Option<f64>,
         #[arg(long, short)]
         quiet: bool,
@@ -212,7 +214,7 @@ enum Cmd {
         #[arg(long)]
         job: Option<PathBuf>,
         /// Seconds to run [default: the trace's length, or 30 with --pendulums].
-        #[arg(long)]
+        #[arg(long, value_parser = flags::number(ranges::DANCE_S))]
         seconds: Option<f64>,
         /// Load a four-track recording (PATH: one byte per frame; PATH.len:
         /// the sample count) into the node's tape before the run, for a player.
@@ -235,8 +237,8 @@ enum Cmd {
         #[arg(long, default_value = "bench/data/prusaslicer-twisted-vase.gcode.gz")]
         job: PathBuf,
         /// Repetitions of the planning measurement (the best is reported).
-        #[arg(long, default_value_t = 3)]
-        repeat: usize,
+        #[arg(long, default_value_t = 3, value_parser = flags::count::<u32>(ranges::REPEAT))]
+        repeat: u32,
         /// Skip the full simulation.
         #[arg(long)]
         no_sim: bool,
@@ -248,6 +250,15 @@ enum Cmd {
 }
 
 fn main() -> std::process::ExitCode {
+    // Output piped into a program that stops reading (`motet … | head`)
+    // ends motet quietly, as it ends any command-line tool, instead of a
+    // panic in the middle of a print.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default before any
+    // thread starts; nothing else handles SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     match dispatch(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
@@ -384,7 +395,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             job,
             repeat,
             no_sim,
-        } => bench::bench(&machine, &job, repeat, no_sim),
+        } => bench::bench(&machine, &job, repeat as usize, no_sim),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }

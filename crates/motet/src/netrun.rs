@@ -111,15 +111,10 @@ fn record_nodes(session: &Session) -> Vec<RunNode> {
 }
 
 pub fn run(a: NetArgs) -> Result<()> {
-    if !(a.time_scale.is_finite() && a.time_scale > 0.0) {
-        bail!("--time-scale must be a positive number");
-    }
-    if !(a.sync_ms.is_finite() && a.sync_ms >= 1.0) {
-        bail!("--sync-ms must be at least 1");
-    }
-    if !(a.lead_ms.is_finite() && a.lead_ms > 0.0) {
-        bail!("--lead-ms must be a positive number");
-    }
+    use motet_planner::ranges;
+    ranges::TIME_SCALE.check("--time-scale", a.time_scale)?;
+    ranges::SYNC_MS.check("--sync-ms", a.sync_ms)?;
+    ranges::LEAD_MS.check("--lead-ms", a.lead_ms)?;
     let files = read_files(a.machine_path, a.job_path, a.allow_unknown)?;
     let machine = &files.machine;
     if !a.quiet {
@@ -259,7 +254,7 @@ fn drive(
             "tally": tallies[k].map(|t| serde_json::json!({
                 "steps": t.steps,
                 "tool_changes": t.tool_changes,
-                "crc": format!("{:08x}", t.crc),
+                "hash": format!("{:016x}", t.hash),
             })),
         })).collect::<Vec<_>>(),
     });

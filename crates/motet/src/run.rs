@@ -27,7 +27,19 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
-        println!("{}: ok ({} commands)", j.display(), loaded.commands.len());
+        println!(
+            "{}: ok ({} commands, {} of motion planned)",
+            j.display(),
+            loaded.commands.len(),
+            motet_sim::format_duration(loaded.planned_s.unwrap_or(0.0))
+        );
+        if loaded.clamps.moves > 0 {
+            println!(
+                "  {} move(s) clamped onto the travel, by {} mm at most (less than half a step)",
+                loaded.clamps.moves,
+                motet_planner::ranges::number(loaded.clamps.max_mm)
+            );
+        }
     }
     Ok(())
 }
@@ -63,9 +75,11 @@ pub fn run(
         b
     };
     let mut progress = |done: usize, _total: usize| bar.set_position(done as u64);
-    let result = motet_sim::simulate(&machine, &name, &loaded.commands, &mut progress)
+    let mut result = motet_sim::simulate(&machine, &name, &loaded.commands, &mut progress)
         .map_err(|e| anyhow::anyhow!("{}:{e}", job_path.display()))?;
     bar.finish_and_clear();
+    result.report.clamped_moves = loaded.clamps.moves;
+    result.report.max_clamp_mm = loaded.clamps.max_mm;
 
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let (x, y) = (

@@ -185,3 +185,27 @@ fn dance_takes_live_inputs_from_stdin() {
         assert!(ch["error_steps"].as_f64().unwrap().abs() <= 0.5, "{ch}");
     }
 }
+
+/// Output into a pipe nobody reads (`motet … | head -0`) ends motet quietly,
+/// never with a panic.
+#[test]
+fn a_closed_pipe_is_no_panic() {
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "run",
+            "examples/plotter.toml",
+            "examples/jobs/drawing.svg",
+            "--out",
+        ])
+        .arg(std::env::temp_dir().join(format!("motet-pipe-{}", std::process::id())))
+        .current_dir(root())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -340,8 +340,8 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
     assert_eq!(steps, want_steps, "steps per channel");
     assert_eq!(tally["tool_changes"], want[0].tool_changes);
     assert_eq!(
-        tally["crc"],
-        format!("{:08x}", want[0].crc),
+        tally["hash"],
+        format!("{:016x}", want[0].hash),
         "every step's time"
     );
     assert!(want_steps.iter().sum::<u64>() > 10_000);

@@ -279,10 +279,18 @@ impl Machine {
         for p in planned {
             match p {
                 Planned::Segment(s) => out.push(HostMessage::Segment(segment_msg(s, seq, mask))),
-                Planned::Event(e) => out.push(HostMessage::Event {
-                    track: e.tool,
-                    time: e.time,
-                    value: e.value,
+                Planned::Event(e) => out.push(match e.per_speed {
+                    None => HostMessage::Event {
+                        track: e.tool,
+                        time: e.time,
+                        value: e.value,
+                    },
+                    Some(feed) => HostMessage::EventPerSpeed {
+                        track: e.tool,
+                        time: e.time,
+                        value: e.value,
+                        feed: feed as f32,
+                    },
                 }),
                 Planned::Aux(_) | Planned::Pause { .. } => {}
             }
