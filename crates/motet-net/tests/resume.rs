@@ -667,7 +667,11 @@ fn a_given_position_is_checked_against_travel() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 96, ..Default::default() })]
+    // 96 cases by default; PROPTEST_CASES runs more.
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(96),
+        ..Default::default()
+    })]
 
     /// Any byte of the journal, the job or the machine file flipped:
     /// refused. Any field of the journal that the plan fixes (a segment's
