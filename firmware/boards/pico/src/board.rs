@@ -50,9 +50,10 @@ impl Board for Pico {
     const TICKS_PER_US: u32 = TICKS_PER_US;
     const CHANNELS: u8 = pin_table::CHANNELS as u8;
     const TOOLS: u8 = pin_table::TOOLS as u8;
-    /// What the M0+ keeps up with on one channel (docs/firmware.md: the
-    /// background's soft-float solve bounds the node, not the pins).
-    const MAX_STEP_HZ: u32 = 5_000;
+    /// Four channels at once within one M0+ core with room for the link
+    /// (about 7,000 steps/s in all, docs/firmware.md): the background's
+    /// soft-float solve bounds the node, not the pins.
+    const MAX_STEP_HZ: u32 = 1_500;
     const LAYOUT: Layout = LAYOUT;
     type Flash = QspiFlash;
 
