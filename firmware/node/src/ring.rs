@@ -53,7 +53,16 @@ impl<const N: usize> Ring<N> {
     /// The two halves; once only (None after), so that each index keeps
     /// one writer.
     pub fn split(&self) -> Option<(Producer<'_>, Consumer<'_>)> {
-        if self.split.swap(true, Ordering::AcqRel) {
+        // A critical section, not `swap`: ARMv6-M (the Pico's Cortex-M0+)
+        // has no compare-and-swap; the queue itself needs only loads and
+        // stores. Each board brings its critical section (one core: masking
+        // interrupts; the RP2040: a hardware spinlock too).
+        let taken = critical_section::with(|_| {
+            let taken = self.split.load(Ordering::Acquire);
+            self.split.store(true, Ordering::Release);
+            taken
+        });
+        if taken {
             return None;
         }
         let head = self.head.load(Ordering::Acquire);
