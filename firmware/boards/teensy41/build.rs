@@ -56,4 +56,3 @@ fn main() {
     println!("cargo:rustc-link-arg-bin=motet-teensy41-boot=-Tteensy41-boot.x");
     println!("cargo:rustc-link-arg-bin=motet-teensy41-node=-Tteensy41-node.x");
 }
-

@@ -37,9 +37,8 @@ const OCOTP_GATE: u32 = 0b11 << 12;
 /// against the pad types): a wrong port or bit fails the build.
 macro_rules! pad_is {
     ($pad:ty, $port:literal, $pin:expr) => {
-        const _: () = assert!(
-            $pin.port == $port && <$pad as GpioPad<$port>>::OFFSET == $pin.bit as u32
-        );
+        const _: () =
+            assert!($pin.port == $port && <$pad as GpioPad<$port>>::OFFSET == $pin.bit as u32);
     };
 }
 pad_is!(p::P2, 4, STEP[0]);
@@ -75,7 +74,14 @@ fn fast(pin: &GpioPin, output: bool) {
     w32(gpr, r32(gpr) | pin.mask());
     let gdir = pin.fast_base() + 0x04;
     let v = r32(gdir);
-    w32(gdir, if output { v | pin.mask() } else { v & !pin.mask() });
+    w32(
+        gdir,
+        if output {
+            v | pin.mask()
+        } else {
+            v & !pin.mask()
+        },
+    );
 }
 
 fn output<P: GpioPad<N>, const N: u8>(pad: &mut P, pin: &GpioPin) {
@@ -153,7 +159,8 @@ impl Teensy41 {
         adc1.calibrate();
         iomuxc::adc::prepare::<_, 1>(&mut pins.p14);
         iomuxc::adc::prepare::<_, 1>(&mut pins.p15);
-        core::mem::forget(adc1);
+        // ADC1 is read through its registers from here on (`adc1` only set
+        // it up).
         let inputs = GraphInputs::new();
 
         w32(CCGR2, r32(CCGR2) | OCOTP_GATE);

@@ -111,7 +111,7 @@ impl FlashPages for NorFlash {
     const SECTOR: u32 = SECTOR;
 
     fn erase(&mut self, at: u32) -> Result<(), StorageError> {
-        if at % SECTOR != 0 {
+        if !at.is_multiple_of(SECTOR) {
             return Err(StorageError::OutOfRange);
         }
         inside(WRITABLE, at, SECTOR as usize)?;
@@ -134,7 +134,9 @@ impl FlashPages for NorFlash {
             // Whole pages: 0xFF leaves the bytes outside `data` as they are.
             let mut buf = [u32::MAX; (PAGE / 4) as usize];
             // SAFETY: `buf` is PAGE bytes; viewed as bytes to fill it.
-            let bytes = unsafe { core::slice::from_raw_parts_mut(buf.as_mut_ptr().cast::<u8>(), PAGE as usize) };
+            let bytes = unsafe {
+                core::slice::from_raw_parts_mut(buf.as_mut_ptr().cast::<u8>(), PAGE as usize)
+            };
             bytes[from..from + n].copy_from_slice(&data[done..done + n]);
             // SAFETY: a page of the firmware's own regions, from a full
             // page buffer.

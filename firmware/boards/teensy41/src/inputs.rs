@@ -10,12 +10,13 @@ use motet_firmware::board::Inputs;
 const QTIMER1: u32 = 0x401D_C000;
 const CNTR: u32 = QTIMER1 + 0x0A;
 const CTRL: u32 = QTIMER1 + 0x0C;
-const COMP1: u32 = QTIMER1 + 0x00;
+const COMP1: u32 = QTIMER1;
 const FILT: u32 = QTIMER1 + 0x16;
 const ENBL: u32 = QTIMER1 + 0x1E;
 /// CTRL: count mode 4 (quadrature), primary source counter input 0 (phase
-/// A), secondary source counter input 1 (phase B), roll over at 16 bits.
-const QUADRATURE: u16 = (0b100 << 13) | (0 << 9) | (1 << 7);
+/// A: PCS 0), secondary source counter input 1 (phase B), roll over at 16
+/// bits.
+const QUADRATURE: u16 = (0b100 << 13) | (1 << 7);
 /// FILT: 3 agreeing samples, 10 IPG clocks apart (200 ns at 150 MHz).
 const FILTER: u16 = (3 << 8) | 10;
 

@@ -113,7 +113,11 @@ mod tests {
             assert_eq!(r.start % SECTOR, 0, "{name} starts mid-sector");
             assert_eq!(r.len % SECTOR, 0, "{name} ends mid-sector");
             assert!(r.len > 0, "{name} is empty");
-            assert!(r.end() <= LOADABLE.end(), "{name} runs past {:#x}", LOADABLE.end());
+            assert!(
+                r.end() <= LOADABLE.end(),
+                "{name} runs past {:#x}",
+                LOADABLE.end()
+            );
         }
     }
 

@@ -225,7 +225,12 @@ mod tests {
             (STEP[2], 0x4200_4084, 0x4200_4088), // GPIO2 → GPIO7
         ];
         for (p, set, clear) in cases {
-            assert_eq!((p.set_addr(), p.clear_addr()), (set, clear), "pin {}", p.pin);
+            assert_eq!(
+                (p.set_addr(), p.clear_addr()),
+                (set, clear),
+                "pin {}",
+                p.pin
+            );
         }
         assert_eq!(STEP[3].mask(), 1 << 16);
     }

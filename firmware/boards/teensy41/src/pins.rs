@@ -8,7 +8,9 @@ use crate::timer;
 use core::ptr::write_volatile;
 use cortex_m::peripheral::NVIC;
 use motet_firmware::board::{Pins, Ticks};
-use teensy4_bsp::hal::flexpwm::{Channel, ClockSelect, Mask, PairOperation, Prescaler, Pwm, ValueRegister, SM};
+use teensy4_bsp::hal::flexpwm::{
+    Channel, ClockSelect, Mask, PairOperation, Prescaler, Pwm, ValueRegister, SM,
+};
 use teensy4_bsp::ral::Interrupt;
 
 /// FlexPWM counts the 150 MHz IPG clock / 128: 1.171875 MHz.

@@ -8,7 +8,9 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use heapless::spsc::{Consumer, Producer, Queue};
 use imxrt_usbd::{BusAdapter, EndpointMemory, EndpointState, Speed};
 use usb_device::bus::UsbBusAllocator;
-use usb_device::device::{StringDescriptors, UsbDevice, UsbDeviceBuilder, UsbDeviceState, UsbVidPid};
+use usb_device::device::{
+    StringDescriptors, UsbDevice, UsbDeviceBuilder, UsbDeviceState, UsbVidPid,
+};
 use usb_device::LangID;
 use usbd_serial::SerialPort;
 
