@@ -7,7 +7,7 @@
 //! profile, so steps are placed exactly inside a frame, not rounded to it.
 
 use heapless::Deque;
-use motet_trajectory::{JointPath, Segment};
+use motet_trajectory::{JointPath, Segment, TimeCursor};
 use motet_wire::ChannelConfig;
 
 /// A step found but not yet taken.
@@ -33,10 +33,35 @@ pub struct Channel {
     turn: Option<f64>,
     /// Distance into the current segment up to which steps are found.
     s: f64,
+    /// The current leg: the stretch of the segment up to its turning point
+    /// or its end, over which the joint is monotone.
+    leg: Leg,
+    /// The current segment's profile, inverted piece by piece as `s` grows.
+    timer: TimeCursor,
     /// Joint value where the last segment ended, to keep angles continuous.
     joint_ref: f64,
     pending: Option<Step>,
     last_time: f64,
+}
+
+/// What a leg's steps need, computed once per leg instead of once per step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Leg {
+    /// Distance where the leg ends.
+    hi: f64,
+    /// The joint there, in steps.
+    at_hi: f64,
+    /// For a joint affine in the distance, `(joint at s = 0 in steps,
+    /// distance per step)`: a crossing is then one multiplication away.
+    line: Option<(f64, f64)>,
+}
+
+impl Leg {
+    const NONE: Leg = Leg {
+        hi: 0.0,
+        at_hi: 0.0,
+        line: None,
+    };
 }
 
 impl Channel {
@@ -50,6 +75,8 @@ impl Channel {
             path: None,
             turn: None,
             s: 0.0,
+            leg: Leg::NONE,
+            timer: TimeCursor::new(&motet_trajectory::Profile::dwell(0.0)),
             joint_ref: 0.0,
             pending: None,
             last_time: f64::NEG_INFINITY,
@@ -82,6 +109,7 @@ impl Channel {
 
     /// The next step on the first `end` queued segments (the committed ones;
     /// the rest are not to be run yet).
+    #[inline]
     pub fn next_step_within<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
@@ -90,6 +118,14 @@ impl Channel {
         if self.pending.is_some() {
             return self.pending;
         }
+        self.find_step(segments, end)
+    }
+
+    fn find_step<const Q: usize>(
+        &mut self,
+        segments: &Deque<Segment, Q>,
+        end: usize,
+    ) -> Option<Step> {
         loop {
             if self.seg >= end {
                 return None;
@@ -106,37 +142,63 @@ impl Channel {
                     self.turn = p.turning_point();
                     self.s = 0.0;
                     self.path = Some(p);
+                    self.timer = TimeCursor::new(&seg.profile);
+                    self.enter_leg(&p);
                     p
                 }
             };
-            let len = path.length();
-            let hi = match self.turn {
-                Some(t) if self.s < t => t,
-                _ => len,
-            };
-            let at_hi = path.value_at(hi) * self.spu;
+            let leg = self.leg;
             let pos = self.position as f64;
-            let (boundary, positive) = if at_hi > pos + 0.5 {
+            let (boundary, positive) = if leg.at_hi > pos + 0.5 {
                 (pos + 0.5, true)
-            } else if at_hi < pos - 0.5 {
+            } else if leg.at_hi < pos - 0.5 {
                 (pos - 0.5, false)
-            } else if hi < len {
-                self.s = hi;
+            } else if leg.hi < path.length() {
+                self.s = leg.hi;
+                self.enter_leg(&path);
                 continue;
             } else {
-                self.joint_ref = path.value_at(len);
+                self.joint_ref = path.value_at(path.length());
                 self.path = None;
                 self.seg += 1;
                 continue;
             };
-            let s = path.solve(boundary / self.spu, self.s, hi);
+            let s = match leg.line {
+                Some((a0, per_step)) => {
+                    let s = (boundary - a0) * per_step;
+                    if s.is_nan() {
+                        self.s
+                    } else {
+                        s.clamp(self.s, leg.hi)
+                    }
+                }
+                None => path.solve(boundary / self.spu, self.s, leg.hi),
+            };
             self.s = s;
             // Never earlier than the step before, whatever the rounding.
-            let time = seg.time_at_distance(s).max(self.last_time);
+            let time = (seg.t0 + self.timer.time_at(&seg.profile, s) * 1e6).max(self.last_time);
             let step = Step { time, positive };
             self.pending = Some(step);
             return Some(step);
         }
+    }
+
+    /// Starts the leg that begins at `self.s`.
+    fn enter_leg(&mut self, path: &JointPath) {
+        let hi = match self.turn {
+            Some(t) if self.s < t => t,
+            _ => path.length(),
+        };
+        let line = path.line().map(|(a0, k)| {
+            let rate = k * self.spu;
+            let per_step = if rate == 0.0 { 0.0 } else { 1.0 / rate };
+            (a0 * self.spu, per_step)
+        });
+        self.leg = Leg {
+            hi,
+            at_hi: path.value_at(hi) * self.spu,
+            line,
+        };
     }
 
     /// The profiles of queued segments `from..` were replaced (same
@@ -146,8 +208,15 @@ impl Channel {
         if self.seg < from {
             return;
         }
-        if let (Some(step), Some(seg)) = (self.pending.as_mut(), segments.get(self.seg)) {
-            step.time = seg.time_at_distance(self.s).max(self.last_time);
+        let Some(seg) = segments.get(self.seg) else {
+            return;
+        };
+        if self.path.is_some() {
+            self.timer = TimeCursor::new(&seg.profile);
+        }
+        if let Some(step) = self.pending.as_mut() {
+            step.time =
+                (seg.t0 + self.timer.time_at(&seg.profile, self.s) * 1e6).max(self.last_time);
         }
     }
 

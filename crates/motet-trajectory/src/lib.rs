@@ -13,10 +13,12 @@ mod math;
 pub mod point;
 pub mod profile;
 pub mod segment;
+pub mod timing;
 
 pub use chain::{ChainError, Element, ElementChain, Unit};
 pub use contingency::{Contingency, TailError, TailWalk};
 pub use kinematics::{JointMap, JointPath, KinematicsKind};
 pub use point::{Point, MAX_AXES};
-pub use profile::{Profile, ProfileKind, ProfileParams};
+pub use profile::{Piece, Profile, ProfileKind, ProfileParams, PIECES};
 pub use segment::Segment;
+pub use timing::TimeCursor;
