@@ -34,10 +34,13 @@ pub struct Channel {
     /// Distance into the current segment up to which steps are found.
     s: f64,
     /// The current leg: the stretch of the segment up to its turning point
-    /// or its end, over which the joint is monotone.
+    /// or its end, over which the joint is monotone. [`Leg::NONE`] whenever
+    /// `path` is `None`, so that no step is found on a stale leg.
     leg: Leg,
     /// The current segment's profile, inverted piece by piece as `s` grows.
     timer: TimeCursor,
+    /// The current segment's start, host µs.
+    t0: f64,
     /// Joint value where the last segment ended, to keep angles continuous.
     joint_ref: f64,
     pending: Option<Step>,
@@ -77,6 +80,7 @@ impl Channel {
             s: 0.0,
             leg: Leg::NONE,
             timer: TimeCursor::new(&motet_trajectory::Profile::dwell(0.0)),
+            t0: 0.0,
             joint_ref: 0.0,
             pending: None,
             last_time: f64::NEG_INFINITY,
@@ -99,6 +103,7 @@ impl Channel {
         self.position = libm_round(value * self.spu);
         self.seg = 0;
         self.path = None;
+        self.leg = Leg::NONE;
         self.pending = None;
     }
 
@@ -118,7 +123,64 @@ impl Channel {
         if self.pending.is_some() {
             return self.pending;
         }
+        if self.seg < end {
+            if let Some(step) = self.step_on_line() {
+                return Some(step);
+            }
+        }
         self.find_step(segments, end)
+    }
+
+    /// The common case, kept short: the next step lies in the current leg
+    /// of a joint affine in the distance, and in the profile piece the
+    /// timer is in. `None` (nothing changed) sends the caller the long way.
+    #[inline(always)]
+    fn step_on_line(&mut self) -> Option<Step> {
+        let (a0, per_step) = self.leg.line?;
+        let pos = self.position as f64;
+        let at_hi = self.leg.at_hi;
+        let (boundary, positive) = if at_hi > pos + 0.5 {
+            (pos + 0.5, true)
+        } else if at_hi < pos - 0.5 {
+            (pos - 0.5, false)
+        } else {
+            return None;
+        };
+        let s = self.line_crossing(a0, per_step, boundary);
+        let t = self.timer.time_in_piece(s)?;
+        self.s = s;
+        let step = Step {
+            time: self.step_time(t),
+            positive,
+        };
+        self.pending = Some(step);
+        Some(step)
+    }
+
+    /// Where a joint affine in the distance crosses `boundary`, inside the
+    /// leg. Plain comparisons (not `f64::max`, which costs NaN checks per
+    /// step); a NaN stays where the leg is.
+    #[inline(always)]
+    fn line_crossing(&self, a0: f64, per_step: f64, boundary: f64) -> f64 {
+        let s = (boundary - a0) * per_step;
+        let s = if s > self.s { s } else { self.s };
+        if s < self.leg.hi {
+            s
+        } else {
+            self.leg.hi
+        }
+    }
+
+    /// Host time of a step `t` seconds into the current segment, never
+    /// earlier than the step before, whatever the rounding.
+    #[inline(always)]
+    fn step_time(&self, t: f64) -> f64 {
+        let time = self.t0 + t * 1e6;
+        if time > self.last_time {
+            time
+        } else {
+            self.last_time
+        }
     }
 
     fn find_step<const Q: usize>(
@@ -131,60 +193,75 @@ impl Channel {
                 return None;
             }
             let seg = segments.get(self.seg)?;
-            let path = match self.path {
-                Some(p) => p,
-                None => {
-                    if seg.profile.length() <= 0.0 {
-                        self.seg += 1;
-                        continue;
-                    }
-                    let p = JointPath::new(&self.config.map, seg, self.joint_ref);
-                    self.turn = p.turning_point();
-                    self.s = 0.0;
-                    self.path = Some(p);
-                    self.timer = TimeCursor::new(&seg.profile);
-                    self.enter_leg(&p);
-                    p
-                }
-            };
-            let leg = self.leg;
-            let pos = self.position as f64;
-            let (boundary, positive) = if leg.at_hi > pos + 0.5 {
-                (pos + 0.5, true)
-            } else if leg.at_hi < pos - 0.5 {
-                (pos - 0.5, false)
-            } else if leg.hi < path.length() {
-                self.s = leg.hi;
-                self.enter_leg(&path);
-                continue;
-            } else {
-                self.joint_ref = path.value_at(path.length());
-                self.path = None;
+            if self.path.is_none() && !self.start_segment(seg) {
                 self.seg += 1;
                 continue;
+            }
+            let pos = self.position as f64;
+            let at_hi = self.leg.at_hi;
+            let (boundary, positive) = if at_hi > pos + 0.5 {
+                (pos + 0.5, true)
+            } else if at_hi < pos - 0.5 {
+                (pos - 0.5, false)
+            } else {
+                self.end_leg();
+                continue;
             };
-            let s = match leg.line {
-                Some((a0, per_step)) => {
-                    let s = (boundary - a0) * per_step;
-                    if s.is_nan() {
-                        self.s
-                    } else {
-                        s.clamp(self.s, leg.hi)
-                    }
-                }
-                None => path.solve(boundary / self.spu, self.s, leg.hi),
+            let s = match (self.leg.line, &self.path) {
+                (Some((a0, per_step)), _) => self.line_crossing(a0, per_step, boundary),
+                (None, Some(path)) => path.solve(boundary / self.spu, self.s, self.leg.hi),
+                (None, None) => return None,
             };
             self.s = s;
-            // Never earlier than the step before, whatever the rounding.
-            let time = (seg.t0 + self.timer.time_at(&seg.profile, s) * 1e6).max(self.last_time);
-            let step = Step { time, positive };
+            let t = self.timer.time_at(&seg.profile, s);
+            let step = Step {
+                time: self.step_time(t),
+                positive,
+            };
             self.pending = Some(step);
             return Some(step);
         }
     }
 
+    /// Starts following `seg`; false when it has no length to follow.
+    #[inline(never)]
+    fn start_segment(&mut self, seg: &Segment) -> bool {
+        if seg.profile.length() <= 0.0 {
+            return false;
+        }
+        let p = JointPath::new(&self.config.map, seg, self.joint_ref);
+        self.turn = p.turning_point();
+        self.s = 0.0;
+        self.path = Some(p);
+        self.timer = TimeCursor::new(&seg.profile);
+        self.t0 = seg.t0;
+        self.enter_leg();
+        true
+    }
+
+    /// No step is left in the current leg: moves on to the next leg, or past
+    /// the segment.
+    #[inline(never)]
+    fn end_leg(&mut self) {
+        let Some(path) = self.path else {
+            return;
+        };
+        if self.leg.hi < path.length() {
+            self.s = self.leg.hi;
+            self.enter_leg();
+        } else {
+            self.joint_ref = path.value_at(path.length());
+            self.path = None;
+            self.leg = Leg::NONE;
+            self.seg += 1;
+        }
+    }
+
     /// Starts the leg that begins at `self.s`.
-    fn enter_leg(&mut self, path: &JointPath) {
+    fn enter_leg(&mut self) {
+        let Some(path) = self.path.as_ref() else {
+            return;
+        };
         let hi = match self.turn {
             Some(t) if self.s < t => t,
             _ => path.length(),
@@ -213,14 +290,19 @@ impl Channel {
         };
         if self.path.is_some() {
             self.timer = TimeCursor::new(&seg.profile);
+            self.t0 = seg.t0;
         }
-        if let Some(step) = self.pending.as_mut() {
-            step.time =
-                (seg.t0 + self.timer.time_at(&seg.profile, self.s) * 1e6).max(self.last_time);
+        if self.pending.is_some() {
+            let t = self.timer.time_at(&seg.profile, self.s);
+            let time = self.step_time(t);
+            if let Some(step) = self.pending.as_mut() {
+                step.time = time;
+            }
         }
     }
 
     /// Takes the pending step; returns the direction output.
+    #[inline]
     pub fn take_step(&mut self) -> Option<(f64, bool)> {
         let step = self.pending.take()?;
         self.position += if step.positive { 1 } else { -1 };

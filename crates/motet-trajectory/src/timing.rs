@@ -61,25 +61,38 @@ impl TimeCursor {
 
     /// Seconds into `profile` (the one the cursor was made for) at which
     /// distance `d` is reached; `d` at least the previous call's.
-    #[inline]
+    #[inline(always)]
     pub fn time_at(&mut self, profile: &Profile, d: f64) -> f64 {
-        while d > self.d_end {
-            self.enter(profile, self.index + 1);
+        loop {
+            if let Some(t) = self.time_in_piece(d) {
+                return t;
+            }
+            self.next_piece(profile);
+        }
+    }
+
+    /// [`TimeCursor::time_at`] while `d` lies in the current piece (`None`
+    /// past it): needs no profile, so a caller can keep this path short.
+    #[inline(always)]
+    pub fn time_in_piece(&mut self, d: f64) -> Option<f64> {
+        if d > self.d_end {
+            return None;
         }
         let p = &self.piece;
         let x = d - p.d0;
         if x <= 0.0 {
-            return p.t0;
+            return Some(p.t0);
         }
         if x >= self.span {
             // The piece's end, exactly: near a stop the distance is flat in
             // time and a solve would land anywhere on the flat.
-            return p.t0 + p.duration;
+            return Some(p.t0 + p.duration);
         }
         let u = match self.solve {
             Solve::Cruise { per_unit } => x * per_unit,
             Solve::Quadratic { vv, two_a } => {
-                let root = sqrt((vv + two_a * x).max(0.0));
+                let disc = vv + two_a * x;
+                let root = sqrt(if disc > 0.0 { disc } else { 0.0 });
                 let denom = p.v + root;
                 if denom > 0.0 {
                     2.0 * x / denom
@@ -107,7 +120,13 @@ impl TimeCursor {
             }
             Solve::Still => 0.0,
         };
-        p.t0 + u.min(p.duration)
+        // A plain comparison, not `f64::min`: this runs once per step.
+        Some(p.t0 + if u < p.duration { u } else { p.duration })
+    }
+
+    #[inline(never)]
+    fn next_piece(&mut self, profile: &Profile) {
+        self.enter(profile, self.index + 1);
     }
 
     /// Moves to the first non-empty piece from `from` on (the last piece if
@@ -164,6 +183,7 @@ impl TimeCursor {
 /// The `u` in `[0, duration]` where the cubic piece has covered `x`: Newton
 /// from `start`, kept inside a bracket. Distance is monotone in the piece
 /// because speed never goes negative there.
+#[inline(never)]
 fn newton(p: &Piece, half_a: f64, sixth_j: f64, half_j: f64, x: f64, start: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, p.duration);
     let mut u = start.clamp(lo, hi);
