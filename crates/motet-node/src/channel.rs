@@ -79,7 +79,7 @@ impl Channel {
             turn: None,
             s: 0.0,
             leg: Leg::NONE,
-            timer: TimeCursor::new(&motet_trajectory::Profile::dwell(0.0)),
+            timer: TimeCursor::START,
             t0: 0.0,
             joint_ref: 0.0,
             pending: None,
@@ -233,7 +233,7 @@ impl Channel {
         self.turn = p.turning_point();
         self.s = 0.0;
         self.path = Some(p);
-        self.timer = TimeCursor::new(&seg.profile);
+        self.timer = TimeCursor::START;
         self.t0 = seg.t0;
         self.enter_leg();
         true
@@ -289,7 +289,7 @@ impl Channel {
             return;
         };
         if self.path.is_some() {
-            self.timer = TimeCursor::new(&seg.profile);
+            self.timer = TimeCursor::START;
             self.t0 = seg.t0;
         }
         if self.pending.is_some() {

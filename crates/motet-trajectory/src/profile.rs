@@ -387,6 +387,19 @@ impl Profile {
         self.state(t).0
     }
 
+    /// [`Profile::piece`]`(i).duration`, without computing the piece.
+    #[inline]
+    pub fn piece_duration(&self, i: usize) -> f64 {
+        match i {
+            0 | 2 => self.ramp_in.t_jerk,
+            1 => self.ramp_in.t_const,
+            3 if self.vc > 0.0 => self.cruise,
+            3 => 0.0,
+            5 => self.ramp_out.t_const,
+            _ => self.ramp_out.t_jerk,
+        }
+    }
+
     /// Piece `i` (`0..PIECES`: the entry ramp's three, the cruise, the exit
     /// ramp's three); a piece a profile does not have has duration 0.
     pub fn piece(&self, i: usize) -> Piece {

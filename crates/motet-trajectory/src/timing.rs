@@ -45,21 +45,34 @@ pub struct TimeCursor {
 }
 
 impl TimeCursor {
+    /// A cursor that enters its profile's first piece on its first
+    /// question: made for free, so that a channel with no step in a segment
+    /// never pays for one.
+    pub const START: TimeCursor = TimeCursor {
+        index: usize::MAX,
+        piece: Piece {
+            t0: 0.0,
+            d0: 0.0,
+            duration: 0.0,
+            v: 0.0,
+            a: 0.0,
+            j: 0.0,
+        },
+        d_end: f64::NEG_INFINITY,
+        solve: Solve::Still,
+        span: 0.0,
+        u: 0.0,
+    };
+
     /// A cursor at the start of `profile`.
     pub fn new(profile: &Profile) -> TimeCursor {
-        let mut c = TimeCursor {
-            index: 0,
-            piece: profile.piece(0),
-            d_end: 0.0,
-            solve: Solve::Still,
-            span: 0.0,
-            u: 0.0,
-        };
+        let mut c = TimeCursor::START;
         c.enter(profile, 0);
         c
     }
 
-    /// Seconds into `profile` (the one the cursor was made for) at which
+    /// Seconds into `profile` (the one the cursor was made for, or any for
+    /// [`TimeCursor::START`]) at which
     /// distance `d` is reached; `d` at least the previous call's.
     #[inline(always)]
     pub fn time_at(&mut self, profile: &Profile, d: f64) -> f64 {
@@ -126,27 +139,28 @@ impl TimeCursor {
 
     #[inline(never)]
     fn next_piece(&mut self, profile: &Profile) {
-        self.enter(profile, self.index + 1);
+        // `START`'s index wraps to the first piece.
+        self.enter(profile, self.index.wrapping_add(1));
     }
 
     /// Moves to the first non-empty piece from `from` on (the last piece if
     /// none is), and prepares its constants.
     fn enter(&mut self, profile: &Profile, from: usize) {
         let mut i = from.min(PIECES - 1);
-        let mut piece = profile.piece(i);
-        while piece.duration <= 0.0 && i + 1 < PIECES {
+        while profile.piece_duration(i) <= 0.0 && i + 1 < PIECES {
             i += 1;
-            piece = profile.piece(i);
         }
+        let piece = profile.piece(i);
         // Where the next non-empty piece starts.
-        let mut d_end = f64::INFINITY;
-        for k in i + 1..PIECES {
-            let next = profile.piece(k);
-            if next.duration > 0.0 {
-                d_end = next.d0;
-                break;
-            }
+        let mut k = i + 1;
+        while k < PIECES && profile.piece_duration(k) <= 0.0 {
+            k += 1;
         }
+        let d_end = if k < PIECES {
+            profile.piece(k).d0
+        } else {
+            f64::INFINITY
+        };
         let u = piece.duration;
         self.span = u * (piece.v + u * (0.5 * piece.a + u * piece.j / 6.0));
         if d_end == f64::INFINITY {
@@ -237,12 +251,18 @@ mod tests {
         ];
         for (length, v0, v1, vmax, accel, jerk) in cases {
             let p = fastest(length, v0, v1, vmax, accel, jerk);
+            for i in 0..PIECES {
+                assert_eq!(p.piece_duration(i), p.piece(i).duration, "{p:?} piece {i}");
+            }
+            // A cursor from the start and one entering lazily agree.
+            let mut lazy = TimeCursor::START;
             let mut c = TimeCursor::new(&p);
             let n = 5000;
             let mut last = -1.0;
             for k in 0..=n {
                 let d = length * k as f64 / n as f64;
                 let t = c.time_at(&p, d);
+                assert_eq!(t, lazy.time_at(&p, d));
                 let want = p.time_at(d);
                 assert!(t >= last, "{p:?}: time went back at d={d}");
                 last = t;
