@@ -183,6 +183,8 @@ impl Channel {
         }
     }
 
+    /// The long way: starts segments and legs as needed, and solves any
+    /// joint shape and any profile piece.
     fn find_step<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
