@@ -7,7 +7,7 @@
 //! profile, so steps are placed exactly inside a frame, not rounded to it.
 
 use heapless::Deque;
-use motet_trajectory::{JointPath, Segment};
+use motet_trajectory::{JointPath, Segment, TimeCursor};
 use motet_wire::ChannelConfig;
 
 /// A step found but not yet taken.
@@ -33,10 +33,38 @@ pub struct Channel {
     turn: Option<f64>,
     /// Distance into the current segment up to which steps are found.
     s: f64,
+    /// The current leg: the stretch of the segment up to its turning point
+    /// or its end, over which the joint is monotone. [`Leg::NONE`] whenever
+    /// `path` is `None`, so that no step is found on a stale leg.
+    leg: Leg,
+    /// The current segment's profile, inverted piece by piece as `s` grows.
+    timer: TimeCursor,
+    /// The current segment's start, host µs.
+    t0: f64,
     /// Joint value where the last segment ended, to keep angles continuous.
     joint_ref: f64,
     pending: Option<Step>,
     last_time: f64,
+}
+
+/// What a leg's steps need, computed once per leg instead of once per step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Leg {
+    /// Distance where the leg ends.
+    hi: f64,
+    /// The joint there, in steps.
+    at_hi: f64,
+    /// For a joint affine in the distance, `(joint at s = 0 in steps,
+    /// distance per step)`: a crossing is then one multiplication away.
+    line: Option<(f64, f64)>,
+}
+
+impl Leg {
+    const NONE: Leg = Leg {
+        hi: 0.0,
+        at_hi: 0.0,
+        line: None,
+    };
 }
 
 impl Channel {
@@ -50,6 +78,9 @@ impl Channel {
             path: None,
             turn: None,
             s: 0.0,
+            leg: Leg::NONE,
+            timer: TimeCursor::START,
+            t0: 0.0,
             joint_ref: 0.0,
             pending: None,
             last_time: f64::NEG_INFINITY,
@@ -72,6 +103,7 @@ impl Channel {
         self.position = libm_round(value * self.spu);
         self.seg = 0;
         self.path = None;
+        self.leg = Leg::NONE;
         self.pending = None;
     }
 
@@ -82,6 +114,7 @@ impl Channel {
 
     /// The next step on the first `end` queued segments (the committed ones;
     /// the rest are not to be run yet).
+    #[inline]
     pub fn next_step_within<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
@@ -90,53 +123,161 @@ impl Channel {
         if self.pending.is_some() {
             return self.pending;
         }
+        if self.seg < end {
+            if let Some(step) = self.step_on_line() {
+                return Some(step);
+            }
+        }
+        self.find_step(segments, end)
+    }
+
+    /// The common case, kept short: the next step lies in the current leg
+    /// of a joint affine in the distance, and in the profile piece the
+    /// timer is in. `None` (nothing changed) sends the caller the long way.
+    #[inline(always)]
+    fn step_on_line(&mut self) -> Option<Step> {
+        let (a0, per_step) = self.leg.line?;
+        let pos = self.position as f64;
+        let at_hi = self.leg.at_hi;
+        let (boundary, positive) = if at_hi > pos + 0.5 {
+            (pos + 0.5, true)
+        } else if at_hi < pos - 0.5 {
+            (pos - 0.5, false)
+        } else {
+            return None;
+        };
+        let s = self.line_crossing(a0, per_step, boundary);
+        let t = self.timer.time_in_piece(s)?;
+        self.s = s;
+        let step = Step {
+            time: self.step_time(t),
+            positive,
+        };
+        self.pending = Some(step);
+        Some(step)
+    }
+
+    /// Where a joint affine in the distance crosses `boundary`, inside the
+    /// leg. Plain comparisons (not `f64::max`, which costs NaN checks per
+    /// step); a NaN stays where the leg is.
+    #[inline(always)]
+    fn line_crossing(&self, a0: f64, per_step: f64, boundary: f64) -> f64 {
+        let s = (boundary - a0) * per_step;
+        let s = if s > self.s { s } else { self.s };
+        if s < self.leg.hi {
+            s
+        } else {
+            self.leg.hi
+        }
+    }
+
+    /// Host time of a step `t` seconds into the current segment, never
+    /// earlier than the step before, whatever the rounding.
+    #[inline(always)]
+    fn step_time(&self, t: f64) -> f64 {
+        let time = self.t0 + t * 1e6;
+        if time > self.last_time {
+            time
+        } else {
+            self.last_time
+        }
+    }
+
+    /// The long way: starts segments and legs as needed, and solves any
+    /// joint shape and any profile piece.
+    fn find_step<const Q: usize>(
+        &mut self,
+        segments: &Deque<Segment, Q>,
+        end: usize,
+    ) -> Option<Step> {
         loop {
             if self.seg >= end {
                 return None;
             }
             let seg = segments.get(self.seg)?;
-            let path = match self.path {
-                Some(p) => p,
-                None => {
-                    if seg.profile.length() <= 0.0 {
-                        self.seg += 1;
-                        continue;
-                    }
-                    let p = JointPath::new(&self.config.map, seg, self.joint_ref);
-                    self.turn = p.turning_point();
-                    self.s = 0.0;
-                    self.path = Some(p);
-                    p
-                }
-            };
-            let len = path.length();
-            let hi = match self.turn {
-                Some(t) if self.s < t => t,
-                _ => len,
-            };
-            let at_hi = path.value_at(hi) * self.spu;
+            if self.path.is_none() && !self.start_segment(seg) {
+                self.seg += 1;
+                continue;
+            }
             let pos = self.position as f64;
+            let at_hi = self.leg.at_hi;
             let (boundary, positive) = if at_hi > pos + 0.5 {
                 (pos + 0.5, true)
             } else if at_hi < pos - 0.5 {
                 (pos - 0.5, false)
-            } else if hi < len {
-                self.s = hi;
-                continue;
             } else {
-                self.joint_ref = path.value_at(len);
-                self.path = None;
-                self.seg += 1;
+                self.end_leg();
                 continue;
             };
-            let s = path.solve(boundary / self.spu, self.s, hi);
+            let s = match (self.leg.line, &self.path) {
+                (Some((a0, per_step)), _) => self.line_crossing(a0, per_step, boundary),
+                (None, Some(path)) => path.solve(boundary / self.spu, self.s, self.leg.hi),
+                (None, None) => return None,
+            };
             self.s = s;
-            // Never earlier than the step before, whatever the rounding.
-            let time = seg.time_at_distance(s).max(self.last_time);
-            let step = Step { time, positive };
+            let t = self.timer.time_at(&seg.profile, s);
+            let step = Step {
+                time: self.step_time(t),
+                positive,
+            };
             self.pending = Some(step);
             return Some(step);
         }
+    }
+
+    /// Starts following `seg`; false when it has no length to follow.
+    #[inline(never)]
+    fn start_segment(&mut self, seg: &Segment) -> bool {
+        if seg.profile.length() <= 0.0 {
+            return false;
+        }
+        let p = JointPath::new(&self.config.map, seg, self.joint_ref);
+        self.turn = p.turning_point();
+        self.s = 0.0;
+        self.path = Some(p);
+        self.timer = TimeCursor::START;
+        self.t0 = seg.t0;
+        self.enter_leg();
+        true
+    }
+
+    /// No step is left in the current leg: moves on to the next leg, or past
+    /// the segment.
+    #[inline(never)]
+    fn end_leg(&mut self) {
+        let Some(path) = self.path else {
+            return;
+        };
+        if self.leg.hi < path.length() {
+            self.s = self.leg.hi;
+            self.enter_leg();
+        } else {
+            self.joint_ref = path.value_at(path.length());
+            self.path = None;
+            self.leg = Leg::NONE;
+            self.seg += 1;
+        }
+    }
+
+    /// Starts the leg that begins at `self.s`.
+    fn enter_leg(&mut self) {
+        let Some(path) = self.path.as_ref() else {
+            return;
+        };
+        let hi = match self.turn {
+            Some(t) if self.s < t => t,
+            _ => path.length(),
+        };
+        let line = path.line().map(|(a0, k)| {
+            let rate = k * self.spu;
+            let per_step = if rate == 0.0 { 0.0 } else { 1.0 / rate };
+            (a0 * self.spu, per_step)
+        });
+        self.leg = Leg {
+            hi,
+            at_hi: path.value_at(hi) * self.spu,
+            line,
+        };
     }
 
     /// The profiles of queued segments `from..` were replaced (same
@@ -146,12 +287,24 @@ impl Channel {
         if self.seg < from {
             return;
         }
-        if let (Some(step), Some(seg)) = (self.pending.as_mut(), segments.get(self.seg)) {
-            step.time = seg.time_at_distance(self.s).max(self.last_time);
+        let Some(seg) = segments.get(self.seg) else {
+            return;
+        };
+        if self.path.is_some() {
+            self.timer = TimeCursor::START;
+            self.t0 = seg.t0;
+        }
+        if self.pending.is_some() {
+            let t = self.timer.time_at(&seg.profile, self.s);
+            let time = self.step_time(t);
+            if let Some(step) = self.pending.as_mut() {
+                step.time = time;
+            }
         }
     }
 
     /// Takes the pending step; returns the direction output.
+    #[inline]
     pub fn take_step(&mut self) -> Option<(f64, bool)> {
         let step = self.pending.take()?;
         self.position += if step.positive { 1 } else { -1 };

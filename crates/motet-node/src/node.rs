@@ -1,7 +1,7 @@
 //! The node: message handling, queues, and the frame poll.
 
 use crate::board::Board;
-use crate::channel::Channel;
+use crate::channel::{Channel, Step};
 use crate::graph::{
     self, Component, FrameOut, Graph, GraphBuilder, Inputs, Mode, PortRef, Tape, MAX_HW,
     SLOW_FRAME_US,
@@ -988,32 +988,54 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
 
     fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
         let end = self.committed_len();
+        // Each channel's next step time (infinite: none). Within this loop
+        // only a step changes its channel's next step, and only an event or
+        // a refresh changes what is due besides steps, so both are kept and
+        // updated where they change instead of asked for on every output.
+        let n = self.channels.len();
+        let mut next = [f64::INFINITY; MAX_CHANNELS];
+        for (t, ch) in next.iter_mut().zip(self.channels.iter_mut()) {
+            *t = time_of(ch.next_step_within(&self.segments, end));
+        }
+        let mut others = self.others_due(until);
         // Time of the last output handed out.
         let mut last = None;
         loop {
-            let mut best: Option<(usize, f64)> = None;
-            for (i, ch) in self.channels.iter_mut().enumerate() {
-                if let Some(st) = ch.next_step_within(&self.segments, end) {
-                    if st.time < until && best.is_none_or(|(_, t)| st.time < t) {
-                        best = Some((i, st.time));
-                    }
+            // The earliest step before `until`, the first channel on a tie.
+            let (mut bi, mut bt) = (usize::MAX, until);
+            for (i, &t) in next[..n].iter().enumerate() {
+                if t < bt {
+                    (bi, bt) = (i, t);
                 }
             }
-            let event_time = self.event_due().filter(|&t| t < until);
-            let refresh = self
-                .tools
-                .iter()
-                .enumerate()
-                .filter_map(|(i, t)| t.next_update().map(|u| (i, u)))
-                .filter(|&(_, u)| u < until)
-                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let (event_time, refresh, other) = others;
+            if bi != usize::MAX && bt < other {
+                // Only a step is due first: the common case, taken directly.
+                if *budget == 0 {
+                    if let Some(t) = last {
+                        self.now = t;
+                        self.retire();
+                        return false;
+                    }
+                }
+                *budget = budget.saturating_sub(1);
+                last = Some(bt);
+                let ch = &mut self.channels[bi];
+                let id = ch.config().channel;
+                if let Some((t, dir)) = ch.take_step() {
+                    board.step(id, dir, t);
+                }
+                next[bi] = time_of(ch.next_step_within(&self.segments, end));
+                continue;
+            }
+            let best = (bi != usize::MAX).then_some((bi, bt));
             // Ties: events, then refreshes, then steps.
             let step_time = best.map(|(_, t)| t);
-            let next = [step_time, event_time, refresh.map(|r| r.1)]
+            let next_out = [step_time, event_time, refresh.map(|r| r.1)]
                 .into_iter()
                 .flatten()
                 .min_by(f64::total_cmp);
-            match (next, last) {
+            match (next_out, last) {
                 (None, _) => break,
                 (Some(_), Some(t)) if *budget == 0 => {
                     // Everything before `t` is out; what is due at `t` or
@@ -1025,7 +1047,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 _ => {}
             }
             *budget = budget.saturating_sub(1);
-            last = next;
+            last = next_out;
             if let Some((i, u)) = refresh {
                 if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
                     let speed = self.speed_at(u);
@@ -1040,25 +1062,51 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                     if let Some(t) = still {
                         tool.defer(t);
                     }
+                    others = self.others_due(until);
                     continue;
                 }
             }
             match (best, event_time) {
                 (None, None) => break,
-                (Some((_, ts)), Some(te)) if te <= ts => self.fire_event(board),
-                (None, Some(_)) => self.fire_event(board),
+                (Some((_, ts)), Some(te)) if te <= ts => {
+                    self.fire_event(board);
+                    others = self.others_due(until);
+                }
+                (None, Some(_)) => {
+                    self.fire_event(board);
+                    others = self.others_due(until);
+                }
                 (Some((i, _)), _) => {
                     let ch = &mut self.channels[i];
                     let id = ch.config().channel;
                     if let Some((t, dir)) = ch.take_step() {
                         board.step(id, dir, t);
                     }
+                    next[i] = time_of(ch.next_step_within(&self.segments, end));
                 }
             }
         }
         self.now = until;
         self.retire();
         true
+    }
+
+    /// The committed event due before `until`, the earliest tool refresh
+    /// due before it (the first tool on a tie), and the earlier of their
+    /// times (infinite: neither).
+    fn others_due(&self, until: f64) -> (Option<f64>, Option<(usize, f64)>, f64) {
+        let event_time = self.event_due().filter(|&t| t < until);
+        let refresh = self
+            .tools
+            .iter()
+            .enumerate()
+            .filter_map(|(i, t)| t.next_update().map(|u| (i, u)))
+            .filter(|&(_, u)| u < until)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let first = event_time
+            .unwrap_or(f64::INFINITY)
+            .min(refresh.map_or(f64::INFINITY, |r| r.1));
+        (event_time, refresh, first)
     }
 
     fn fire_event<B: Board>(&mut self, board: &mut B) {
@@ -1105,6 +1153,12 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             self.starved = true;
         }
     }
+}
+
+/// A step's time; infinite for none.
+#[inline]
+fn time_of(step: Option<Step>) -> f64 {
+    step.map_or(f64::INFINITY, |s| s.time)
 }
 
 /// The checks [`Node::push_segment`] makes on a message's values.

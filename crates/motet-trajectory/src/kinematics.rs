@@ -249,6 +249,16 @@ impl JointPath {
         self.length
     }
 
+    /// `(a0, k)` when the joint is affine in the distance, `a0 + k·s`
+    /// (linear maps: cartesian, CoreXY, any kinematic matrix).
+    #[inline]
+    pub fn line(&self) -> Option<(f64, f64)> {
+        match self.shape {
+            Shape::Linear { a0, k } => Some((a0, k)),
+            _ => None,
+        }
+    }
+
     /// Joint value after distance `s` along the segment.
     #[inline]
     pub fn value_at(&self, s: f64) -> f64 {

@@ -4,7 +4,8 @@
 //! This crate is `no_std` without an allocator and never reads a clock: every
 //! function takes the time it works on as an argument.
 #![no_std]
-#![forbid(unsafe_code)]
+// Unsafe only for the FPU's square-root instruction (`math::sqrt`).
+#![deny(unsafe_code)]
 
 pub mod chain;
 pub mod contingency;
@@ -13,10 +14,12 @@ mod math;
 pub mod point;
 pub mod profile;
 pub mod segment;
+pub mod timing;
 
 pub use chain::{ChainError, Element, ElementChain, Unit};
 pub use contingency::{Contingency, TailError, TailWalk};
 pub use kinematics::{JointMap, JointPath, KinematicsKind};
 pub use point::{Point, MAX_AXES};
-pub use profile::{Profile, ProfileKind, ProfileParams};
+pub use profile::{Piece, Profile, ProfileKind, ProfileParams, PIECES};
 pub use segment::Segment;
+pub use timing::TimeCursor;

@@ -135,6 +135,48 @@ impl Ramp {
         )
     }
 
+    /// Piece `k` (0: jerk rising, 1: constant acceleration, 2: jerk falling)
+    /// of the ramp, starting `t0` seconds and `d0` units into the profile. The
+    /// start speeds and distances are those [`Ramp::state`] gives, so both
+    /// agree on where a piece begins.
+    fn piece(&self, k: usize, t0: f64, d0: f64) -> Piece {
+        let (s, a, j) = (self.sign, self.accel, self.jerk);
+        let tj = self.t_jerk;
+        match k {
+            0 => Piece {
+                t0,
+                d0,
+                duration: tj,
+                v: self.v_from,
+                a: 0.0,
+                j: s * j,
+            },
+            1 => {
+                let (d, v, _) = self.state(tj);
+                Piece {
+                    t0: t0 + tj,
+                    d0: d0 + d,
+                    duration: self.t_const,
+                    v,
+                    a: s * a,
+                    j: 0.0,
+                }
+            }
+            _ => {
+                let t = tj + self.t_const;
+                let (d, v, _) = self.state(t);
+                Piece {
+                    t0: t0 + t,
+                    d0: d0 + d,
+                    duration: tj,
+                    v,
+                    a: s * a,
+                    j: -s * j,
+                }
+            }
+        }
+    }
+
     /// Time at which the ramp has covered distance `d` (clamped to the ramp).
     pub fn time_at(&self, d: f64) -> f64 {
         let total = self.duration();
@@ -188,6 +230,26 @@ impl Ramp {
         t
     }
 }
+
+/// One polynomial piece of a profile: `d0 + v u + a u²/2 + j u³/6` units
+/// covered `u` seconds after `t0`, for `u` in `0..=duration`. Speed never goes
+/// negative inside a piece, so distance is monotone there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piece {
+    /// Seconds into the profile where the piece starts.
+    pub t0: f64,
+    /// Distance into the profile where the piece starts.
+    pub d0: f64,
+    pub duration: f64,
+    /// Speed, acceleration and jerk at the piece's start.
+    pub v: f64,
+    pub a: f64,
+    pub j: f64,
+}
+
+/// How many pieces a profile has, empty ones included: three per ramp and
+/// the cruise.
+pub const PIECES: usize = 7;
 
 /// A segment's speed over time: ramp, cruise, ramp.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -323,6 +385,40 @@ impl Profile {
     #[inline]
     pub fn distance_at(&self, t: f64) -> f64 {
         self.state(t).0
+    }
+
+    /// [`Profile::piece`]`(i).duration`, without computing the piece.
+    #[inline]
+    pub fn piece_duration(&self, i: usize) -> f64 {
+        match i {
+            0 | 2 => self.ramp_in.t_jerk,
+            1 => self.ramp_in.t_const,
+            3 if self.vc > 0.0 => self.cruise,
+            3 => 0.0,
+            5 => self.ramp_out.t_const,
+            _ => self.ramp_out.t_jerk,
+        }
+    }
+
+    /// Piece `i` (`0..PIECES`: the entry ramp's three, the cruise, the exit
+    /// ramp's three); a piece a profile does not have has duration 0.
+    pub fn piece(&self, i: usize) -> Piece {
+        let t1 = self.ramp_in.duration();
+        let d1 = self.ramp_in.distance();
+        match i {
+            0..=2 => self.ramp_in.piece(i, 0.0, 0.0),
+            3 => Piece {
+                t0: t1,
+                d0: d1,
+                duration: if self.vc > 0.0 { self.cruise } else { 0.0 },
+                v: self.vc,
+                a: 0.0,
+                j: 0.0,
+            },
+            _ => self
+                .ramp_out
+                .piece((i - 4).min(2), t1 + self.cruise, d1 + self.vc * self.cruise),
+        }
     }
 
     /// Seconds into the segment at which distance `d` is reached: the inverse of
