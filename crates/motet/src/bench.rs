@@ -2,7 +2,7 @@
 //! figures the project tracks.
 
 use crate::run::load_machine;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use motet_api::job::{parse_job, read_bytes};
 use motet_api::{job_name, JobKind, JobOptions};
 use motet_planner::{Planned, Planner};
@@ -11,8 +11,8 @@ use std::time::Instant;
 
 /// A script's session: 10,000 `move_to` calls around a circle, streamed as
 /// they come. Prints the longest call and how often the machine had to stop.
-fn interactive(machine_path: &Path) -> Result<()> {
-    let mut m = motet_api::Machine::open(machine_path)?;
+fn interactive(machine: motet_host::Machine) -> Result<()> {
+    let mut m = motet_api::Machine::new(machine)?;
     m.move_to(&[("x", 100.0), ("y", 100.0)], Some(200.0))?;
     let (mut longest, start) = (0.0f64, Instant::now());
     let n = 10_000;
@@ -41,8 +41,21 @@ fn interactive(machine_path: &Path) -> Result<()> {
     Ok(())
 }
 
-pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) -> Result<()> {
-    let machine = load_machine(machine_path)?;
+pub fn bench(
+    machine_path: &Path,
+    job_path: &Path,
+    repeat: usize,
+    no_sim: bool,
+    microsteps: Option<u32>,
+) -> Result<()> {
+    let machine = match microsteps {
+        None => load_machine(machine_path)?,
+        Some(m) => {
+            let text = std::fs::read_to_string(machine_path)
+                .with_context(|| format!("reading {}", machine_path.display()))?;
+            motet_host::Machine::parse(&crate::bench_wire::with_microsteps(&text, m), machine_path)?
+        }
+    };
     let data = read_bytes(job_path)?;
     let lines = data.iter().filter(|b| **b == b'\n').count();
     let kind = JobKind::of(job_path)?;
@@ -114,7 +127,7 @@ pub fn bench(machine_path: &Path, job_path: &Path, repeat: usize, no_sim: bool) 
         duration,
         duration / 3600.0
     );
-    interactive(machine_path)?;
+    interactive(machine.clone())?;
     if !no_sim {
         let r = motet_sim::simulate(
             &machine,

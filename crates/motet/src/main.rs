@@ -242,6 +242,9 @@ enum Cmd {
         /// Skip the full simulation.
         #[arg(long)]
         no_sim: bool,
+        /// Replace every actuator chain's microstep value (as bench-net's).
+        #[arg(long, value_parser = flags::count::<u32>(ranges::MICROSTEPS))]
+        microsteps: Option<u32>,
     },
     /// Bytes on the wire per second of motion for a job (batched and plain segments).
     BenchWire(bench_wire::Args),
@@ -395,7 +398,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             job,
             repeat,
             no_sim,
-        } => bench::bench(&machine, &job, repeat as usize, no_sim),
+            microsteps,
+        } => bench::bench(&machine, &job, repeat as usize, no_sim, microsteps),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }

@@ -209,3 +209,51 @@ fn a_closed_pipe_is_no_panic() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `bench --microsteps` simulates the machine as if its file said so: the
+/// same steps as a run of the edited file.
+#[test]
+fn bench_microsteps_is_the_edited_machine() {
+    let dir = scratch("microsteps");
+    let job = root().join("examples/jobs/printer-vase-layers.gcode");
+    let job = job.to_str().unwrap();
+    let printer = root().join("examples/printer.toml");
+    let text = std::fs::read_to_string(&printer).unwrap();
+    assert!(text.contains("microstep = 16"));
+    let edited = write(
+        &dir,
+        "printer.toml",
+        &text.replace("microstep = 16", "microstep = 32"),
+    );
+    let out = dir.join("out");
+    let (ok, _, stderr) = motet(&["run", &edited, job, "-q", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let want: u64 = report["actuators"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["steps"].as_u64().unwrap())
+        .sum();
+
+    let (ok, stdout, stderr) = motet(&[
+        "bench",
+        "--machine",
+        printer.to_str().unwrap(),
+        "--job",
+        job,
+        "--repeat",
+        "1",
+        "--microsteps",
+        "32",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains(&format!(" {want} steps ")),
+        "want {want} steps: {stdout}"
+    );
+
+    let (ok, _, stderr) = motet(&["bench", "--microsteps", "0", "--no-sim"]);
+    assert!(!ok && stderr.contains("--microsteps"), "{stderr}");
+}
