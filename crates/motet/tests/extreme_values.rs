@@ -9,9 +9,7 @@ mod common;
 use common::{motet, root};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-extreme-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("extreme", name)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> String {

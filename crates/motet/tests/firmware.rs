@@ -14,7 +14,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{motet, root};
+use common::{journal_seals, motet, resume_to_done, root};
 
 /// One emulated board at a time: each runs in real time.
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -24,10 +24,7 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-fw-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("fw", name)
 }
 
 /// The firmware's ELF files: the bootloader and the node application.
@@ -379,10 +376,7 @@ fn a_killed_host_leaves_the_board_braked_and_resume_finishes() {
         .unwrap();
     let start = Instant::now();
     loop {
-        let seals = std::fs::read_to_string(out.join("journal"))
-            .map(|t| t.lines().filter(|l| l.starts_with("seal")).count())
-            .unwrap_or(0);
-        if seals >= 2 {
+        if journal_seals(&out) >= 2 {
             break;
         }
         assert!(
@@ -404,14 +398,7 @@ fn a_killed_host_leaves_the_board_braked_and_resume_finishes() {
         );
         std::thread::sleep(Duration::from_millis(200));
     }
-    let (ok, stdout, stderr) = motet(&["resume", out.to_str().unwrap()]);
-    assert!(ok, "{stderr}");
-    assert!(
-        stdout.contains("resuming") && stdout.contains("done"),
-        "{stdout}"
-    );
-    let report = std::fs::read_to_string(out.join("net.json")).unwrap();
-    assert!(report.contains("\"outcome\": \"done\""), "{report}");
+    resume_to_done(&out, &[]);
 }
 
 /// Bad input at the board: a board with no application answers nothing;
@@ -482,7 +469,7 @@ fn a_silent_vanishing_or_too_slow_board_is_a_clear_error() {
         .spawn()
         .unwrap();
     let start = Instant::now();
-    while !std::fs::read_to_string(out.join("journal")).is_ok_and(|t| t.contains("seal")) {
+    while journal_seals(&out) == 0 {
         assert!(
             start.elapsed() < Duration::from_secs(30),
             "the run never got going"

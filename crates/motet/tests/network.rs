@@ -8,13 +8,10 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{motet, root};
+use common::{journal_seals, motet, resume_to_done, root};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-net-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("net", name)
 }
 
 /// A simulated node process; killed when dropped.
@@ -325,10 +322,7 @@ fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
     // Kill it once the job is well under way (the journal has windows).
     let started = Instant::now();
     loop {
-        let seals = std::fs::read_to_string(out.join("journal"))
-            .map(|t| t.matches("seal").count())
-            .unwrap_or(0);
-        if seals > 15 {
+        if journal_seals(&out) > 15 {
             break;
         }
         assert!(
@@ -358,14 +352,7 @@ fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
         );
     }
 
-    let (ok, stdout, stderr) = motet(&["resume", out.to_str().unwrap()]);
-    assert!(ok, "{stderr}");
-    assert!(
-        stdout.contains("resuming") && stdout.contains("done"),
-        "{stdout}"
-    );
-    let report = std::fs::read_to_string(out.join("net.json")).unwrap();
-    assert!(report.contains("\"outcome\": \"done\""), "{report}");
+    resume_to_done(&out, &[]);
 }
 
 /// A UDP port free on this machine now.
@@ -375,12 +362,6 @@ fn free_udp_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
-}
-
-fn journal_seals(out: &Path) -> usize {
-    std::fs::read_to_string(out.join("journal"))
-        .map(|t| t.lines().filter(|l| l.starts_with("seal")).count())
-        .unwrap_or(0)
 }
 
 /// The defects of a trusting resume, end to end: firmware upload mid-job is

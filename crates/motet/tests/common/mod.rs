@@ -21,3 +21,34 @@ pub fn motet(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// An empty scratch folder for one test: `motet-KIND-PID-NAME` under the
+/// system's temporary folder.
+pub fn scratch(kind: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("motet-{kind}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Seals the journal of a networked run in `out` holds so far.
+pub fn journal_seals(out: &std::path::Path) -> usize {
+    std::fs::read_to_string(out.join("journal"))
+        .map(|t| t.lines().filter(|l| l.starts_with("seal")).count())
+        .unwrap_or(0)
+}
+
+/// `motet resume OUT` succeeds and finishes the job: its stdout.
+pub fn resume_to_done(out: &std::path::Path, extra: &[&str]) -> String {
+    let mut args = vec!["resume", out.to_str().unwrap()];
+    args.extend(extra);
+    let (ok, stdout, stderr) = motet(&args);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("resuming") && stdout.contains("done"),
+        "{stdout}"
+    );
+    let report = std::fs::read_to_string(out.join("net.json")).unwrap();
+    assert!(report.contains("\"outcome\": \"done\""), "{report}");
+    stdout
+}
