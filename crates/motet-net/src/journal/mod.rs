@@ -1,0 +1,355 @@
+//! The journal of a networked run: what identifies the run, every sealed
+//! segment and window, written before the seal is sent, and how the run
+//! stopped, so that after any stop (even of the host process itself)
+//! `motet resume` can prove what it resumes.
+//!
+//! A text file, one record per line, each ending in ` *` and a checksum (8
+//! hex digits): the CRC-32C of the previous record's checksum (4 bytes, little
+//! endian; 0 before the first) and of this record's text. An edited or
+//! damaged record is caught, and so is one removed, moved or re-signed on its
+//! own, since the records after it no longer follow:
+//!
+//! ```text
+//! motet-journal 2 run=RUN machine=SHA256 job=SHA256 t0=T min_move_s=S start=x0 … x5
+//! seg INDEX COMMAND T0 T1 x0 … x5 | x0 … x5      one sealed segment: host times
+//!                                                  (µs), start | end point
+//! seal END TAIL DONE TIME                          segments < END committed; the
+//!                                                  contingency tail starts at TAIL;
+//!                                                  every node had finished the
+//!                                                  segments < DONE at host time TIME
+//! stop END TAIL DONE TIME LOST                     the run stopped there; LOST: the
+//!                                                  machine nodes (indices, `,`) that
+//!                                                  stopped answering, or `-`
+//! ```
+//!
+//! The header carries what the plan depends on beyond the two files: where
+//! the machine started, the time the trajectory started at and the shortest
+//! move time the run planned with; with them the plan can be made again, bit
+//! for bit, and compared. Floats are written in Rust's shortest round-trip
+//! form, so they read back bit for bit.
+
+use crate::digest::Digest;
+use motet_trajectory::Point;
+use motet_wire::frame::Crc32c;
+
+/// The journal format this crate writes and reads.
+pub const JOURNAL_FORMAT: u32 = 2;
+
+#[derive(Debug, thiserror::Error)]
+pub enum JournalError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        path: String,
+        line: usize,
+        message: String,
+    },
+}
+
+/// What identifies a run and what its plan depends on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JournalHeader {
+    pub run: u32,
+    pub machine: Digest,
+    pub job: Digest,
+    /// Host time the trajectory starts at, µs.
+    pub t0: f64,
+    /// Shortest move time the planner kept to, s.
+    pub min_move_s: f64,
+    /// Where the machine was at rest when the run started.
+    pub start: Point,
+}
+
+/// One committed segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JournalSegment {
+    pub index: u32,
+    /// Index of the command (in the run's command list) it came from.
+    pub command: usize,
+    /// Start and end, host µs.
+    pub t0: f64,
+    pub t1: f64,
+    pub start: Point,
+    pub end: Point,
+}
+
+/// A sealed window: segments before `end` committed, tail from `tail`; every
+/// node had reported the segments before `done` finished at host time `time`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JournalSeal {
+    pub end: u32,
+    pub tail: u32,
+    pub done: u32,
+    pub time: u64,
+}
+
+/// How a run stopped: the window and tail it stopped on, the segments every
+/// node had finished, and the machine nodes that were lost.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct JournalStop {
+    pub seal: JournalSeal,
+    pub lost: Vec<usize>,
+}
+
+/// The checksum of a record whose text is `text` after a record whose
+/// checksum was `prev`.
+pub fn record_checksum(prev: u32, text: &str) -> u32 {
+    let mut c = Crc32c::new();
+    c.update(&prev.to_le_bytes());
+    c.update(text.as_bytes());
+    c.finish()
+}
+
+mod read;
+mod text;
+mod write;
+
+pub use read::Journal;
+pub use write::JournalWriter;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header() -> JournalHeader {
+        JournalHeader {
+            run: 0xabcd_0123,
+            machine: Digest::of(b"machine"),
+            job: Digest::of(b"job"),
+            t0: 200_000.5,
+            min_move_s: 1.0 / 3.0,
+            start: [0.0, 1.5, -0.0, 0.0, 2.0, 0.0],
+        }
+    }
+
+    fn segs() -> Vec<JournalSegment> {
+        (0..5)
+            .map(|i| JournalSegment {
+                index: i,
+                command: 3 * i as usize,
+                t0: 1000.0 * i as f64,
+                t1: 1000.0 * i as f64 + 999.75,
+                start: [0.1 * i as f64, 1.0 / 3.0, -2.5e-7, 0.0, 1e300, 7.0],
+                end: [0.1 * (i + 1) as f64, 2.0 / 3.0, 0.0, -0.0, 5.0, 7.25],
+            })
+            .collect()
+    }
+
+    /// A journal with two windows and a stop, as text.
+    fn written() -> String {
+        static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+        TEXT.get_or_init(write_one).clone()
+    }
+
+    fn write_one() -> String {
+        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("motet-journal-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("journal");
+        let mut w = JournalWriter::create(&path).unwrap();
+        w.header(&header()).unwrap();
+        let segs = segs();
+        for s in &segs[..3] {
+            w.segment(s).unwrap();
+        }
+        w.seal(JournalSeal {
+            end: 3,
+            tail: 1,
+            done: 0,
+            time: 10,
+        })
+        .unwrap();
+        for s in &segs[3..] {
+            w.segment(s).unwrap();
+        }
+        w.seal(JournalSeal {
+            end: 5,
+            tail: 5,
+            done: 2,
+            time: 20,
+        })
+        .unwrap();
+        w.stop(&JournalStop {
+            seal: JournalSeal {
+                end: 5,
+                tail: 5,
+                done: 4,
+                time: 30,
+            },
+            lost: vec![0, 2],
+        })
+        .unwrap();
+        drop(w);
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        text
+    }
+
+    #[test]
+    fn written_journal_reads_back_bit_for_bit() {
+        let j = Journal::parse(&written(), "j").unwrap();
+        assert_eq!(j.header, Some(header()));
+        assert_eq!(j.segments, segs());
+        assert_eq!(j.seal_ending(3).map(|s| s.tail), Some(1));
+        assert_eq!(j.segment(4), Some(&segs()[4]));
+        assert_eq!(j.segment_line(4), Some(7));
+        assert_eq!(j.committed(), 5);
+        assert_eq!(j.done(), 4);
+        assert_eq!(j.stop.as_ref().map(|s| s.lost.clone()), Some(vec![0, 2]));
+        assert!(!j.torn_tail);
+    }
+
+    #[test]
+    fn a_line_cut_short_at_the_end_is_ignored() {
+        let text = written();
+        let cut = text.len() - 20;
+        let j = Journal::parse(&text[..cut], "j").unwrap();
+        assert!(j.torn_tail);
+        assert_eq!(j.stop, None);
+    }
+
+    /// Signs every record again after an edit: a deliberate forgery, which
+    /// the checksums cannot tell from the real thing (resume re-plans).
+    fn resign(lines: &[String]) -> String {
+        let mut chain = 0;
+        let mut out = String::new();
+        for l in lines {
+            let text = l.rsplit_once(" *").map_or(l.as_str(), |(t, _)| t);
+            chain = record_checksum(chain, text);
+            out += &format!("{text} *{chain:08x}\n");
+        }
+        out
+    }
+
+    fn sign(text: &str) -> String {
+        format!("{text} *00000000")
+    }
+
+    #[test]
+    fn bad_records_say_where() {
+        let text = written();
+        let lines: Vec<&str> = text.lines().collect();
+        let owned = || lines.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let with = |i: usize, line: &str| {
+            let mut l = owned();
+            l[i] = line.to_string();
+            resign(&l)
+        };
+        let unsigned = |i: usize, line: &str| {
+            let mut l = owned();
+            l[i] = line.to_string();
+            l.join("\n") + "\n"
+        };
+        let removed = |i: usize| {
+            let mut l = owned();
+            l.remove(i);
+            l.join("\n") + "\n"
+        };
+        let cases = [
+            // One changed digit, checksum kept: damage or an edit.
+            (
+                unsigned(2, &lines[2].replacen("seg 1 3", "seg 1 4", 1)),
+                "j:3: checksum",
+            ),
+            // A record taken out (or re-signed on its own): the next one no
+            // longer follows.
+            (removed(4), "j:5: checksum"),
+            (
+                unsigned(2, &sign(lines[2].rsplit_once(" *").unwrap().0)),
+                "j:3: checksum",
+            ),
+            (unsigned(2, "seg 1 3 0 1"), "j:3: record without a checksum"),
+            // Read the same, written otherwise: not motet's.
+            (
+                unsigned(2, &{
+                    let (t, c) = lines[2].rsplit_once(" *").unwrap();
+                    format!("{t} *{}", c.to_uppercase())
+                }),
+                "j:3: checksum",
+            ),
+            (
+                with(2, &lines[2].replacen(" 1000.0 ", " 1e3 ", 1)),
+                "`1e3` is not a finite number as motet writes it",
+            ),
+            (
+                with(2, &lines[2].replacen("seg 1 ", "seg 01 ", 1)),
+                "segment index `01`",
+            ),
+            (
+                with(0, &sign("motet-journal 1 run=1")),
+                "j:1: journal format 1",
+            ),
+            (with(0, &sign("hello")), "j:1: not a motet journal"),
+            (
+                with(
+                    2,
+                    &sign("seg 7 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
+                "j:3: segment 7 where segment 1 was due",
+            ),
+            (
+                with(
+                    2,
+                    &sign(
+                        "seg 1 3 2000.0 1000.0 0.0 0.0 0.0 0.0 0.0 0.0 | 0.0 0.0 0.0 0.0 0.0 0.0",
+                    ),
+                ),
+                "ends (1000 µs) before it starts",
+            ),
+            (
+                with(
+                    2,
+                    &sign("seg 1 3 0.0 1.0 0.0 0.0 0.0 0.0 0.0 NaN | 0.0 0.0 0.0 0.0 0.0 0.0"),
+                ),
+                "`NaN` is not a finite",
+            ),
+            (
+                with(4, &sign("seal 3 4 0 10")),
+                "tail start 4 after window end 3",
+            ),
+            (with(4, &sign("seal 9 1 0 10")), "window end 9 beyond the 3"),
+            (with(4, &sign("seal 3 1 4 10")), "j:5: 4 segments done, but"),
+            (
+                with(8, &sign("stop 4 4 0 30 -")),
+                "stopped on window end 4, but the last seal ends at 5",
+            ),
+            (with(8, &sign("stop 5 5 4 30 x")), "lost node `x`"),
+            (with(3, &sign("hello")), "j:4: unknown record `hello`"),
+        ];
+        for (text, want) in cases {
+            let e = Journal::parse(&text, "j").unwrap_err().to_string();
+            assert!(e.contains(want), "want {want:?}, got {e}");
+        }
+        assert_eq!(Journal::parse("", "j").unwrap().header, None);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_text_never_panics(s in "(seg|seal|stop|motet-journal|[0-9 .|*-]|x|\n){0,120}") {
+            let _ = Journal::parse(&s, "j");
+        }
+
+        /// Any byte flipped in a journal is refused (or, in the last line's
+        /// newline, leaves a line cut short that is ignored and flagged).
+        #[test]
+        fn a_flipped_byte_is_caught(at in proptest::prelude::any::<proptest::sample::Index>(), bit in 0u8..8) {
+            let text = written();
+            let mut bytes = text.into_bytes();
+            let i = at.index(bytes.len());
+            bytes[i] ^= 1 << bit;
+            let t = String::from_utf8_lossy(&bytes);
+            match Journal::parse(&t, "j") {
+                Err(_) => {}
+                Ok(j) => proptest::prop_assert!(
+                    j.torn_tail && j.stop.is_none(),
+                    "flip at {} accepted", i
+                ),
+            }
+        }
+    }
+}
