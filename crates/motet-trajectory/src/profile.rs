@@ -507,7 +507,7 @@ pub fn fastest(length: f64, v0: f64, v1: f64, v_max: f64, accel: f64, jerk: f64)
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn check_profile(p: &Profile, accel: f64) {
@@ -530,20 +530,24 @@ mod tests {
         assert!((p.distance_at(dur) - p.length()).abs() < 1e-9 * (1.0 + p.length()));
     }
 
+    /// Profiles the tests walk: (length, v0, v1, vmax, accel, jerk):
+    /// trapezoids and S-curves, reaching cruise or not, short and long.
+    pub(crate) const CASES: [(f64, f64, f64, f64, f64, f64); 10] = [
+        (10.0, 0.0, 0.0, 100.0, 1000.0, 0.0),
+        (10.0, 0.0, 0.0, 1000.0, 1000.0, 0.0),
+        (1.0, 20.0, 5.0, 100.0, 500.0, 0.0),
+        (100.0, 50.0, 50.0, 80.0, 3000.0, 0.0),
+        (100.0, 80.0, 80.0, 80.0, 3000.0, 0.0),
+        (10.0, 0.0, 0.0, 100.0, 1000.0, 50_000.0),
+        (10.0, 0.0, 0.0, 1000.0, 1000.0, 10_000.0),
+        (0.5, 10.0, 12.0, 200.0, 2000.0, 100_000.0),
+        (0.01, 0.0, 0.0, 200.0, 2000.0, 100_000.0),
+        (3.0, 4.0, 2.0, 60.0, 800.0, 30_000.0),
+    ];
+
     #[test]
     fn profiles_are_consistent() {
-        // (length, v0, v1, vmax, accel, jerk)
-        let cases = [
-            (10.0, 0.0, 0.0, 100.0, 1000.0, 0.0),
-            (10.0, 0.0, 0.0, 1000.0, 1000.0, 0.0),
-            (1.0, 20.0, 5.0, 100.0, 500.0, 0.0),
-            (100.0, 50.0, 50.0, 80.0, 3000.0, 0.0),
-            (10.0, 0.0, 0.0, 100.0, 1000.0, 50_000.0),
-            (10.0, 0.0, 0.0, 1000.0, 1000.0, 10_000.0),
-            (0.5, 10.0, 12.0, 200.0, 2000.0, 100_000.0),
-            (0.01, 0.0, 0.0, 200.0, 2000.0, 100_000.0),
-        ];
-        for (length, v0, v1, vmax, accel, jerk) in cases {
+        for (length, v0, v1, vmax, accel, jerk) in CASES {
             let p = fastest(length, v0, v1, vmax, accel, jerk);
             assert!(p.vc() <= vmax + 1e-9);
             assert!((p.v0() - v0).abs() < 1e-9 && (p.v1() - v1).abs() < 1e-9);

@@ -236,20 +236,7 @@ mod tests {
     /// cursor with the profile's own inverse and with its forward state.
     #[test]
     fn cursor_inverts_the_profile() {
-        // (length, v0, v1, vmax, accel, jerk)
-        let cases = [
-            (10.0, 0.0, 0.0, 100.0, 1000.0, 0.0),
-            (10.0, 0.0, 0.0, 1000.0, 1000.0, 0.0),
-            (1.0, 20.0, 5.0, 100.0, 500.0, 0.0),
-            (100.0, 50.0, 50.0, 80.0, 3000.0, 0.0),
-            (100.0, 80.0, 80.0, 80.0, 3000.0, 0.0),
-            (10.0, 0.0, 0.0, 100.0, 1000.0, 50_000.0),
-            (10.0, 0.0, 0.0, 1000.0, 1000.0, 10_000.0),
-            (0.5, 10.0, 12.0, 200.0, 2000.0, 100_000.0),
-            (0.01, 0.0, 0.0, 200.0, 2000.0, 100_000.0),
-            (3.0, 4.0, 2.0, 60.0, 800.0, 30_000.0),
-        ];
-        for (length, v0, v1, vmax, accel, jerk) in cases {
+        for (length, v0, v1, vmax, accel, jerk) in crate::profile::tests::CASES {
             let p = fastest(length, v0, v1, vmax, accel, jerk);
             for i in 0..PIECES {
                 assert_eq!(p.piece_duration(i), p.piece(i).duration, "{p:?} piece {i}");
