@@ -13,7 +13,7 @@ use crate::limits::Limits;
 use crate::ranges::{self, OutOfRange};
 use motet_trajectory::kinematics::JointPath;
 use motet_trajectory::point::distance_masked;
-use motet_trajectory::profile::{fastest, reachable_speed};
+use motet_trajectory::profile::{fastest, reachable_entry, reachable_speed};
 use motet_trajectory::{JointMap, Point, Profile, ProfileKind, Segment, MAX_AXES};
 use std::collections::VecDeque;
 
@@ -480,7 +480,10 @@ impl Planner {
         for k in (0..n).rev() {
             let fixed_entry = k == 0;
             let m = &mut self.queue[k];
-            let reach = reachable_speed(exit, m.length, m.accel, m.jerk);
+            // Entries are fixed before exits stop rising: every exit from
+            // this one up must stay reachable (S-curve ramps down are not
+            // monotone in their end speed).
+            let reach = reachable_entry(exit, m.length, m.accel, m.jerk);
             // An incomplete horizon's cap may still rise, like a speed held
             // down by the queue's end.
             let (cap, cap_end_limited) = if m.horizon_cap < m.entry_cap {

@@ -280,6 +280,37 @@ fn check_horizon(segs: &[Segment], n: usize) {
     }
 }
 
+/// Every segment's two ramps fit within its length.
+fn check_ramps_fit(segs: &[Segment]) {
+    for (i, s) in segs.iter().enumerate() {
+        let p = &s.profile;
+        assert!(
+            p.ramps_length() <= p.length() * (1.0 + 1e-9) + 1e-12,
+            "segment {i}: ramps need {} of {} ({:?})",
+            p.ramps_length(),
+            p.length(),
+            p.params()
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, .. ProptestConfig::default() })]
+
+    /// S-curve plans, streamed or whole, under any lookahead and stop
+    /// horizon: every segment's ramps fit its length.
+    #[test]
+    fn s_curve_ramps_fit_every_segment(moves in arb_moves(), lookahead in 2usize..40, horizon in prop_oneof![Just(0usize), 1usize..40], one_by_one in any::<bool>()) {
+        let mut l = limits(ProfileKind::SCurve, vec![]);
+        l.stop_horizon = horizon;
+        l.lookahead = lookahead;
+        let (cmds, targets) = absolute(&moves);
+        let segs = segments(&plan(&l, &cmds, one_by_one));
+        check_continuity(&segs, &targets);
+        check_ramps_fit(&segs);
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 100, .. ProptestConfig::default() })]
 

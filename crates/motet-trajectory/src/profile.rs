@@ -362,6 +362,12 @@ impl Profile {
     }
 
     /// Largest |acceleration| along the path anywhere in the profile.
+    /// Distance the two ramps take; at most [`Profile::length`] in a plan
+    /// (the planner lowers speeds until they fit).
+    pub fn ramps_length(&self) -> f64 {
+        self.ramp_in.distance() + self.ramp_out.distance()
+    }
+
     pub fn peak_accel(&self) -> f64 {
         self.ramp_in.accel.max(self.ramp_out.accel)
     }
@@ -463,6 +469,50 @@ pub fn reachable_speed(v_from: f64, distance: f64, accel: f64, jerk: f64) -> f64
     for _ in 0..64 {
         let mid = 0.5 * (lo + hi);
         if ramp_distance(v_from, mid, accel, jerk) <= distance {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-12 * hi {
+            break;
+        }
+    }
+    lo
+}
+
+/// The longest distance a ramp down from `v` to any speed in `[floor, v]`
+/// takes. A jerk-limited ramp down is not monotone in where it ends: its
+/// length grows as the end speed falls from `v` down to `u*` and shrinks
+/// below it (from `v`, stopping can take less room than slowing to a third
+/// of `v`). `u*` is `v/3` while the ramp never reaches `accel`
+/// (`v < 1.5 accel²/jerk`) and `accel²/(2 jerk)` beyond; so the longest is
+/// the ramp to `max(floor, u*)`. Without a jerk limit it is the ramp to
+/// `floor`.
+pub fn longest_ramp_down(v: f64, floor: f64, accel: f64, jerk: f64) -> f64 {
+    let floor = floor.min(v);
+    if jerk <= 0.0 {
+        return ramp_distance(v, floor, accel, jerk);
+    }
+    let knee = accel * accel / jerk;
+    let u_star = if v < 1.5 * knee { v / 3.0 } else { 0.5 * knee };
+    ramp_distance(v, floor.max(u_star), accel, jerk)
+}
+
+/// The highest entry speed from which a move of `distance` can slow to
+/// `exit` and to every exit above it (see [`longest_ramp_down`]): a planner
+/// fixes a move's entry while its exit may still rise as later moves come,
+/// and every exit it may get must stay within reach.
+pub fn reachable_entry(exit: f64, distance: f64, accel: f64, jerk: f64) -> f64 {
+    let trapezoid = reachable_speed(exit, distance, accel, 0.0);
+    if jerk <= 0.0 {
+        return trapezoid;
+    }
+    // Jerk only lengthens ramps: the trapezoid bound brackets the answer, and
+    // the longest ramp down grows with the entry speed.
+    let (mut lo, mut hi) = (exit, trapezoid);
+    for _ in 0..64 {
+        let mid = 0.5 * (lo + hi);
+        if longest_ramp_down(mid, exit, accel, jerk) <= distance {
             lo = mid;
         } else {
             hi = mid;
@@ -584,6 +634,35 @@ pub(crate) mod tests {
         for jerk in [0.0, 20_000.0] {
             let v = reachable_speed(10.0, 3.0, 1000.0, jerk);
             assert!((ramp_distance(10.0, v, 1000.0, jerk) - 3.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn longest_ramp_down_is_the_worst_end_speed() {
+        // Below and above the knee (1.5 accel²/jerk = 37.5 here), from
+        // several floors: the closed form against the largest of 20,000
+        // sampled end speeds.
+        let (accel, jerk) = (1000.0, 40_000.0);
+        for v in [2.0, 20.0, 37.0, 38.0, 80.0, 300.0] {
+            for floor in [0.0, 0.1 * v, 0.3 * v, 0.5 * v, v] {
+                let n = 20_000;
+                let brute = (0..=n)
+                    .map(|k| floor + (v - floor) * k as f64 / n as f64)
+                    .map(|u| ramp_distance(v, u, accel, jerk))
+                    .fold(0.0, f64::max);
+                let closed = longest_ramp_down(v, floor, accel, jerk);
+                assert!(
+                    closed >= brute * (1.0 - 1e-12),
+                    "v {v} floor {floor}: {closed} < {brute}"
+                );
+                assert!(
+                    closed <= brute * (1.0 + 1e-6) + 1e-12,
+                    "v {v} floor {floor}: {closed} > {brute}"
+                );
+            }
+            let d = 0.05 * v;
+            let e = reachable_entry(0.0, d, accel, jerk);
+            assert!((longest_ramp_down(e, 0.0, accel, jerk) - d).abs() < 1e-9 * d.max(1.0));
         }
     }
 
