@@ -1,8 +1,9 @@
 //! Job files: G-code, SVG and photographs, turned into checked commands for a
 //! machine. Used by the command line and by scripts alike.
 
+use crate::reader::JobReader;
 use flate2::read::GzDecoder;
-use motet_host::{check_job, Clamps, Machine};
+use motet_host::{Clamps, Machine};
 use motet_planner::{Command, Located, Planner, SourceError};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -27,6 +28,11 @@ pub enum JobError {
     Gzip { file: String, error: std::io::Error },
     #[error("{file}:{line}: G-code is not valid UTF-8 text")]
     NotText { file: String, line: usize },
+    #[error(
+        "{file}:{line}: line longer than {} bytes; is this a G-code file?",
+        crate::reader::MAX_LINE
+    )]
+    LineTooLong { file: String, line: usize },
     #[error("{}", located(.file, .error))]
     Source { file: String, error: SourceError },
 }
@@ -111,11 +117,13 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, JobError> {
 }
 
 /// Reads, parses, checks and plans a job file for `machine` (the plan is
-/// only checked, and its duration kept). Nothing moves on error.
+/// only checked, and its duration kept), keeping every command. Nothing moves
+/// on error. A run that need not hold the job reads it with a
+/// [`JobReader`](crate::reader::JobReader) instead.
 pub fn load_job(machine: &Machine, path: &Path, opts: &JobOptions) -> Result<Job, JobError> {
     let kind = JobKind::of(path)?;
-    let data = read_bytes(path)?;
-    let mut job = parse_job(machine, path, kind, &data, opts)?;
+    let reader = JobReader::open(machine, path, opts)?;
+    let mut job = collect(path, kind, reader)?;
     job.planned_s = Some(plan_check(machine, &job)?);
     Ok(job)
 }
@@ -149,54 +157,18 @@ pub fn parse_job(
     data: &[u8],
     opts: &JobOptions,
 ) -> Result<Job, JobError> {
-    let file = path.display().to_string();
-    let target = machine.job_target();
-    let located = |error: SourceError| JobError::Source {
-        file: file.clone(),
-        error,
-    };
-    let (commands, warnings) = match kind {
-        JobKind::Gcode => {
-            let text = std::str::from_utf8(data).map_err(|e| JobError::NotText {
-                file: file.clone(),
-                line: data[..e.valid_up_to()]
-                    .iter()
-                    .filter(|b| **b == b'\n')
-                    .count()
-                    + 1,
-            })?;
-            let gopts = motet_gcode::GcodeOptions {
-                allow_unknown: opts.allow_unknown,
-                ..Default::default()
-            };
-            let parsed = motet_gcode::parse(text, &target, &gopts).map_err(located)?;
-            (
-                parsed.commands,
-                parsed
-                    .warnings
-                    .iter()
-                    .map(|w| format!("{file}:{w}"))
-                    .collect(),
-            )
-        }
-        JobKind::Svg => (
-            motet_svg::parse(data, &target, &motet_svg::SvgOptions::default()).map_err(located)?,
-            vec![],
-        ),
-        JobKind::Image => (
-            motet_image::parse(data, &target, &motet_image::ImageOptions::default())
-                .map_err(located)?,
-            vec![],
-        ),
-    };
-    let mut commands = commands;
-    let clamps = check_job(machine, &mut commands).map_err(located)?;
+    let reader = JobReader::from_bytes(machine, path, kind, data, opts)?;
+    collect(path, kind, reader)
+}
+
+fn collect(path: &Path, kind: JobKind, mut reader: JobReader<'_>) -> Result<Job, JobError> {
+    let commands = reader.by_ref().collect::<Result<Vec<_>, _>>()?;
     Ok(Job {
         path: path.to_path_buf(),
         kind,
         commands,
-        warnings,
-        clamps,
+        warnings: reader.warnings().to_vec(),
+        clamps: reader.clamps(),
         planned_s: None,
     })
 }

@@ -23,8 +23,10 @@
 
 pub mod job;
 mod machine;
+pub mod reader;
 
 pub use job::{job_name, load_job, plan_check, Job, JobError, JobKind, JobOptions};
 pub use machine::{ApiError, Event, Machine};
 pub use motet_planner::PlanError;
 pub use motet_sim::Report;
+pub use reader::{scan_job, JobReader, JobScan};

@@ -147,7 +147,9 @@ fn run(machine: &Machine, items: &[Planned], end: f64) {
             Err(e @ (SimError::Refused { .. } | SimError::Stream(_))) => {
                 panic!("a checked, planned job was refused on its way to the nodes: {e}")
             }
-            Err(SimError::Plan { .. }) => unreachable!("submit does not plan"),
+            Err(SimError::Plan { .. } | SimError::Source(_)) => {
+                unreachable!("submit neither plans nor reads a job")
+            }
         }
     }
     sim.run_until(end);

@@ -192,41 +192,91 @@ pub struct Parsed {
 }
 
 /// Parse a G-code program for `target`. See the crate documentation for what
-/// is supported.
+/// is supported. The whole program's commands are returned at once; a job of
+/// any length is read with an [`Interpreter`], a line at a time.
 pub fn parse(text: &str, target: &JobTarget, opts: &GcodeOptions) -> Result<Parsed, SourceError> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut p = Interp::new(target, opts)?;
-    let mut lines = text.split('\n').enumerate();
-    for (i, raw) in lines.by_ref() {
-        let line_no = u32::try_from(i.saturating_add(1)).unwrap_or(u32::MAX);
-        let line = raw.strip_suffix('\r').unwrap_or(raw);
-        p.line(line, line_no)?;
-        if p.ended {
-            break;
-        }
+    let mut p = Interpreter::new(target, opts)?;
+    let mut commands = Vec::new();
+    for (i, raw) in text.split('\n').enumerate() {
+        p.line(raw, line_number(i))?;
+        commands.extend(p.drain());
     }
-    if p.ended {
-        let mut first = None;
-        let mut count = 0u64;
-        for (i, raw) in lines {
-            let t = raw.trim();
-            if t.is_empty() || t.starts_with(';') || t == "%" {
-                continue;
+    let warnings = p.finish();
+    Ok(Parsed { commands, warnings })
+}
+
+/// The 1-based line number of the `i`-th line (0-based), saturating.
+pub fn line_number(i: usize) -> u32 {
+    u32::try_from(i.saturating_add(1)).unwrap_or(u32::MAX)
+}
+
+/// Most distinct warnings kept; further ones are only counted, so a file of
+/// endless distinct unknown codes cannot grow the list without bound.
+pub const MAX_WARNINGS: usize = 256;
+
+/// The G-code interpreter fed one line at a time: memory stays that of its
+/// modal state and the commands of the line just read, however long the
+/// program. [`parse`] is this over a whole text.
+pub struct Interpreter {
+    interp: Interp,
+    /// Lines after the program end (M2/M30): how many, and the first.
+    after_end: u64,
+    first_after_end: Option<u32>,
+}
+
+impl Interpreter {
+    pub fn new(target: &JobTarget, opts: &GcodeOptions) -> Result<Interpreter, SourceError> {
+        Ok(Interpreter {
+            interp: Interp::new(target, opts)?,
+            after_end: 0,
+            first_after_end: None,
+        })
+    }
+
+    /// Interprets line `line_no` (1-based), its `\n` removed; a trailing
+    /// `\r` and, on line 1, a byte order mark are ignored. Its commands are
+    /// then in [`Interpreter::drain`]. Lines after the program end are only
+    /// counted, for a warning.
+    pub fn line(&mut self, raw: &str, line_no: u32) -> Result<(), SourceError> {
+        let line = raw.strip_suffix('\r').unwrap_or(raw);
+        let line = match line_no {
+            1 => line.strip_prefix('\u{feff}').unwrap_or(line),
+            _ => line,
+        };
+        if self.interp.ended {
+            let t = line.trim();
+            if !(t.is_empty() || t.starts_with(';') || t == "%") {
+                self.after_end += 1;
+                self.first_after_end.get_or_insert(line_no);
             }
-            count += 1;
-            if first.is_none() {
-                first = Some(u32::try_from(i.saturating_add(1)).unwrap_or(u32::MAX));
-            }
+            return Ok(());
         }
-        if let Some(line) = first {
-            p.warnings.push(SourceError::new(
+        self.interp.line(line, line_no)
+    }
+
+    /// The commands interpreted since the last call, in order.
+    pub fn drain(&mut self) -> std::vec::Drain<'_, Located<Command>> {
+        self.interp.out.drain(..)
+    }
+
+    /// Whether M2 or M30 ended the program.
+    pub fn ended(&self) -> bool {
+        self.interp.ended
+    }
+
+    /// The warnings: codes accepted but not acted on (repeats folded into
+    /// the first, as "(N more like this)"), lines after the program end.
+    pub fn finish(mut self) -> Vec<SourceError> {
+        if let Some(line) = self.first_after_end {
+            let count = self.after_end;
+            self.interp.warnings.push(SourceError::new(
                 line,
                 0,
                 format!("{count} line(s) after the program end (M2/M30) ignored"),
             ));
         }
+        self.interp.finish().warnings
     }
-    Ok(p.finish())
 }
 
 const INCH: f64 = 25.4;
@@ -504,8 +554,8 @@ enum ToolState {
     PerSpeed(f32, Option<f64>),
 }
 
-struct Interp<'t> {
-    target: &'t JobTarget,
+struct Interp {
+    target: JobTarget,
     allow_unknown: bool,
     retract_length: f64,
     retract_speed: f64,
@@ -542,15 +592,17 @@ struct Interp<'t> {
     out: Vec<Located<Command>>,
     warnings: Vec<SourceError>,
     warn_index: Vec<(WarnKey, usize, u64)>,
+    /// Warnings beyond [`MAX_WARNINGS`].
+    unlisted_warnings: u64,
     scratch: Vec<Point>,
 
     // Current line, for locations.
-    line: &'t str,
+    line: String,
     line_no: u32,
 }
 
-impl<'t> Interp<'t> {
-    fn new(target: &'t JobTarget, opts: &GcodeOptions) -> Result<Self, SourceError> {
+impl Interp {
+    fn new(target: &JobTarget, opts: &GcodeOptions) -> Result<Self, SourceError> {
         let mut letter_axis = [None; 7];
         for (slot, &l) in AXIS_LETTERS.iter().enumerate() {
             let name = [l.to_ascii_lowercase()];
@@ -585,7 +637,7 @@ impl<'t> Interp<'t> {
             return Err(SourceError::new(0, 0, "retract_speed must be positive"));
         }
         Ok(Interp {
-            target,
+            target: target.clone(),
             allow_unknown: opts.allow_unknown,
             retract_length: opts.retract_length,
             retract_speed: opts.retract_speed,
@@ -615,8 +667,9 @@ impl<'t> Interp<'t> {
             out: Vec::new(),
             warnings: Vec::new(),
             warn_index: Vec::new(),
+            unlisted_warnings: 0,
             scratch: Vec::new(),
-            line: "",
+            line: String::new(),
             line_no: 0,
         })
     }
@@ -629,6 +682,16 @@ impl<'t> Interp<'t> {
                 }
             }
         }
+        if self.unlisted_warnings > 0 {
+            self.warnings.push(SourceError::new(
+                self.line_no,
+                0,
+                format!(
+                    "{} further warning(s) of other kinds not listed (only the first {MAX_WARNINGS} kinds are)",
+                    self.unlisted_warnings
+                ),
+            ));
+        }
         Parsed {
             commands: self.out,
             warnings: self.warnings,
@@ -638,7 +701,7 @@ impl<'t> Interp<'t> {
     fn loc(&self, at: usize) -> SourceLoc {
         SourceLoc {
             line: self.line_no,
-            column: column(self.line, at),
+            column: column(&self.line, at),
         }
     }
 
@@ -652,6 +715,11 @@ impl<'t> Interp<'t> {
     fn warn(&mut self, key: WarnKey, at: usize, msg: impl FnOnce() -> String) {
         if let Some(e) = self.warn_index.iter_mut().find(|e| e.0 == key) {
             e.2 += 1;
+            return;
+        }
+        if self.warnings.len() >= MAX_WARNINGS {
+            // Still said at the end, never stored.
+            self.unlisted_warnings += 1;
             return;
         }
         let w = SourceError {
@@ -693,8 +761,9 @@ impl<'t> Interp<'t> {
         )
     }
 
-    fn line(&mut self, line: &'t str, line_no: u32) -> Result<(), SourceError> {
-        self.line = line;
+    fn line(&mut self, line: &str, line_no: u32) -> Result<(), SourceError> {
+        self.line.clear();
+        self.line.push_str(line);
         self.line_no = line_no;
         if line.trim() == "%" {
             return Ok(());
@@ -888,7 +957,7 @@ impl<'t> Interp<'t> {
         &mut self,
         w: &mut Words,
         word: Word<'_>,
-        lx: &mut Lexer<'t>,
+        lx: &mut Lexer<'_>,
     ) -> Result<bool, SourceError> {
         let at = word.at;
         let Some(c) = code10(word.text) else {
@@ -953,7 +1022,7 @@ impl<'t> Interp<'t> {
 
     /// The rest of a printer code's line: S R P T numbers; other letters
     /// (firmware extras such as M104 B/F or M106 I) are ignored.
-    fn printer_args(&mut self, lx: &mut Lexer<'t>) -> Result<PArgs, SourceError> {
+    fn printer_args(&mut self, lx: &mut Lexer<'_>) -> Result<PArgs, SourceError> {
         let mut a = PArgs::default();
         while let Some(word) = lx.next_word().map_err(|e| self.lex_err(e))? {
             let slot = match word.letter {

@@ -32,19 +32,47 @@ pub fn check_job(
     machine: &Machine,
     commands: &mut [Located<Command>],
 ) -> Result<Clamps, SourceError> {
-    let mut clamps = Clamps::default();
-    let mut pos = machine.start;
+    let mut check = JobCheck::new(machine);
     for c in commands.iter_mut() {
+        check.check(machine, c)?;
+    }
+    Ok(check.clamps)
+}
+
+/// [`check_job`] a command at a time, for jobs read as a stream: holds only
+/// the position the last move ended at.
+#[derive(Clone, Debug)]
+pub struct JobCheck {
+    pos: Point,
+    /// What was clamped so far.
+    pub clamps: Clamps,
+}
+
+impl JobCheck {
+    /// A check starting where `machine` starts.
+    pub fn new(machine: &Machine) -> JobCheck {
+        JobCheck {
+            pos: machine.start,
+            clamps: Clamps::default(),
+        }
+    }
+
+    /// Checks the next command of the job (clamping it as [`check_job`] does).
+    pub fn check(
+        &mut self,
+        machine: &Machine,
+        c: &mut Located<Command>,
+    ) -> Result<(), SourceError> {
         let loc = c.loc;
         let Command::Move(m) = &mut c.item else {
-            continue;
+            return Ok(());
         };
-        let d = clamp_move(machine, &pos, &mut m.target)
+        let d = clamp_move(machine, &self.pos, &mut m.target)
             .map_err(|message| SourceError { loc, message })?;
-        clamps.add(d);
-        pos = m.target;
+        self.clamps.add(d);
+        self.pos = m.target;
+        Ok(())
     }
-    Ok(clamps)
 }
 
 /// [`check_move`] after clamping `to` onto the travel where it is beyond it

@@ -10,4 +10,6 @@ pub mod report;
 pub mod run;
 
 pub use report::{format_duration, Report};
-pub use run::{simulate, SimError, SimMachine, SimResult, NODE_QUEUE};
+pub use run::{
+    simulate, simulate_stream, Held, SimError, SimMachine, SimResult, StreamRun, NODE_QUEUE,
+};

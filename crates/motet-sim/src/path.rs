@@ -9,10 +9,18 @@ pub struct PathRecorder {
     y: usize,
     /// Smallest movement worth a new point, mm.
     resolution: f64,
-    pub strokes: Vec<Stroke>,
+    /// The stroke being recorded.
+    open: Option<Stroke>,
+    /// Finished strokes not yet taken, simplified.
+    done: Vec<Stroke>,
     /// The true latest position, kept even when thinning drops it.
     current: Option<[f64; 2]>,
 }
+
+/// Points a stroke collects before it is simplified and handed out, the
+/// next piece starting where it ended: what the recorder holds however long
+/// one stroke runs (a week of hand-driven motion with the tool on).
+pub const MAX_STROKE_POINTS: usize = 8192;
 
 impl PathRecorder {
     pub fn new(x: usize, y: usize, resolution: f64) -> PathRecorder {
@@ -20,7 +28,8 @@ impl PathRecorder {
             x,
             y,
             resolution,
-            strokes: Vec::new(),
+            open: None,
+            done: Vec::new(),
             current: None,
         }
     }
@@ -28,24 +37,32 @@ impl PathRecorder {
     /// Adds the machine's position after a step or a tool change.
     pub fn sample(&mut self, p: &Point, tool_on: bool) {
         let q = [p[self.x], p[self.y]];
-        let same_state = self.strokes.last().is_some_and(|s| s.tool_on == tool_on);
+        let same_state = self.open.as_ref().is_some_and(|s| s.tool_on == tool_on);
         if !same_state {
             // Close the previous stroke where the machine really was, and start the
             // new one there, so strokes join without gaps.
             let mut points = Vec::new();
-            let tol = 0.5 * self.resolution;
             if let Some(c) = self.current {
-                if let Some(s) = self.strokes.last_mut() {
-                    if s.points.last() != Some(&c) {
-                        s.points.push(c);
-                    }
-                    simplify(&mut s.points, tol);
-                }
+                self.close(c);
                 points.push(c);
             }
-            self.strokes.push(Stroke { points, tool_on });
+            self.open = Some(Stroke { points, tool_on });
+        } else if self
+            .open
+            .as_ref()
+            .is_some_and(|s| s.points.len() >= MAX_STROKE_POINTS)
+        {
+            // A long stroke goes on as a new piece from its last point.
+            let last = self.open.as_ref().and_then(|s| s.points.last().copied());
+            if let Some(last) = last {
+                self.close(last);
+                self.open = Some(Stroke {
+                    points: vec![last],
+                    tool_on,
+                });
+            }
         }
-        if let Some(s) = self.strokes.last_mut() {
+        if let Some(s) = self.open.as_mut() {
             if s.points
                 .last()
                 .is_none_or(|l| dist(*l, q) >= self.resolution)
@@ -56,16 +73,41 @@ impl PathRecorder {
         self.current = Some(q);
     }
 
-    /// The strokes so far, the last one ended at the current position; the
-    /// next sample starts a new stroke there.
-    pub fn take(&mut self) -> Vec<Stroke> {
-        if let (Some(c), Some(s)) = (self.current, self.strokes.last_mut()) {
+    /// Ends the open stroke at `c`, simplified, into the finished ones.
+    fn close(&mut self, c: [f64; 2]) {
+        if let Some(mut s) = self.open.take() {
             if s.points.last() != Some(&c) {
                 s.points.push(c);
             }
             simplify(&mut s.points, 0.5 * self.resolution);
+            self.done.push(s);
         }
-        std::mem::take(&mut self.strokes)
+    }
+
+    /// How many points the recorder holds: the open stroke's and the finished
+    /// strokes' not yet taken.
+    pub fn held_points(&self) -> usize {
+        self.open.as_ref().map_or(0, |s| s.points.len())
+            + self.done.iter().map(|s| s.points.len()).sum::<usize>()
+    }
+
+    /// The strokes finished since the last call, in order; the open one stays.
+    pub fn take_finished(&mut self) -> Vec<Stroke> {
+        std::mem::take(&mut self.done)
+    }
+
+    /// Whether finished strokes wait to be taken.
+    pub fn has_finished(&self) -> bool {
+        !self.done.is_empty()
+    }
+
+    /// The strokes so far, the last one ended at the current position; the
+    /// next sample starts a new stroke there.
+    pub fn take(&mut self) -> Vec<Stroke> {
+        if let Some(c) = self.current {
+            self.close(c);
+        }
+        std::mem::take(&mut self.done)
     }
 }
 

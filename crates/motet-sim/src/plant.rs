@@ -116,6 +116,21 @@ impl Plant {
         self.window.push_back(seg);
     }
 
+    /// Outputs up to `t` (µs) have all been applied: segments that ended
+    /// before it are no longer needed. Steps already drop them as they pass;
+    /// this keeps the window bounded when time passes without steps (dwells,
+    /// moves shorter than a step), one segment kept as the last reference.
+    pub fn applied_until(&mut self, t: f64) {
+        while self.window.len() > 1 && self.window[0].t1() < t && self.window[1].t0 <= t {
+            self.window.pop_front();
+        }
+    }
+
+    /// Segments held between being planned and being passed.
+    pub fn window_len(&self) -> usize {
+        self.window.len()
+    }
+
     /// Applies the outputs of one frame, in time order.
     pub fn apply(&mut self, outputs: &mut [Stamped]) {
         // Each node emits in time order; only several nodes need merging.

@@ -23,6 +23,9 @@ pub enum SimError {
     Refused { node: String, reason: Refusal },
     #[error("a segment could not be batched: {0}")]
     Stream(motet_wire::stream::StreamError),
+    /// The job's own stream failed (a read error, a bad line).
+    #[error("{0}")]
+    Source(Box<dyn std::error::Error + Send + Sync>),
 }
 
 /// What a run produced.
@@ -282,6 +285,28 @@ impl SimMachine {
         self.plant.recorder.take()
     }
 
+    /// The strokes of the executed path finished since the last call, each
+    /// simplified; the one being drawn stays until it ends.
+    pub fn take_finished_strokes(&mut self) -> Vec<Stroke> {
+        self.plant.recorder.take_finished()
+    }
+
+    /// What the simulation holds that depends on the job, as counts: the
+    /// plant's segment window and recorded points, and the nodes' queued
+    /// segments. Each is bounded whatever the job's length (ARCHITECTURE.md,
+    /// "Constant memory").
+    pub fn held(&self) -> Held {
+        Held {
+            plant_segments: self.plant.window_len(),
+            path_points: self.plant.recorder.held_points(),
+            node_segments: self
+                .nodes
+                .iter()
+                .map(|n| NODE_QUEUE - n.status().segment_space)
+                .sum(),
+        }
+    }
+
     /// Node underruns so far.
     pub fn underruns(&self) -> u32 {
         self.nodes.iter().map(|n| n.status().underruns).sum()
@@ -322,6 +347,7 @@ impl SimMachine {
             }
         }
         self.plant.apply(&mut self.outputs);
+        self.plant.applied_until(until);
         self.now = until;
     }
 
@@ -421,6 +447,25 @@ impl SimMachine {
     }
 }
 
+/// Counts of what a simulation holds (see [`SimMachine::held`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Held {
+    pub plant_segments: usize,
+    pub path_points: usize,
+    pub node_segments: usize,
+}
+
+impl Held {
+    /// The larger of each count.
+    pub fn max(self, o: Held) -> Held {
+        Held {
+            plant_segments: self.plant_segments.max(o.plant_segments),
+            path_points: self.path_points.max(o.path_points),
+            node_segments: self.node_segments.max(o.node_segments),
+        }
+    }
+}
+
 /// Plans `commands` on `machine` and executes them on simulated nodes.
 pub fn simulate(
     machine: &Machine,
@@ -428,21 +473,65 @@ pub fn simulate(
     commands: &[Located<Command>],
     progress: Progress,
 ) -> Result<SimResult, SimError> {
+    let mut strokes = Vec::new();
+    let items = commands
+        .iter()
+        .map(|c| Ok::<_, std::convert::Infallible>(c.clone()));
+    let run = simulate_stream(machine, job, items, commands.len(), progress, &mut |s| {
+        strokes.push(s)
+    })?;
+    Ok(SimResult {
+        report: run.report,
+        strokes,
+    })
+}
+
+/// What [`simulate_stream`] returns: the report, and the most it held.
+pub struct StreamRun {
+    pub report: Report,
+    /// The largest of each count in [`SimMachine::held`] over the run.
+    pub held: Held,
+}
+
+/// Plans and executes a job read as it runs: `commands` is consumed one
+/// command at a time, and each stroke of the executed path goes to `strokes`
+/// as soon as it is finished, so nothing here grows with the job. `total` is
+/// the number of commands, for `progress` (0 if not known). An error from
+/// `commands` ends the run with [`SimError::Source`].
+pub fn simulate_stream<E>(
+    machine: &Machine,
+    job: &str,
+    commands: impl Iterator<Item = Result<Located<Command>, E>>,
+    total: usize,
+    progress: Progress,
+    strokes: &mut dyn FnMut(Stroke),
+) -> Result<StreamRun, SimError>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
     let started = Instant::now();
     let mut sim = SimMachine::new(machine)?;
-
+    let mut held = Held::default();
     let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
-    let total = commands.len();
-    for (i, c) in commands.iter().enumerate() {
+    let mut n = 0usize;
+    for c in commands {
+        let c = c.map_err(|e| SimError::Source(Box::new(e)))?;
         planner
             .push(&c.item)
             .map_err(|error| SimError::Plan { loc: c.loc, error })?;
         while let Some(item) = planner.pop() {
             sim.submit(item)?;
         }
-        if i % 1024 == 0 {
-            progress(i, total);
+        if sim.plant.recorder.has_finished() {
+            sim.take_finished_strokes()
+                .into_iter()
+                .for_each(&mut *strokes);
         }
+        held = held.max(sim.held());
+        if n.is_multiple_of(1024) {
+            progress(n, total);
+        }
+        n += 1;
     }
     planner.finish();
     while let Some(item) = planner.pop() {
@@ -452,12 +541,13 @@ pub fn simulate(
     // Run to the end, then until nothing is left to do.
     sim.run_until(end);
     sim.run_to_rest();
-    progress(total, total);
+    held = held.max(sim.held());
+    progress(n, total.max(n));
+    sim.take_strokes().into_iter().for_each(&mut *strokes);
 
     let wall = started.elapsed().as_secs_f64();
-    let report = sim.report(job, total, end, wall);
-    Ok(SimResult {
-        report,
-        strokes: sim.take_strokes(),
+    Ok(StreamRun {
+        report: sim.report(job, n, end, wall),
+        held,
     })
 }

@@ -1,6 +1,7 @@
 //! `motet bench`: parse, plan and simulate a real slicer's G-code and print the
 //! figures the project tracks.
 
+use crate::bench_memory::{repeated_job, run_peak_mib, Scratch};
 use crate::run::load_machine;
 use anyhow::{Context, Result};
 use motet_api::job::{parse_job, read_bytes};
@@ -47,13 +48,19 @@ pub fn bench(
     repeat: usize,
     no_sim: bool,
     microsteps: Option<u32>,
+    long: usize,
 ) -> Result<()> {
-    let machine = match microsteps {
-        None => load_machine(machine_path)?,
+    let scratch = Scratch::new()?;
+    // The machine `motet run` is measured on: the file, or its edited copy.
+    let (machine, run_machine) = match microsteps {
+        None => (load_machine(machine_path)?, machine_path.to_path_buf()),
         Some(m) => {
             let text = std::fs::read_to_string(machine_path)
                 .with_context(|| format!("reading {}", machine_path.display()))?;
-            motet_host::Machine::parse(&crate::bench_wire::with_microsteps(&text, m), machine_path)?
+            let edited = crate::bench_wire::with_microsteps(&text, m);
+            let copy = scratch.0.join("machine.toml");
+            std::fs::write(&copy, &edited)?;
+            (motet_host::Machine::parse(&edited, machine_path)?, copy)
         }
     };
     let data = read_bytes(job_path)?;
@@ -149,6 +156,22 @@ pub fn bench(
             "accuracy: step-time error {:.4} µs max, executed path within {:.4} mm ({:.3} steps) of the commanded path",
             r.report.max_step_time_error_us, r.report.max_path_deviation_mm, r.report.max_deviation_steps
         );
+        drop(r);
+        drop(loaded);
+        let once = run_peak_mib(&run_machine, job_path, &scratch.0.join("once"))?;
+        println!("peak memory: {once:.1} MiB for `motet run` on the job (its own process)");
+        if long > 1 {
+            let name = format!("{}-x{long}.gcode", job_name(job_path));
+            let long_job = scratch.0.join(name);
+            repeated_job(&data, long, &long_job)?;
+            drop(data);
+            let peak = run_peak_mib(&run_machine, &long_job, &scratch.0.join("long"))?;
+            println!(
+                "peak memory: {peak:.1} MiB for the job {long} times over ({} lines): {:+.1} % against once",
+                lines * long,
+                (peak / once - 1.0) * 100.0
+            );
+        }
     }
     Ok(())
 }

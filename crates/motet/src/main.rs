@@ -2,6 +2,7 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
+mod bench_memory;
 mod bench_net;
 mod bench_wire;
 mod dance;
@@ -245,6 +246,10 @@ enum Cmd {
         /// Replace every actuator chain's microstep value (as bench-net's).
         #[arg(long, value_parser = flags::count::<u32>(ranges::MICROSTEPS))]
         microsteps: Option<u32>,
+        /// Also measure `motet run`'s peak memory on the job written N times
+        /// over into one file.
+        #[arg(long, value_parser = flags::count::<u32>(ranges::LONG_JOB))]
+        long: Option<u32>,
     },
     /// Bytes on the wire per second of motion for a job (batched and plain segments).
     BenchWire(bench_wire::Args),
@@ -399,7 +404,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             repeat,
             no_sim,
             microsteps,
-        } => bench::bench(&machine, &job, repeat as usize, no_sim, microsteps),
+            long,
+        } => bench::bench(
+            &machine,
+            &job,
+            repeat as usize,
+            no_sim,
+            microsteps,
+            long.map_or(0, |n| n as usize),
+        ),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }

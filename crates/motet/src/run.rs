@@ -2,9 +2,9 @@
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use motet_api::{job_name, load_job, JobOptions};
+use motet_api::{job_name, scan_job, JobOptions, JobReader};
 use motet_host::Machine;
-use motet_render::{render_png, render_svg, RenderSpec};
+use motet_render::{PngCanvas, RenderSpec, SvgWriter};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -23,27 +23,49 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
         m.nodes.len()
     );
     if let Some(j) = job_path {
-        let loaded = load_job(&m, j, &JobOptions { allow_unknown })?;
-        for w in &loaded.warnings {
+        let scan = scan_job(
+            JobReader::open(&m, j, &JobOptions { allow_unknown })?,
+            &mut |_, _| {},
+        )?;
+        for w in &scan.warnings {
             eprintln!("warning: {w}");
         }
         println!(
             "{}: ok ({} commands, {} of motion planned)",
             j.display(),
-            loaded.commands.len(),
-            motet_sim::format_duration(loaded.planned_s.unwrap_or(0.0))
+            scan.commands,
+            motet_sim::format_duration(scan.planned_s)
         );
-        if loaded.clamps.moves > 0 {
+        if scan.clamps.moves > 0 {
             println!(
                 "  {} move(s) clamped onto the travel, by {} mm at most (less than half a step)",
-                loaded.clamps.moves,
-                motet_planner::ranges::number(loaded.clamps.max_mm)
+                scan.clamps.moves,
+                motet_planner::ranges::number(scan.clamps.max_mm)
             );
         }
     }
     Ok(())
 }
 
+/// A progress bar on a terminal, hidden otherwise.
+fn bar(quiet: bool, len: u64, template: &str) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(len);
+    b.set_style(
+        ProgressStyle::with_template(template)
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    b
+}
+
+/// Runs a job on the simulated machine. The job is read twice and never
+/// held: first through to its end, checked and planned (every error found
+/// before anything moves), then again as it runs, each stroke of the executed
+/// path drawn into the renders as it ends. Memory stays the same however
+/// long the job is (ARCHITECTURE.md, "Constant memory").
 pub fn run(
     machine_path: &Path,
     job_path: &Path,
@@ -52,36 +74,29 @@ pub fn run(
     quiet: bool,
 ) -> Result<()> {
     let machine = load_machine(machine_path)?;
-    let loaded = load_job(&machine, job_path, &JobOptions { allow_unknown })?;
+    let opts = JobOptions { allow_unknown };
+    let scan_bar = bar(
+        quiet,
+        0,
+        "{spinner} checking [{bar:40}] {bytes}/{total_bytes} ({eta})",
+    );
+    let scan = scan_job(
+        JobReader::open(&machine, job_path, &opts)?,
+        &mut |done, size| {
+            scan_bar.set_length(size);
+            scan_bar.set_position(done);
+        },
+    )?;
+    scan_bar.finish_and_clear();
     if !quiet {
-        for w in &loaded.warnings {
+        for w in &scan.warnings {
             eprintln!("warning: {w}");
         }
     }
     let name = job_name(job_path);
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&name));
-
-    let bar = if quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(loaded.commands.len() as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} simulating [{bar:40}] {pos}/{len} commands ({eta})",
-            )
-            .expect("static template")
-            .progress_chars("=> "),
-        );
-        b
-    };
-    let mut progress = |done: usize, _total: usize| bar.set_position(done as u64);
-    let mut result = motet_sim::simulate(&machine, &name, &loaded.commands, &mut progress)
-        .map_err(|e| anyhow::anyhow!("{}:{e}", job_path.display()))?;
-    bar.finish_and_clear();
-    result.report.clamped_moves = loaded.clamps.moves;
-    result.report.max_clamp_mm = loaded.clamps.max_mm;
-
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+
     let (x, y) = (
         machine.axis("x").unwrap_or(0),
         machine.axis("y").unwrap_or(0),
@@ -94,15 +109,61 @@ pub fn run(
         bounds = [[-100.0, -100.0], [100.0, 100.0]];
     }
     let spec = RenderSpec::new(bounds, format!("{} on {}", name, machine.name));
-    let png = render_png(&result.strokes, &spec).context("rendering the tool path")?;
-    std::fs::write(out.join("path.png"), png)?;
-    std::fs::write(out.join("path.svg"), render_svg(&result.strokes, &spec))?;
+    let mut png = PngCanvas::new(&spec).context("rendering the tool path")?;
+    let svg_path = out.join("path.svg");
+    let svg_file = std::fs::File::create(&svg_path)
+        .with_context(|| format!("cannot create {}", svg_path.display()))?;
+    let mut svg = SvgWriter::new(std::io::BufWriter::new(svg_file), &spec)
+        .context("rendering the tool path")?;
+    let mut svg_error = None;
+
+    let run_bar = bar(
+        quiet,
+        scan.commands as u64,
+        "{spinner} simulating [{bar:40}] {pos}/{len} commands ({eta})",
+    );
+    let mut progress = |done: usize, _total: usize| run_bar.set_position(done as u64);
+    let run = motet_sim::simulate_stream(
+        &machine,
+        &name,
+        JobReader::open(&machine, job_path, &opts)?,
+        scan.commands,
+        &mut progress,
+        &mut |stroke| {
+            png.draw(&stroke);
+            if svg_error.is_none() {
+                svg_error = svg.stroke(&stroke).err();
+            }
+        },
+    )
+    .map_err(|e| match e {
+        // The job's own errors already name their file.
+        motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
+        e => anyhow::anyhow!("{}:{e}", job_path.display()),
+    })?;
+    run_bar.finish_and_clear();
+    if let Some(e) = svg_error {
+        return Err(e).with_context(|| format!("writing {}", svg_path.display()));
+    }
+    svg.finish()
+        .with_context(|| format!("writing {}", svg_path.display()))?;
+    let mut report = run.report;
+    report.clamped_moves = scan.clamps.moves;
+    report.max_clamp_mm = scan.clamps.max_mm;
+
+    std::fs::write(
+        out.join("path.png"),
+        png.encode().context("rendering the tool path")?,
+    )?;
     std::fs::write(
         out.join("report.json"),
-        serde_json::to_string_pretty(&result.report)? + "\n",
+        serde_json::to_string_pretty(&report)? + "\n",
     )?;
     if !quiet {
-        println!("{}", result.report.summary());
+        println!("{}", report.summary());
+        if let Some(peak) = crate::bench_memory::own_peak_mib() {
+            println!("  {}{peak:.1} MiB", crate::bench_memory::PEAK_LINE);
+        }
         println!(
             "  wrote {}/{{path.png, path.svg, report.json}}",
             out.display()
