@@ -63,10 +63,12 @@ impl PathRecorder {
             }
         }
         if let Some(s) = self.open.as_mut() {
-            if s.points
-                .last()
-                .is_none_or(|l| dist(*l, q) >= self.resolution)
-            {
+            // Squared: this runs on every step.
+            let r2 = self.resolution * self.resolution;
+            if s.points.last().is_none_or(|l| {
+                let (dx, dy) = (l[0] - q[0], l[1] - q[1]);
+                dx * dx + dy * dy >= r2
+            }) {
                 s.points.push(q);
             }
         }

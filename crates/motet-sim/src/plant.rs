@@ -30,6 +30,7 @@ pub struct ActuatorStats {
 }
 
 struct ActuatorModel {
+    joint: usize,
     map: JointMap,
     /// Unsigned steps per joint unit.
     spu: f64,
@@ -53,6 +54,11 @@ pub struct Plant {
     pub recorder: PathRecorder,
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
+    /// Each joint's executed value (its actuators' mean), kept step by step.
+    joints: [f64; MAX_JOINTS],
+    /// The executed machine point, kept step by step: a step changes one
+    /// joint, so only that joint's axes (or the xy pair) are recomputed.
+    executed: Point,
     /// Tool outputs executed: (time, tool, value), kept only for observers.
     pub tool_changes: Vec<(f64, usize, f32)>,
     pub watch_tools: bool,
@@ -72,8 +78,8 @@ impl Plant {
                 let value = map.value(&machine.start, 0.0);
                 let position = (value * spu).round() as i64;
                 ActuatorModel {
+                    joint: a.joint,
                     map,
-
                     spu,
                     invert: a.steps_per_unit < 0.0,
                     position,
@@ -95,7 +101,7 @@ impl Plant {
                 _ => None,
             })
             .collect();
-        Plant {
+        let mut plant = Plant {
             actuators,
             kinematics: machine.kinematics,
             xy: machine.xy,
@@ -106,9 +112,15 @@ impl Plant {
             window: VecDeque::new(),
             recorder,
             max_path_deviation: 0.0,
+            joints: [0.0; MAX_JOINTS],
+            executed: [0.0; MAX_AXES],
             tool_changes: Vec::new(),
             watch_tools: false,
+        };
+        for j in 0..plant.joint_actuators.len().min(MAX_JOINTS) {
+            plant.update_joint(j);
         }
+        plant
     }
 
     /// A segment was sent to the nodes: it becomes part of the ideal trajectory.
@@ -210,42 +222,58 @@ impl Plant {
             st.max_deviation_steps = st.max_deviation_steps.max(dev);
             st.max_step_error_us = st.max_step_error_us.max(err);
         }
-        let p = self.executed_point();
+        if let Some(j) = self.joint_of(index) {
+            self.update_joint(j);
+        }
+        let p = self.executed;
         let mut d2 = 0.0;
         for i in 0..MAX_AXES {
             if Some(i) != self.extruder {
                 d2 += (p[i] - cmd[i]) * (p[i] - cmd[i]);
             }
         }
-        self.max_path_deviation = self.max_path_deviation.max(d2.sqrt());
+        // Compared squared; the root is taken only for a new largest.
+        if d2 > self.max_path_deviation * self.max_path_deviation {
+            self.max_path_deviation = d2.sqrt();
+        }
         let on = self.tool_on();
         self.recorder.sample(&p, on);
     }
 
-    /// The machine point the motors are at now (forward kinematics).
-    pub fn executed_point(&self) -> Point {
-        let mut joints = [0.0; MAX_JOINTS];
-        for (j, acts) in self.joint_actuators.iter().enumerate() {
-            let sum: f64 = acts
-                .iter()
-                .map(|&i| self.actuators[i].position as f64 / self.actuators[i].spu)
-                .sum();
-            joints[j] = sum / acts.len().max(1) as f64;
+    /// The joint actuator `index` drives.
+    fn joint_of(&self, index: usize) -> Option<usize> {
+        self.actuators.get(index).map(|a| a.joint)
+    }
+
+    /// Recomputes joint `j` from its actuators and the axes it moves.
+    fn update_joint(&mut self, j: usize) {
+        if j >= MAX_JOINTS {
+            return;
         }
-        let mut p = [0.0; MAX_AXES];
-        let mut k = 0;
-        if let Some((x, y)) = self.xy {
-            let (px, py) = self.kinematics.forward_xy(joints[0], joints[1]);
-            p[x] = px;
-            p[y] = py;
-            k = 2;
-        }
-        for (j, axis) in self.joint_axis.iter().enumerate().skip(k) {
-            if let Some(i) = axis {
-                p[*i] = joints[j];
+        let acts = &self.joint_actuators[j];
+        let value = |i: usize| self.actuators[i].position as f64 / self.actuators[i].spu;
+        self.joints[j] = match acts.as_slice() {
+            // One motor (the common case): its value, as the mean would give.
+            [i] => value(*i),
+            _ => acts.iter().map(|&i| value(i)).sum::<f64>() / acts.len().max(1) as f64,
+        };
+        match self.xy {
+            Some((x, y)) if j < 2 => {
+                let (px, py) = self.kinematics.forward_xy(self.joints[0], self.joints[1]);
+                self.executed[x] = px;
+                self.executed[y] = py;
+            }
+            _ => {
+                if let Some(Some(i)) = self.joint_axis.get(j) {
+                    self.executed[*i] = self.joints[j];
+                }
             }
         }
-        p
+    }
+
+    /// The machine point the motors are at now (forward kinematics).
+    pub fn executed_point(&self) -> Point {
+        self.executed
     }
 
     pub fn actuator_stats(&self) -> Vec<ActuatorStats> {
@@ -258,6 +286,12 @@ const MAX_JOINTS: usize = MAX_AXES;
 
 /// The ideal machine point at `t` from the segments around it.
 fn point_at(window: &VecDeque<Segment>, t: f64) -> Option<Point> {
+    // Almost always the front one: segments are dropped as steps pass them.
+    if let Some(s) = window.front() {
+        if s.t0 <= t && t <= s.t1() {
+            return Some(s.position_at(t));
+        }
+    }
     window
         .iter()
         .find(|s| s.t0 <= t && t <= s.t1())
