@@ -177,3 +177,58 @@ fn a_scan_counts_and_plans_what_load_job_keeps() {
     let size = std::fs::metadata(&path).unwrap().len();
     assert_eq!(seen.last(), Some(&(size, size)));
 }
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Lines from a small G-code vocabulary (moves, comments, blank lines,
+    /// unknown codes, the program end), joined by `\n` or `\r\n`, with or
+    /// without a final line end and a byte order mark.
+    fn arb_text() -> impl Strategy<Value = Vec<u8>> {
+        let line = prop_oneof![
+            (0.0..200.0f64, 0.0..200.0f64).prop_map(|(x, y)| format!("G1 X{x:.3} Y{y:.3} F1200")),
+            (0.0..200.0f64).prop_map(|x| format!("G0 X{x:.2}")),
+            Just("; a comment".to_string()),
+            Just(String::new()),
+            Just("M117 hello".to_string()),
+            Just("G21 G90".to_string()),
+            Just("M2".to_string()),
+        ];
+        (
+            prop::collection::vec((line, any::<bool>()), 0..40),
+            any::<bool>(),
+            any::<bool>(),
+        )
+            .prop_map(|(lines, final_end, bom)| {
+                let mut t = if bom {
+                    "\u{feff}".to_string()
+                } else {
+                    String::new()
+                };
+                let n = lines.len();
+                for (i, (l, crlf)) in lines.into_iter().enumerate() {
+                    t.push_str(&l);
+                    if i + 1 < n || final_end {
+                        t.push_str(if crlf { "\r\n" } else { "\n" });
+                    }
+                }
+                t.into_bytes()
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, .. ProptestConfig::default() })]
+
+        #[test]
+        fn streamed_equals_whole_text(data in arb_text()) {
+            let m = machine("plotter.toml");
+            let (want, warnings) = whole(&m, &data);
+            let opts = JobOptions { allow_unknown: true };
+            let mut r = JobReader::from_bytes(&m, Path::new("j.gcode"), JobKind::Gcode, &data, &opts).unwrap();
+            let got: Vec<_> = r.by_ref().collect::<Result<_, _>>().unwrap();
+            prop_assert_eq!(got, want);
+            prop_assert_eq!(r.warnings().len(), warnings);
+        }
+    }
+}
