@@ -281,12 +281,13 @@ impl<'a> JobReader<'a> {
             if !ended_by_newline {
                 // That was the last line: the interpreter's warnings are complete.
                 line.clear();
-                let it = interp.take().expect("checked above");
-                self.warnings = it
-                    .finish()
-                    .iter()
-                    .map(|w| format!("{}:{w}", self.file))
-                    .collect();
+                if let Some(it) = interp.take() {
+                    self.warnings = it
+                        .finish()
+                        .iter()
+                        .map(|w| format!("{}:{w}", self.file))
+                        .collect();
+                }
             }
         }
         Ok(())
