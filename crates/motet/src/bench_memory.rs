@@ -2,6 +2,7 @@
 //! on the job, and on a job N times longer, each in its own process so that
 //! nothing the benchmark itself holds is counted.
 
+use crate::peak::PEAK_LINE;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
@@ -21,19 +22,6 @@ impl Drop for Scratch {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
-
-/// This process's peak resident memory so far, MiB (Linux: `VmHWM` in
-/// `/proc/self/status`, which starts afresh at exec); `None` where the
-/// system does not say.
-pub fn own_peak_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
-}
-
-/// What `motet run` prints before its peak memory.
-pub const PEAK_LINE: &str = "peak memory ";
 
 /// Runs `motet run MACHINE JOB` in a child process; returns the peak
 /// resident memory it reports for itself, MiB.

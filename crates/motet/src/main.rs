@@ -12,6 +12,7 @@ mod flags;
 mod netrun;
 mod node;
 mod nodes;
+mod peak;
 mod run;
 
 use clap::{Parser, Subcommand};

@@ -161,8 +161,8 @@ pub fn run(
     )?;
     if !quiet {
         println!("{}", report.summary());
-        if let Some(peak) = crate::bench_memory::own_peak_mib() {
-            println!("  {}{peak:.1} MiB", crate::bench_memory::PEAK_LINE);
+        if let Some(peak) = crate::peak::own_peak_mib() {
+            println!("  {}{peak:.1} MiB", crate::peak::PEAK_LINE);
         }
         println!(
             "  wrote {}/{{path.png, path.svg, report.json}}",
