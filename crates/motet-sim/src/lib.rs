@@ -3,6 +3,7 @@
 //! what it did.
 
 pub mod dance;
+mod ideal;
 pub mod live;
 pub mod path;
 pub mod plant;

@@ -34,9 +34,47 @@ impl PathRecorder {
         }
     }
 
+    /// The machine axes drawn as the picture's x and y.
+    pub fn x(&self) -> usize {
+        self.x
+    }
+
+    pub fn y(&self) -> usize {
+        self.y
+    }
+
+    /// Whether the stroke being recorded is a tool-on one (`None`: none is
+    /// open yet).
+    pub fn tool_on(&self) -> Option<bool> {
+        self.open.as_ref().map(|s| s.tool_on)
+    }
+
     /// Adds the machine's position after a step or a tool change.
+    #[inline]
     pub fn sample(&mut self, p: &Point, tool_on: bool) {
         let q = [p[self.x], p[self.y]];
+        // The common case, once per step: the same stroke goes on.
+        if let Some(s) = self.open.as_mut() {
+            if s.tool_on == tool_on && s.points.len() < MAX_STROKE_POINTS {
+                // Squared: this runs on every step.
+                let r2 = self.resolution * self.resolution;
+                if s.points.last().is_none_or(|l| {
+                    let (dx, dy) = (l[0] - q[0], l[1] - q[1]);
+                    dx * dx + dy * dy >= r2
+                }) {
+                    s.points.push(q);
+                }
+                self.current = Some(q);
+                return;
+            }
+        }
+        self.sample_new_stroke(q, tool_on);
+    }
+
+    /// A sample that starts a stroke: the tool's state changed, or the open
+    /// stroke is full.
+    #[inline(never)]
+    fn sample_new_stroke(&mut self, q: [f64; 2], tool_on: bool) {
         let same_state = self.open.as_ref().is_some_and(|s| s.tool_on == tool_on);
         if !same_state {
             // Close the previous stroke where the machine really was, and start the
@@ -47,11 +85,7 @@ impl PathRecorder {
                 points.push(c);
             }
             self.open = Some(Stroke { points, tool_on });
-        } else if self
-            .open
-            .as_ref()
-            .is_some_and(|s| s.points.len() >= MAX_STROKE_POINTS)
-        {
+        } else {
             // A long stroke goes on as a new piece from its last point.
             let last = self.open.as_ref().and_then(|s| s.points.last().copied());
             if let Some(last) = last {
@@ -63,7 +97,6 @@ impl PathRecorder {
             }
         }
         if let Some(s) = self.open.as_mut() {
-            // Squared: this runs on every step.
             let r2 = self.resolution * self.resolution;
             if s.points.last().is_none_or(|l| {
                 let (dx, dy) = (l[0] - q[0], l[1] - q[1]);

@@ -1,10 +1,10 @@
 //! The simulated plant: motors that move one step per step pulse, tool outputs,
 //! and an observer that checks every step against the ideal trajectory.
 
+use crate::ideal::IdealTrajectory;
 use crate::path::PathRecorder;
 use motet_host::Machine;
 use motet_trajectory::{JointMap, KinematicsKind, Point, Segment, MAX_AXES};
-use std::collections::VecDeque;
 
 /// Something a node did, with its exact time.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,6 +36,13 @@ struct ActuatorModel {
     spu: f64,
     invert: bool,
     position: i64,
+    /// Whether a step of it moves the executed point in the drawing's
+    /// plane (x or y): only then does the path recorder need the step.
+    moves_xy: bool,
+    /// The machine axis it alone moves, one to one, when its joint is
+    /// that axis and it is the joint's only motor (outside the xy pair):
+    /// the executed point then takes its value directly.
+    sole_axis: Option<usize>,
     stats: ActuatorStats,
 }
 
@@ -47,10 +54,12 @@ pub struct Plant {
     /// For each joint, the actuators driving it (averaged for the executed path).
     joint_actuators: Vec<Vec<usize>>,
     joint_axis: Vec<Option<usize>>,
-    extruder: Option<usize>,
     pub tools: Vec<f32>,
-    /// Segments sent to nodes and not yet in the past, for the ideal trajectory.
-    window: VecDeque<Segment>,
+    /// Segments sent to nodes and not yet in the past, followed at step
+    /// instants.
+    ideal: IdealTrajectory,
+    /// The axes whose path deviation is checked (all but the extruder).
+    checked_axes: Vec<usize>,
     pub recorder: PathRecorder,
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
@@ -83,6 +92,8 @@ impl Plant {
                     spu,
                     invert: a.steps_per_unit < 0.0,
                     position,
+                    moves_xy: false,
+                    sole_axis: None,
                     stats: ActuatorStats {
                         position,
                         ..Default::default()
@@ -100,16 +111,30 @@ impl Plant {
                 }
                 _ => None,
             })
-            .collect();
+            .collect::<Vec<Option<usize>>>();
+        let (x, y) = (recorder.x(), recorder.y());
+        let mut actuators: Vec<ActuatorModel> = actuators;
+        for a in actuators.iter_mut() {
+            let in_xy_pair = machine.xy.is_some() && a.joint < 2;
+            let axis = joint_axis.get(a.joint).copied().flatten();
+            a.moves_xy = in_xy_pair || axis.is_some_and(|i| i == x || i == y);
+            let sole = joint_actuators[a.joint].len() == 1;
+            a.sole_axis = axis.filter(|_| sole && !in_xy_pair && a.joint < MAX_JOINTS);
+        }
+        // The axes whose deviation is checked: all but the extruder's.
+        let extruder = machine.axis("e");
+        let axes = machine.axes.len().min(MAX_AXES);
+        let checked_axes = (0..axes).filter(|&i| Some(i) != extruder).collect();
+        let ideal = IdealTrajectory::new(actuators.iter().map(|a| (a.map, a.spu)), extruder);
         let mut plant = Plant {
             actuators,
             kinematics: machine.kinematics,
             xy: machine.xy,
             joint_actuators,
             joint_axis,
-            extruder: machine.axis("e"),
             tools: vec![0.0; machine.tools.len()],
-            window: VecDeque::new(),
+            ideal,
+            checked_axes,
             recorder,
             max_path_deviation: 0.0,
             joints: [0.0; MAX_JOINTS],
@@ -125,7 +150,7 @@ impl Plant {
 
     /// A segment was sent to the nodes: it becomes part of the ideal trajectory.
     pub fn planned(&mut self, seg: Segment) {
-        self.window.push_back(seg);
+        self.ideal.push(seg);
     }
 
     /// Outputs up to `t` (µs) have all been applied: segments that ended
@@ -133,14 +158,12 @@ impl Plant {
     /// this keeps the window bounded when time passes without steps (dwells,
     /// moves shorter than a step), one segment kept as the last reference.
     pub fn applied_until(&mut self, t: f64) {
-        while self.window.len() > 1 && self.window[0].t1() < t && self.window[1].t0 <= t {
-            self.window.pop_front();
-        }
+        self.ideal.applied_until(t);
     }
 
     /// Segments held between being planned and being passed.
     pub fn window_len(&self) -> usize {
-        self.window.len()
+        self.ideal.len()
     }
 
     /// Applies the outputs of one frame, in time order.
@@ -167,25 +190,14 @@ impl Plant {
     /// Whether the tool works: the first tool is on, or the planned segment
     /// being executed extrudes.
     fn tool_on(&self) -> bool {
-        let extruding = match (self.extruder, self.window.front()) {
-            (Some(e), Some(seg)) => seg.end[e] > seg.start[e],
-            _ => false,
-        };
-        self.tools.first().is_some_and(|v| *v > 0.0) || extruding
+        self.tools.first().is_some_and(|v| *v > 0.0) || self.ideal.extruding()
     }
 
-    fn segment_at(&mut self, t: f64) -> Option<&Segment> {
-        while self.window.len() > 1 && self.window[0].t1() < t {
-            self.window.pop_front();
-        }
-        self.window.front()
-    }
-
+    /// One step of actuator `index` at `t`, checked against the ideal
+    /// trajectory there. Steps come in time order, so the ideal point is
+    /// followed incrementally (see [`IdealTrajectory`]).
     fn step(&mut self, t: f64, index: usize, forward: bool) {
-        if self.segment_at(t).is_none() {
-            return;
-        }
-        let Some(cmd) = point_at(&self.window, t) else {
+        let Some(at) = self.ideal.at(t) else {
             return;
         };
         let a = &mut self.actuators[index];
@@ -194,50 +206,78 @@ impl Plant {
         a.position += if positive { 1 } else { -1 };
         a.stats.steps += 1;
         a.stats.position = a.position;
+        let (after, spu, moves_xy, sole_axis) = (a.position, a.spu, a.moves_xy, a.sole_axis);
 
-        // Ideal joint value in steps near t, on the branch of the executed value.
-        let reference = before as f64 / a.spu;
-        let (map, spu) = (a.map, a.spu);
-        let after = a.position;
-        let ideal = |tt: f64| point_at(&self.window, tt).map(|p| map.value(&p, reference) * spu);
-        {
-            let v = map.value(&cmd, reference) * spu;
-            let dev = (v - before as f64).abs().max((v - after as f64).abs());
-            // Time error: how far the crossing of the half-step boundary is from t,
-            // to first order in the joint's speed. A residual this small means
-            // an error far below a nanosecond at any real speed.
-            let boundary = before as f64 + if positive { 0.5 } else { -0.5 };
-            let residual = (v - boundary).abs();
-            let mut err = 0.0;
-            if residual > 1e-9 {
-                let h = 0.5;
-                if let (Some(v0), Some(v1)) = (ideal(t - h), ideal(t + h)) {
-                    let rate = (v1 - v0) / (2.0 * h);
-                    if rate.abs() > 1e-12 {
-                        err = residual / rate.abs();
-                    }
+        // Ideal joint value in steps at t, on the branch of the executed value.
+        let reference = before as f64 / spu;
+        let v = match self.ideal.joint_steps(index, at) {
+            Some(v) => v,
+            None => {
+                self.actuators[index]
+                    .map
+                    .value(&self.ideal.point(at), reference)
+                    * spu
+            }
+        };
+        let dev = (v - before as f64).abs().max((v - after as f64).abs());
+        // Time error: how far the crossing of the half-step boundary is from t,
+        // to first order in the joint's speed. A residual this small means
+        // an error far below a nanosecond at any real speed.
+        let boundary = before as f64 + if positive { 0.5 } else { -0.5 };
+        let residual = (v - boundary).abs();
+        let err = if residual > 1e-9 {
+            self.time_error(t, index, reference, residual)
+        } else {
+            0.0
+        };
+        let st = &mut self.actuators[index].stats;
+        if dev > st.max_deviation_steps {
+            st.max_deviation_steps = dev;
+        }
+        if err > st.max_step_error_us {
+            st.max_step_error_us = err;
+        }
+        match sole_axis {
+            Some(i) => self.executed[i] = after as f64 / spu,
+            None => {
+                if let Some(j) = self.joint_of(index) {
+                    self.update_joint(j);
                 }
             }
-            let st = &mut self.actuators[index].stats;
-            st.max_deviation_steps = st.max_deviation_steps.max(dev);
-            st.max_step_error_us = st.max_step_error_us.max(err);
         }
-        if let Some(j) = self.joint_of(index) {
-            self.update_joint(j);
-        }
-        let p = self.executed;
-        let mut d2 = 0.0;
-        for i in 0..MAX_AXES {
-            if Some(i) != self.extruder {
-                d2 += (p[i] - cmd[i]) * (p[i] - cmd[i]);
-            }
-        }
+        let d2 = self.ideal.distance2(at, &self.executed, &self.checked_axes);
         // Compared squared; the root is taken only for a new largest.
         if d2 > self.max_path_deviation * self.max_path_deviation {
             self.max_path_deviation = d2.sqrt();
         }
+        // A step off the drawing's plane changes nothing the recorder keeps
+        // unless the tool's state changed with it.
         let on = self.tool_on();
-        self.recorder.sample(&p, on);
+        if moves_xy || self.recorder.tool_on() != Some(on) {
+            let p = self.executed;
+            self.recorder.sample(&p, on);
+        }
+    }
+
+    /// The step-time error estimate where the joint missed its half-step
+    /// boundary by `residual` steps: the joint's speed from the ideal
+    /// trajectory half a microsecond either side.
+    #[cold]
+    fn time_error(&self, t: f64, index: usize, reference: f64, residual: f64) -> f64 {
+        let (map, spu) = (self.actuators[index].map, self.actuators[index].spu);
+        let h = 0.5;
+        let ideal = |tt: f64| {
+            self.ideal
+                .point_anywhere(tt)
+                .map(|p| map.value(&p, reference) * spu)
+        };
+        if let (Some(v0), Some(v1)) = (ideal(t - h), ideal(t + h)) {
+            let rate = (v1 - v0) / (2.0 * h);
+            if rate.abs() > 1e-12 {
+                return residual / rate.abs();
+            }
+        }
+        0.0
     }
 
     /// The joint actuator `index` drives.
@@ -283,17 +323,3 @@ impl Plant {
 
 /// Most joints a machine has: one per axis.
 const MAX_JOINTS: usize = MAX_AXES;
-
-/// The ideal machine point at `t` from the segments around it.
-fn point_at(window: &VecDeque<Segment>, t: f64) -> Option<Point> {
-    // Almost always the front one: segments are dropped as steps pass them.
-    if let Some(s) = window.front() {
-        if s.t0 <= t && t <= s.t1() {
-            return Some(s.position_at(t));
-        }
-    }
-    window
-        .iter()
-        .find(|s| s.t0 <= t && t <= s.t1())
-        .map(|s| s.position_at(t))
-}
