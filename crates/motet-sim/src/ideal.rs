@@ -152,13 +152,10 @@ impl IdealTrajectory {
 
     /// The commanded point at `i`.
     pub fn point(&self, i: Moment) -> Point {
-        let mut p = [0.0; MAX_AXES];
-        if let Some(f) = &self.front {
-            for k in 0..MAX_AXES {
-                p[k] = f.start[k] + f.unit[k] * i.s;
-            }
+        match &self.front {
+            Some(f) => core::array::from_fn(|k| f.start[k] + f.unit[k] * i.s),
+            None => [0.0; MAX_AXES],
         }
-        p
     }
 
     /// Squared distance from `p` to the commanded point at `i`, over `axes`.
