@@ -5,10 +5,20 @@
 //! never differs from the commanded one by more than half a step. The time of
 //! each crossing is solved in closed form from the segment's geometry and speed
 //! profile, so steps are placed exactly inside a frame, not rounded to it.
+//!
+//! On the common stretch (a joint affine in the distance, inside one piece
+//! of the speed profile) the channel solves up to [`AHEAD`] steps at once
+//! and hands them out one by one: each solve is independent of the last, so
+//! the processor overlaps their square roots and divisions instead of
+//! waiting on each, and the checks that pick the stretch are made once per
+//! batch, not once per step. The times are the same as one at a time.
 
 use heapless::Deque;
 use motet_trajectory::{JointPath, Segment, TimeCursor};
 use motet_wire::ChannelConfig;
+
+/// Most steps solved ahead of the one being taken.
+pub const AHEAD: usize = 8;
 
 /// A step found but not yet taken.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,8 +53,52 @@ pub struct Channel {
     t0: f64,
     /// Joint value where the last segment ended, to keep angles continuous.
     joint_ref: f64,
-    pending: Option<Step>,
+    /// Steps solved and not yet taken: `times[head..len]`, all in the
+    /// direction `positive`, at distances `dists[head..len]` into the
+    /// segment (kept so that a retime can go back to the first).
+    ahead: Ahead,
     last_time: f64,
+}
+
+#[derive(Clone, Debug)]
+struct Ahead {
+    times: [f64; AHEAD],
+    dists: [f64; AHEAD],
+    head: usize,
+    len: usize,
+    positive: bool,
+}
+
+impl Ahead {
+    const EMPTY: Ahead = Ahead {
+        times: [0.0; AHEAD],
+        dists: [0.0; AHEAD],
+        head: 0,
+        len: 0,
+        positive: true,
+    };
+
+    #[inline(always)]
+    fn next(&self) -> Option<Step> {
+        (self.head < self.len).then(|| Step {
+            time: self.times[self.head],
+            positive: self.positive,
+        })
+    }
+
+    fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+    }
+
+    /// Just `step`, found the long way.
+    fn one(&mut self, step: Step, s: f64) {
+        self.times[0] = step.time;
+        self.dists[0] = s;
+        self.head = 0;
+        self.len = 1;
+        self.positive = step.positive;
+    }
 }
 
 /// What a leg's steps need, computed once per leg instead of once per step.
@@ -82,7 +136,7 @@ impl Channel {
             timer: TimeCursor::START,
             t0: 0.0,
             joint_ref: 0.0,
-            pending: None,
+            ahead: Ahead::EMPTY,
             last_time: f64::NEG_INFINITY,
         }
     }
@@ -104,7 +158,7 @@ impl Channel {
         self.seg = 0;
         self.path = None;
         self.leg = Leg::NONE;
-        self.pending = None;
+        self.ahead.clear();
     }
 
     /// The next step on the queued segments, if they hold one.
@@ -120,41 +174,61 @@ impl Channel {
         segments: &Deque<Segment, Q>,
         end: usize,
     ) -> Option<Step> {
-        if self.pending.is_some() {
-            return self.pending;
+        if let Some(step) = self.ahead.next() {
+            return Some(step);
         }
         if self.seg < end {
-            if let Some(step) = self.step_on_line() {
+            if let Some(step) = self.steps_on_line() {
                 return Some(step);
             }
         }
         self.find_step(segments, end)
     }
 
-    /// The common case, kept short: the next step lies in the current leg
+    /// The common case, kept short: the next steps lie in the current leg
     /// of a joint affine in the distance, and in the profile piece the
-    /// timer is in. `None` (nothing changed) sends the caller the long way.
+    /// timer is in. Solves up to [`AHEAD`] of them; `None` (nothing
+    /// changed) sends the caller the long way.
     #[inline(always)]
-    fn step_on_line(&mut self) -> Option<Step> {
+    fn steps_on_line(&mut self) -> Option<Step> {
         let (a0, per_step) = self.leg.line?;
         let pos = self.position as f64;
         let at_hi = self.leg.at_hi;
-        let (boundary, positive) = if at_hi > pos + 0.5 {
+        let (mut boundary, positive) = if at_hi > pos + 0.5 {
             (pos + 0.5, true)
         } else if at_hi < pos - 0.5 {
             (pos - 0.5, false)
         } else {
             return None;
         };
-        let s = self.line_crossing(a0, per_step, boundary);
-        let t = self.timer.time_in_piece(s)?;
-        self.s = s;
-        let step = Step {
-            time: self.step_time(t),
-            positive,
-        };
-        self.pending = Some(step);
-        Some(step)
+        let dir = if positive { 1.0 } else { -1.0 };
+        let mut last = self.last_time;
+        let mut n = 0;
+        while n < AHEAD {
+            // Past the leg's last boundary: the rest is the long way's.
+            if (at_hi - boundary) * dir <= 0.0 {
+                break;
+            }
+            let s = self.line_crossing(a0, per_step, boundary);
+            let Some(t) = self.timer.time_in_piece(s) else {
+                break;
+            };
+            self.s = s;
+            let time = self.t0 + t * 1e6;
+            // Never earlier than the step before, whatever the rounding.
+            last = if time > last { time } else { last };
+            self.ahead.times[n] = last;
+            self.ahead.dists[n] = s;
+            n += 1;
+            boundary += dir;
+        }
+        if n == 0 {
+            return None;
+        }
+        self.ahead.head = 0;
+        self.ahead.len = n;
+        self.ahead.positive = positive;
+        self.ahead.next()
     }
 
     /// Where a joint affine in the distance crosses `boundary`, inside the
@@ -220,7 +294,7 @@ impl Channel {
                 time: self.step_time(t),
                 positive,
             };
-            self.pending = Some(step);
+            self.ahead.one(step, s);
             return Some(step);
         }
     }
@@ -294,19 +368,24 @@ impl Channel {
             self.timer = TimeCursor::START;
             self.t0 = seg.t0;
         }
-        if self.pending.is_some() {
+        // The first step solved keeps its place on the path and takes that
+        // place's new time; the ones after it are solved again.
+        let a = &mut self.ahead;
+        if a.head < a.len {
+            self.s = a.dists[a.head];
             let t = self.timer.time_at(&seg.profile, self.s);
             let time = self.step_time(t);
-            if let Some(step) = self.pending.as_mut() {
-                step.time = time;
-            }
+            let a = &mut self.ahead;
+            a.times[a.head] = time;
+            a.len = a.head + 1;
         }
     }
 
     /// Takes the pending step; returns the direction output.
     #[inline]
     pub fn take_step(&mut self) -> Option<(f64, bool)> {
-        let step = self.pending.take()?;
+        let step = self.ahead.next()?;
+        self.ahead.head += 1;
         self.position += if step.positive { 1 } else { -1 };
         self.last_time = step.time;
         Some((step.time, step.positive != self.invert))

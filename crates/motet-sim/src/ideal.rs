@@ -67,6 +67,8 @@ struct PieceCursor {
 pub struct Moment {
     /// Distance along the front segment.
     pub s: f64,
+    /// Time into the current profile piece, µs.
+    u: f64,
 }
 
 impl IdealTrajectory {
@@ -124,9 +126,7 @@ impl IdealTrajectory {
         // is passed (a segment is passed only once `t` is beyond its end).
         if let Some(f) = self.front.as_mut() {
             if f.t0 <= t && t <= f.t1 {
-                return Some(Moment {
-                    s: f.distance_at(t),
-                });
+                return Some(f.moment(t));
             }
         }
         self.at_slow(t)
@@ -145,9 +145,7 @@ impl IdealTrajectory {
         if !(f.t0 <= t && t <= f.t1) {
             return None;
         }
-        Some(Moment {
-            s: f.distance_at(t),
-        })
+        Some(f.moment(t))
     }
 
     /// The commanded point at `i`.
@@ -180,6 +178,16 @@ impl IdealTrajectory {
     pub fn joint_steps(&self, a: usize, i: Moment) -> Option<f64> {
         let (q0, k) = (*self.front.as_ref()?.lines.get(a)?)?;
         Some(q0 + k * i.s)
+    }
+
+    /// Actuator `a`'s ideal joint speed in steps per µs at `i`, when its
+    /// joint is linear in the axes: `i` must be the last moment asked for.
+    #[inline]
+    pub fn joint_rate(&self, a: usize, i: Moment) -> Option<f64> {
+        let f = self.front.as_ref()?;
+        let (_, k) = (*f.lines.get(a)?)?;
+        let p = &f.piece;
+        Some(k * (p.v + i.u * (2.0 * p.half_a + 3.0 * i.u * p.sixth_j)))
     }
 
     /// Whether the front segment extrudes.
@@ -245,10 +253,10 @@ impl Followed {
         f
     }
 
-    /// Distance along the segment at host time `t` (µs), `t` within it and
-    /// not earlier than the last call's.
+    /// Where the segment is at host time `t` (µs), `t` within it and not
+    /// earlier than the last call's.
     #[inline(always)]
-    fn distance_at(&mut self, t: f64) -> f64 {
+    fn moment(&mut self, t: f64) -> Moment {
         let t = t - self.t0;
         while t > self.piece.next {
             self.piece = PieceCursor::enter(&self.profile, self.piece.index + 1);
@@ -264,10 +272,9 @@ impl Followed {
             u
         };
         let s = p.d0 + u * (p.v + u * (p.half_a + u * p.sixth_j));
-        if s < self.length {
-            s
-        } else {
-            self.length
+        Moment {
+            s: if s < self.length { s } else { self.length },
+            u,
         }
     }
 }
