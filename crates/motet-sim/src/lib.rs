@@ -7,10 +7,12 @@ mod ideal;
 pub mod live;
 pub mod path;
 pub mod plant;
+pub mod plant_thread;
 pub mod report;
 pub mod run;
 
 pub use report::{format_duration, Report};
 pub use run::{
-    simulate, simulate_stream, Held, SimError, SimMachine, SimResult, StreamRun, NODE_QUEUE,
+    plant_for, simulate, simulate_stream, Held, SimError, SimMachine, SimResult, StreamRun,
+    NODE_QUEUE,
 };

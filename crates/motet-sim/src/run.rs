@@ -3,6 +3,7 @@
 
 use crate::path::PathRecorder;
 use crate::plant::{Output, Plant, Stamped};
+use crate::plant_thread::{self, PlantSink};
 use crate::report::{ActuatorReport, AxisReport, JointReport, Report};
 use motet_host::{Distributor, Machine};
 use motet_node::{Board, Node};
@@ -39,23 +40,42 @@ pub type Progress<'a> = &'a mut dyn FnMut(usize, usize);
 
 /// Collects one node's outputs for the plant, translating its channel and tool
 /// numbers to the machine's actuators and tools.
-struct Collector<'a> {
+struct Collector<'a, P: PlantSink> {
     actuators: &'a [usize],
     tools: &'a [usize],
     out: &'a mut Vec<Stamped>,
+    /// With a single node, whose outputs come in time order: the plant,
+    /// which then takes them every [`HANDOVER`] outputs instead of at the
+    /// frame's end, so a long frame needs no long buffer.
+    handover: Option<&'a mut P>,
 }
 
-impl Board for Collector<'_> {
+/// Outputs a single node's collector gathers before the plant takes them.
+const HANDOVER: usize = 8192;
+
+impl<P: PlantSink> Collector<'_, P> {
+    #[inline]
+    fn push(&mut self, s: Stamped) {
+        self.out.push(s);
+        if self.out.len() >= HANDOVER {
+            if let Some(plant) = self.handover.as_deref_mut() {
+                plant.frame(self.out, s.time);
+            }
+        }
+    }
+}
+
+impl<P: PlantSink> Board for Collector<'_, P> {
     fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
         let actuator = self.actuators[channel as usize];
-        self.out.push(Stamped {
+        self.push(Stamped {
             time: at_us,
             output: Output::Step { actuator, forward },
         });
     }
     fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
         let tool = self.tools[output as usize];
-        self.out.push(Stamped {
+        self.push(Stamped {
             time: at_us,
             output: Output::Tool { tool, value },
         });
@@ -63,12 +83,15 @@ impl Board for Collector<'_> {
 }
 
 /// A machine of simulated nodes on one simulated clock, fed planned items one
-/// at a time: the engine under both `simulate` and the scripting API.
-pub struct SimMachine {
+/// at a time: the engine under both `simulate` and the scripting API. Its
+/// plant is in line (`P` = [`Plant`], which the scripting API reads from),
+/// or on a thread of its own for a whole job
+/// ([`PlantLink`](crate::plant_thread::PlantLink)).
+pub struct SimMachine<P: PlantSink = Plant> {
     machine: Machine,
     nodes: Vec<Node<NODE_QUEUE>>,
     dist: Distributor,
-    plant: Plant,
+    plant: P,
     frame: f64,
     now: f64,
     outputs: Vec<Stamped>,
@@ -91,24 +114,36 @@ struct Stats {
     travel_distance: f64,
 }
 
+/// The plant that checks and draws what `machine`'s nodes do.
+pub fn plant_for(machine: &Machine) -> Plant {
+    let (x, y) = (
+        machine.axis("x").unwrap_or(0),
+        machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)),
+    );
+    let span = |i: usize| {
+        let t = machine.axes[i].travel;
+        if t[0].is_finite() && t[1].is_finite() {
+            t[1] - t[0]
+        } else {
+            100.0
+        }
+    };
+    // About a pixel of the default render.
+    let resolution = span(x).max(span(y)) / 2000.0;
+    Plant::new(machine, PathRecorder::new(x, y, resolution))
+}
+
 impl SimMachine {
     /// A machine at rest at its start position, nodes configured.
     pub fn new(machine: &Machine) -> Result<SimMachine, SimError> {
-        let (x, y) = (
-            machine.axis("x").unwrap_or(0),
-            machine.axis("y").unwrap_or(1.min(machine.axes.len() - 1)),
-        );
-        let span = |i: usize| {
-            let t = machine.axes[i].travel;
-            if t[0].is_finite() && t[1].is_finite() {
-                t[1] - t[0]
-            } else {
-                100.0
-            }
-        };
-        // About a pixel of the default render.
-        let resolution = span(x).max(span(y)) / 2000.0;
-        let plant = Plant::new(machine, PathRecorder::new(x, y, resolution));
+        SimMachine::with_plant(machine, plant_for(machine))
+    }
+}
+
+impl<P: PlantSink> SimMachine<P> {
+    /// A machine at rest at its start position, nodes configured, whose
+    /// outputs go to `plant`.
+    pub fn with_plant(machine: &Machine, plant: P) -> Result<SimMachine<P>, SimError> {
         let dist = Distributor::new(machine);
         let frame = machine
             .nodes
@@ -171,21 +206,6 @@ impl SimMachine {
         &self.machine
     }
 
-    /// Where the motors are now, as a machine point.
-    pub fn executed_point(&self) -> Point {
-        self.plant.executed_point()
-    }
-
-    /// Keep the tool changes the plant executes for [`SimMachine::take_tool_changes`].
-    pub fn watch_tools(&mut self, on: bool) {
-        self.plant.watch_tools = on;
-    }
-
-    /// Tool changes the plant has executed since the last call, with their times.
-    pub fn take_tool_changes(&mut self) -> Vec<(f64, usize, f32)> {
-        std::mem::take(&mut self.plant.tool_changes)
-    }
-
     /// Sends every batch still being filled: before time passes for the
     /// caller, so no node waits for segments the host holds.
     fn flush_all(&mut self) {
@@ -222,10 +242,18 @@ impl SimMachine {
         }
     }
 
-    /// The report of everything run so far; `end` is the trajectory's end, µs.
-    pub fn report(&self, job: &str, commands: usize, end: f64, wall: f64) -> Report {
+    /// The report of everything run so far, with `plant` the plant that
+    /// ran it; `end` is the trajectory's end, µs.
+    fn report_with(
+        &self,
+        plant: &Plant,
+        job: &str,
+        commands: usize,
+        end: f64,
+        wall: f64,
+    ) -> Report {
         let duration_s = end * 1e-6;
-        let stats = self.plant.actuator_stats();
+        let stats = plant.actuator_stats();
         let actuators: Vec<ActuatorReport> = self
             .machine
             .actuators
@@ -262,7 +290,7 @@ impl SimMachine {
             travel_distance_mm: self.stats.travel_distance,
             axes: self.stats.axes.clone(),
             joints: self.stats.joints.iter().map(|(_, j)| j.clone()).collect(),
-            max_path_deviation_mm: self.plant.max_path_deviation,
+            max_path_deviation_mm: plant.max_path_deviation,
             max_deviation_steps: actuators
                 .iter()
                 .map(|a| a.max_deviation_steps)
@@ -280,31 +308,12 @@ impl SimMachine {
         }
     }
 
-    /// The executed path so far as strokes; recording starts afresh.
-    pub fn take_strokes(&mut self) -> Vec<Stroke> {
-        self.plant.recorder.take()
-    }
-
-    /// The strokes of the executed path finished since the last call, each
-    /// simplified; the one being drawn stays until it ends.
-    pub fn take_finished_strokes(&mut self) -> Vec<Stroke> {
-        self.plant.recorder.take_finished()
-    }
-
-    /// What the simulation holds that depends on the job, as counts: the
-    /// plant's segment window and recorded points, and the nodes' queued
-    /// segments. Each is bounded whatever the job's length (ARCHITECTURE.md,
-    /// "Constant memory").
-    pub fn held(&self) -> Held {
-        Held {
-            plant_segments: self.plant.window_len(),
-            path_points: self.plant.recorder.held_points(),
-            node_segments: self
-                .nodes
-                .iter()
-                .map(|n| NODE_QUEUE - n.status().segment_space)
-                .sum(),
-        }
+    /// Segments queued on the nodes.
+    fn node_segments(&self) -> usize {
+        self.nodes
+            .iter()
+            .map(|n| NODE_QUEUE - n.status().segment_space)
+            .sum()
     }
 
     /// Node underruns so far.
@@ -332,22 +341,24 @@ impl SimMachine {
             return;
         }
         self.outputs.clear();
+        let single = self.nodes.len() == 1;
         for (k, node) in self.nodes.iter_mut().enumerate() {
             let spec = &self.machine.nodes[k];
             let mut c = Collector {
                 actuators: &spec.actuators,
                 tools: &spec.tools,
                 out: &mut self.outputs,
+                handover: single.then_some(&mut self.plant),
             };
-            // The plant takes every node's outputs up to `until` in one go:
-            // a poll that stops at its output budget is continued.
+            // The plant takes every node's outputs up to `until` together
+            // (several nodes' are merged in time there): a poll that stops
+            // at its output budget is continued.
             node.poll(until, &mut c);
             while node.time() < until {
                 node.poll(until, &mut c);
             }
         }
-        self.plant.apply(&mut self.outputs);
-        self.plant.applied_until(until);
+        self.plant.frame(&mut self.outputs, until);
         self.now = until;
     }
 
@@ -447,6 +458,51 @@ impl SimMachine {
     }
 }
 
+impl SimMachine {
+    /// Where the motors are now, as a machine point.
+    pub fn executed_point(&self) -> Point {
+        self.plant.executed_point()
+    }
+
+    /// Keep the tool changes the plant executes for [`SimMachine::take_tool_changes`].
+    pub fn watch_tools(&mut self, on: bool) {
+        self.plant.watch_tools = on;
+    }
+
+    /// Tool changes the plant has executed since the last call, with their times.
+    pub fn take_tool_changes(&mut self) -> Vec<(f64, usize, f32)> {
+        std::mem::take(&mut self.plant.tool_changes)
+    }
+
+    /// The report of everything run so far; `end` is the trajectory's end, µs.
+    pub fn report(&self, job: &str, commands: usize, end: f64, wall: f64) -> Report {
+        self.report_with(&self.plant, job, commands, end, wall)
+    }
+
+    /// The executed path so far as strokes; recording starts afresh.
+    pub fn take_strokes(&mut self) -> Vec<Stroke> {
+        self.plant.recorder.take()
+    }
+
+    /// The strokes of the executed path finished since the last call, each
+    /// simplified; the one being drawn stays until it ends.
+    pub fn take_finished_strokes(&mut self) -> Vec<Stroke> {
+        self.plant.recorder.take_finished()
+    }
+
+    /// What the simulation holds that depends on the job, as counts: the
+    /// plant's segment window and recorded points, and the nodes' queued
+    /// segments. Each is bounded whatever the job's length (ARCHITECTURE.md,
+    /// "Constant memory").
+    pub fn held(&self) -> Held {
+        Held {
+            plant_segments: self.plant.window_len(),
+            path_points: self.plant.recorder.held_points(),
+            node_segments: self.node_segments(),
+        }
+    }
+}
+
 /// Counts of what a simulation holds (see [`SimMachine::held`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Held {
@@ -504,15 +560,47 @@ pub fn simulate_stream<E>(
     commands: impl Iterator<Item = Result<Located<Command>, E>>,
     total: usize,
     progress: Progress,
-    strokes: &mut dyn FnMut(Stroke),
+    strokes: &mut (dyn FnMut(Stroke) + Send),
 ) -> Result<StreamRun, SimError>
 where
     E: std::error::Error + Send + Sync + 'static,
 {
     let started = Instant::now();
-    let mut sim = SimMachine::new(machine)?;
-    let mut held = Held::default();
-    let mut planner = Planner::new(machine.limits(), machine.start, 0.0);
+    std::thread::scope(|scope| {
+        let (link, plant) = plant_thread::spawn(scope, plant_for(machine), strokes);
+        let mut sim = SimMachine::with_plant(machine, link)?;
+        let ran = run_commands(&mut sim, commands, total, progress);
+        // Ends the plant's run, whether the job ran to its end or not.
+        sim.plant.close();
+        let run = match plant.join() {
+            Ok(run) => run,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        let (n, end, node_segments) = ran?;
+        let wall = started.elapsed().as_secs_f64();
+        Ok(StreamRun {
+            report: sim.report_with(&run.plant, job, n, end, wall),
+            held: Held {
+                node_segments,
+                ..run.held
+            },
+        })
+    })
+}
+
+/// Plans `commands` and runs them on `sim` to rest: the commands run, the
+/// trajectory's end (µs), and the most segments the nodes held.
+fn run_commands<P: PlantSink, E>(
+    sim: &mut SimMachine<P>,
+    commands: impl Iterator<Item = Result<Located<Command>, E>>,
+    total: usize,
+    progress: Progress,
+) -> Result<(usize, f64, usize), SimError>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    let mut planner = Planner::new(sim.machine.limits(), sim.machine.start, 0.0);
+    let mut node_segments = 0;
     let mut n = 0usize;
     for c in commands {
         let c = c.map_err(|e| SimError::Source(Box::new(e)))?;
@@ -522,12 +610,7 @@ where
         while let Some(item) = planner.pop() {
             sim.submit(item)?;
         }
-        if sim.plant.recorder.has_finished() {
-            sim.take_finished_strokes()
-                .into_iter()
-                .for_each(&mut *strokes);
-        }
-        held = held.max(sim.held());
+        node_segments = node_segments.max(sim.node_segments());
         if n.is_multiple_of(1024) {
             progress(n, total);
         }
@@ -541,13 +624,7 @@ where
     // Run to the end, then until nothing is left to do.
     sim.run_until(end);
     sim.run_to_rest();
-    held = held.max(sim.held());
+    node_segments = node_segments.max(sim.node_segments());
     progress(n, total.max(n));
-    sim.take_strokes().into_iter().for_each(&mut *strokes);
-
-    let wall = started.elapsed().as_secs_f64();
-    Ok(StreamRun {
-        report: sim.report(job, n, end, wall),
-        held,
-    })
+    Ok((n, end, node_segments))
 }

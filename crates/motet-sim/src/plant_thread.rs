@@ -1,0 +1,172 @@
+//! The plant on a thread of its own, for whole-job runs.
+//!
+//! A simulation's time splits about evenly between the nodes (solving every
+//! step) and the plant (checking every step and drawing the executed path).
+//! Neither waits on the other within a job: the nodes never read the plant,
+//! and the plant needs only the segments planned and the nodes' outputs, in
+//! order. So [`simulate_stream`](crate::simulate_stream) runs the plant on a
+//! second thread, fed in batches through a bounded channel: the two halves
+//! run side by side, and memory stays bounded because the channel is.
+//!
+//! The results are those of the plant run in line: it sees the same
+//! segments and the same outputs in the same order. A batch may carry
+//! segments planned after some of its outputs; the plant follows the front
+//! segment by time, so a segment held earlier changes nothing.
+
+use crate::plant::{Plant, Stamped};
+use crate::run::Held;
+use motet_render::Stroke;
+use motet_trajectory::Segment;
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+
+/// Where a simulated machine's plant takes its inputs: the plant itself,
+/// or a link to the thread it runs on.
+pub trait PlantSink {
+    /// A segment was sent to the nodes.
+    fn planned(&mut self, seg: Segment);
+    /// Every node's outputs up to `until` (µs); the sink takes them and
+    /// leaves `outputs` empty.
+    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64);
+}
+
+impl PlantSink for Plant {
+    fn planned(&mut self, seg: Segment) {
+        Plant::planned(self, seg);
+    }
+
+    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64) {
+        self.apply(outputs);
+        self.applied_until(until);
+        outputs.clear();
+    }
+}
+
+/// Outputs gathered before a batch goes to the plant's thread: large
+/// enough that handing over costs little per step, small enough to stay in
+/// cache.
+const BATCH_OUTPUTS: usize = 8192;
+
+/// Segments planned before a batch goes, whatever its outputs: keeps the
+/// plant's window within the bound of ARCHITECTURE.md's invariant.
+const BATCH_SEGMENTS: usize = 16;
+
+/// Batches in flight between the threads at most.
+const IN_FLIGHT: usize = 2;
+
+struct Batch {
+    planned: Vec<Segment>,
+    outputs: Vec<Stamped>,
+    until: f64,
+}
+
+/// The host side of the plant's thread.
+pub struct PlantLink {
+    /// `None` once closed.
+    tx: Option<SyncSender<Batch>>,
+    /// Output buffers the plant's thread is done with, for reuse.
+    spare: Receiver<Vec<Stamped>>,
+    planned: Vec<Segment>,
+    outputs: Vec<Stamped>,
+    until: f64,
+}
+
+impl PlantSink for PlantLink {
+    fn planned(&mut self, seg: Segment) {
+        self.planned.push(seg);
+        if self.planned.len() >= BATCH_SEGMENTS {
+            self.flush();
+        }
+    }
+
+    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64) {
+        if self.outputs.is_empty() {
+            std::mem::swap(&mut self.outputs, outputs);
+        } else {
+            self.outputs.append(outputs);
+        }
+        self.until = until;
+        if self.outputs.len() >= BATCH_OUTPUTS {
+            self.flush();
+        }
+    }
+}
+
+impl PlantLink {
+    /// Hands what is gathered to the plant's thread (waiting while
+    /// [`IN_FLIGHT`] batches are ahead of it).
+    pub fn flush(&mut self) {
+        if self.planned.is_empty() && self.outputs.is_empty() {
+            return;
+        }
+        let fresh = self.spare.try_recv().unwrap_or_default();
+        let batch = Batch {
+            planned: std::mem::take(&mut self.planned),
+            outputs: std::mem::replace(&mut self.outputs, fresh),
+            until: self.until,
+        };
+        // A plant thread that is gone has panicked; joining it says so.
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(batch);
+        }
+    }
+
+    /// Hands over what is gathered and ends the plant's run: its thread
+    /// finishes the batches in flight, the last stroke, and returns.
+    pub fn close(&mut self) {
+        self.flush();
+        self.tx = None;
+    }
+}
+
+/// The plant's side: what it ran, and the most it held.
+pub struct PlantRun {
+    pub plant: Plant,
+    pub held: Held,
+}
+
+/// Starts `plant` on a thread of `scope`, handing each finished stroke of
+/// the executed path to `strokes` there; the run ends when the link is
+/// dropped, and joining the handle gives the plant back.
+pub fn spawn<'scope, 'env>(
+    scope: &'scope std::thread::Scope<'scope, 'env>,
+    mut plant: Plant,
+    strokes: &'scope mut (dyn FnMut(Stroke) + Send),
+) -> (PlantLink, std::thread::ScopedJoinHandle<'scope, PlantRun>) {
+    let (tx, rx) = sync_channel::<Batch>(IN_FLIGHT);
+    let (spare_tx, spare) = sync_channel::<Vec<Stamped>>(IN_FLIGHT + 1);
+    let handle = scope.spawn(move || {
+        let mut held = Held::default();
+        for mut batch in rx {
+            for seg in batch.planned.drain(..) {
+                plant.planned(seg);
+            }
+            held.plant_segments = held.plant_segments.max(plant.window_len());
+            plant.apply(&mut batch.outputs);
+            plant.applied_until(batch.until);
+            held.path_points = held.path_points.max(plant.recorder.held_points());
+            if plant.recorder.has_finished() {
+                plant
+                    .recorder
+                    .take_finished()
+                    .into_iter()
+                    .for_each(&mut *strokes);
+            }
+            // A buffer that one long frame grew is freed, not kept: the
+            // buffers in flight would otherwise all grow to the longest.
+            if batch.outputs.capacity() <= 2 * BATCH_OUTPUTS {
+                batch.outputs.clear();
+                let _ = spare_tx.try_send(batch.outputs);
+            }
+        }
+        plant.recorder.take().into_iter().for_each(&mut *strokes);
+        PlantRun { plant, held }
+    });
+    let link = PlantLink {
+        tx: Some(tx),
+        spare,
+        planned: Vec::new(),
+        outputs: Vec::new(),
+        until: 0.0,
+    };
+    (link, handle)
+}
