@@ -168,15 +168,26 @@ impl Channel {
 
     /// The next step on the first `end` queued segments (the committed ones;
     /// the rest are not to be run yet).
-    #[inline]
+    #[inline(always)]
     pub fn next_step_within<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
         end: usize,
     ) -> Option<Step> {
+        // Most calls end here: the step was solved with others before it.
         if let Some(step) = self.ahead.next() {
             return Some(step);
         }
+        self.solve_ahead(segments, end)
+    }
+
+    /// Solves the next steps: a batch on a line leg, or one the long way.
+    #[inline(never)]
+    fn solve_ahead<const Q: usize>(
+        &mut self,
+        segments: &Deque<Segment, Q>,
+        end: usize,
+    ) -> Option<Step> {
         if self.seg < end {
             if let Some(step) = self.steps_on_line() {
                 return Some(step);
@@ -202,33 +213,40 @@ impl Channel {
             return None;
         };
         let dir = if positive { 1.0 } else { -1.0 };
-        let mut last = self.last_time;
+        // The distances of the leg's next boundaries, each never short of
+        // the one before, then their times in the current profile piece.
+        let a = &mut self.ahead;
+        let (mut prev, hi) = (self.s, self.leg.hi);
         let mut n = 0;
         while n < AHEAD {
             // Past the leg's last boundary: the rest is the long way's.
             if (at_hi - boundary) * dir <= 0.0 {
                 break;
             }
-            let s = self.line_crossing(a0, per_step, boundary);
-            let Some(t) = self.timer.time_in_piece(s) else {
-                break;
-            };
-            self.s = s;
-            let time = self.t0 + t * 1e6;
-            // Never earlier than the step before, whatever the rounding.
-            last = if time > last { time } else { last };
-            self.ahead.times[n] = last;
-            self.ahead.dists[n] = s;
+            let s = (boundary - a0) * per_step;
+            let s = if s > prev { s } else { prev };
+            let s = if s < hi { s } else { hi };
+            a.dists[n] = s;
+            prev = s;
             n += 1;
             boundary += dir;
         }
+        let n = self.timer.times_in_piece(&a.dists[..n], &mut a.times[..n]);
         if n == 0 {
             return None;
         }
-        self.ahead.head = 0;
-        self.ahead.len = n;
-        self.ahead.positive = positive;
-        self.ahead.next()
+        let mut last = self.last_time;
+        for t in a.times[..n].iter_mut() {
+            let time = self.t0 + *t * 1e6;
+            // Never earlier than the step before, whatever the rounding.
+            last = if time > last { time } else { last };
+            *t = last;
+        }
+        self.s = a.dists[n - 1];
+        a.head = 0;
+        a.len = n;
+        a.positive = positive;
+        a.next()
     }
 
     /// Where a joint affine in the distance crosses `boundary`, inside the

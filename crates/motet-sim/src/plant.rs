@@ -205,7 +205,6 @@ impl Plant {
         let positive = forward != a.invert;
         a.position += if positive { 1 } else { -1 };
         a.stats.steps += 1;
-        a.stats.position = a.position;
         let (after, spu, moves_xy, sole_axis) = (a.position, a.spu, a.moves_xy, a.sole_axis);
 
         // Ideal joint value in steps at t, on the branch of the executed value.
@@ -324,7 +323,13 @@ impl Plant {
     }
 
     pub fn actuator_stats(&self) -> Vec<ActuatorStats> {
-        self.actuators.iter().map(|a| a.stats.clone()).collect()
+        self.actuators
+            .iter()
+            .map(|a| ActuatorStats {
+                position: a.position,
+                ..a.stats.clone()
+            })
+            .collect()
     }
 }
 

@@ -124,17 +124,44 @@ pub struct PlantRun {
     pub held: Held,
 }
 
-/// Starts `plant` on a thread of `scope`, handing each finished stroke of
-/// the executed path to `strokes` there; the run ends when the link is
-/// dropped, and joining the handle gives the plant back.
-pub fn spawn<'scope, 'env>(
-    scope: &'scope std::thread::Scope<'scope, 'env>,
+/// Batches of finished strokes in flight to the drawing thread at most.
+const STROKES_IN_FLIGHT: usize = 64;
+
+/// The threads of a plant's run, to be joined once its link is closed.
+pub struct PlantThreads<'scope> {
+    plant: std::thread::ScopedJoinHandle<'scope, PlantRun>,
+    draw: std::thread::ScopedJoinHandle<'scope, ()>,
+}
+
+impl PlantThreads<'_> {
+    /// Waits for the plant to finish the batches it was given and for the
+    /// last stroke to be drawn; a panic on either thread is passed on.
+    pub fn join(self) -> std::thread::Result<PlantRun> {
+        let run = self.plant.join();
+        self.draw.join()?;
+        run
+    }
+}
+
+/// Starts `plant` on a thread of `scope`, and a second thread that hands
+/// each finished stroke of the executed path to `strokes` (drawing takes
+/// about as long as checking, so the operating system spreads the three
+/// threads over the cores there are). The run ends when the link is closed
+/// or dropped; joining gives the plant back.
+pub fn spawn<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
     mut plant: Plant,
     strokes: &'scope mut (dyn FnMut(Stroke) + Send),
-) -> (PlantLink, std::thread::ScopedJoinHandle<'scope, PlantRun>) {
+) -> (PlantLink, PlantThreads<'scope>) {
     let (tx, rx) = sync_channel::<Batch>(IN_FLIGHT);
     let (spare_tx, spare) = sync_channel::<Vec<Stamped>>(IN_FLIGHT + 1);
-    let handle = scope.spawn(move || {
+    let (draw_tx, draw_rx) = sync_channel::<Vec<Stroke>>(STROKES_IN_FLIGHT);
+    let draw = scope.spawn(move || {
+        for batch in draw_rx {
+            batch.into_iter().for_each(&mut *strokes);
+        }
+    });
+    let plant = scope.spawn(move || {
         let mut held = Held::default();
         for mut batch in rx {
             for seg in batch.planned.drain(..) {
@@ -145,11 +172,8 @@ pub fn spawn<'scope, 'env>(
             plant.applied_until(batch.until);
             held.path_points = held.path_points.max(plant.recorder.held_points());
             if plant.recorder.has_finished() {
-                plant
-                    .recorder
-                    .take_finished()
-                    .into_iter()
-                    .for_each(&mut *strokes);
+                // A drawing thread that is gone has panicked; joining says so.
+                let _ = draw_tx.send(plant.recorder.take_finished());
             }
             // A buffer that one long frame grew is freed, not kept: the
             // buffers in flight would otherwise all grow to the longest.
@@ -158,7 +182,7 @@ pub fn spawn<'scope, 'env>(
                 let _ = spare_tx.try_send(batch.outputs);
             }
         }
-        plant.recorder.take().into_iter().for_each(&mut *strokes);
+        let _ = draw_tx.send(plant.recorder.take());
         PlantRun { plant, held }
     });
     let link = PlantLink {
@@ -168,5 +192,5 @@ pub fn spawn<'scope, 'env>(
         outputs: Vec::new(),
         until: 0.0,
     };
-    (link, handle)
+    (link, PlantThreads { plant, draw })
 }

@@ -137,6 +137,82 @@ impl TimeCursor {
         Some(p.t0 + if u < p.duration { u } else { p.duration })
     }
 
+    /// [`TimeCursor::time_in_piece`] for several increasing distances at
+    /// once: writes the times of the leading ones that lie in the current
+    /// piece to `out` and returns how many. The piece's constants are read
+    /// once, so each time costs only its own arithmetic, and the times do
+    /// not depend on each other, so their roots and divisions overlap.
+    #[inline]
+    pub fn times_in_piece(&mut self, ds: &[f64], out: &mut [f64]) -> usize {
+        let n = ds.len().min(out.len());
+        let p = self.piece;
+        let (d_end, span) = (self.d_end, self.span);
+        // Where a distance is outside the piece's inside, the single-step
+        // rule gives the answer (the piece's start or end).
+        let edge = |d: f64| -> Option<f64> {
+            let x = d - p.d0;
+            if x <= 0.0 {
+                Some(p.t0)
+            } else if x >= span {
+                Some(p.t0 + p.duration)
+            } else {
+                None
+            }
+        };
+        match self.solve {
+            Solve::Quadratic { vv, two_a } => {
+                for k in 0..n {
+                    let d = ds[k];
+                    if d > d_end {
+                        return k;
+                    }
+                    out[k] = match edge(d) {
+                        Some(t) => t,
+                        None => {
+                            let x = d - p.d0;
+                            let disc = vv + two_a * x;
+                            let root = sqrt(if disc > 0.0 { disc } else { 0.0 });
+                            let denom = p.v + root;
+                            let u = if denom > 0.0 {
+                                2.0 * x / denom
+                            } else {
+                                p.duration
+                            };
+                            p.t0 + if u < p.duration { u } else { p.duration }
+                        }
+                    };
+                }
+                n
+            }
+            Solve::Cruise { per_unit } => {
+                for k in 0..n {
+                    let d = ds[k];
+                    if d > d_end {
+                        return k;
+                    }
+                    out[k] = match edge(d) {
+                        Some(t) => t,
+                        None => {
+                            let u = (d - p.d0) * per_unit;
+                            p.t0 + if u < p.duration { u } else { p.duration }
+                        }
+                    };
+                }
+                n
+            }
+            // Newton carries its last answer from one distance to the next.
+            _ => {
+                for k in 0..n {
+                    match self.time_in_piece(ds[k]) {
+                        Some(t) => out[k] = t,
+                        None => return k,
+                    }
+                }
+                n
+            }
+        }
+    }
+
     #[inline(never)]
     fn next_piece(&mut self, profile: &Profile) {
         // `START`'s index wraps to the first piece.
