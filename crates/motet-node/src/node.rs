@@ -1001,31 +1001,52 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // Time of the last output handed out.
         let mut last = None;
         loop {
-            // The earliest step before `until`, the first channel on a tie.
-            let (mut bi, mut bt) = (usize::MAX, until);
+            // The earliest step before `until`, the first channel on a tie,
+            // and the time of the next earliest.
+            let (mut bi, mut bt, mut second) = (usize::MAX, until, until);
             for (i, &t) in next[..n].iter().enumerate() {
                 if t < bt {
+                    second = bt;
                     (bi, bt) = (i, t);
+                } else if t < second {
+                    second = t;
                 }
             }
             let (event_time, refresh, other) = others;
             if bi != usize::MAX && bt < other {
-                // Only a step is due first: the common case, taken directly.
-                if *budget == 0 {
+                // Only steps are due first: the common case, taken directly.
+                // The channel goes on stepping while its next step is still
+                // strictly the earliest, without looking at the others again
+                // (a tie goes back to the full rule).
+                let limit = if second < other { second } else { other };
+                let ch = &mut self.channels[bi];
+                let id = ch.config().channel;
+                let mut out_of_budget = false;
+                loop {
+                    if *budget == 0 && last.is_some() {
+                        out_of_budget = true;
+                        break;
+                    }
+                    *budget = budget.saturating_sub(1);
+                    last = Some(bt);
+                    if let Some((t, dir)) = ch.take_step() {
+                        board.step(id, dir, t);
+                    }
+                    let t = time_of(ch.next_step_within(&self.segments, end));
+                    next[bi] = t;
+                    if t < limit {
+                        bt = t;
+                    } else {
+                        break;
+                    }
+                }
+                if out_of_budget {
                     if let Some(t) = last {
                         self.now = t;
                         self.retire();
                         return false;
                     }
                 }
-                *budget = budget.saturating_sub(1);
-                last = Some(bt);
-                let ch = &mut self.channels[bi];
-                let id = ch.config().channel;
-                if let Some((t, dir)) = ch.take_step() {
-                    board.step(id, dir, t);
-                }
-                next[bi] = time_of(ch.next_step_within(&self.segments, end));
                 continue;
             }
             let best = (bi != usize::MAX).then_some((bi, bt));

@@ -71,6 +71,8 @@ pub struct Plant {
     /// Tool outputs executed: (time, tool, value), kept only for observers.
     pub tool_changes: Vec<(f64, usize, f32)>,
     pub watch_tools: bool,
+    /// Outputs given and not yet applied (see `PlantSink`).
+    pub(crate) inbox: Vec<Stamped>,
 }
 
 impl Plant {
@@ -141,6 +143,7 @@ impl Plant {
             executed: [0.0; MAX_AXES],
             tool_changes: Vec::new(),
             watch_tools: false,
+            inbox: Vec::new(),
         };
         for j in 0..plant.joint_actuators.len().min(MAX_JOINTS) {
             plant.update_joint(j);

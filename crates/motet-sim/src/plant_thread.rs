@@ -24,9 +24,12 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 pub trait PlantSink {
     /// A segment was sent to the nodes.
     fn planned(&mut self, seg: Segment);
-    /// Every node's outputs up to `until` (µs); the sink takes them and
-    /// leaves `outputs` empty.
-    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64);
+    /// Where the nodes put their outputs: each node's in time order, and
+    /// all of them before [`PlantSink::applied`] is told their time.
+    fn outputs(&mut self) -> &mut Vec<Stamped>;
+    /// Every node's outputs before `until` (µs) are in
+    /// [`PlantSink::outputs`]: the plant may take them.
+    fn applied(&mut self, until: f64);
 }
 
 impl PlantSink for Plant {
@@ -34,10 +37,16 @@ impl PlantSink for Plant {
         Plant::planned(self, seg);
     }
 
-    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64) {
-        self.apply(outputs);
-        self.applied_until(until);
+    fn outputs(&mut self) -> &mut Vec<Stamped> {
+        &mut self.inbox
+    }
+
+    fn applied(&mut self, until: f64) {
+        let mut outputs = std::mem::take(&mut self.inbox);
+        self.apply(&mut outputs);
         outputs.clear();
+        self.inbox = outputs;
+        self.applied_until(until);
     }
 }
 
@@ -78,12 +87,11 @@ impl PlantSink for PlantLink {
         }
     }
 
-    fn frame(&mut self, outputs: &mut Vec<Stamped>, until: f64) {
-        if self.outputs.is_empty() {
-            std::mem::swap(&mut self.outputs, outputs);
-        } else {
-            self.outputs.append(outputs);
-        }
+    fn outputs(&mut self) -> &mut Vec<Stamped> {
+        &mut self.outputs
+    }
+
+    fn applied(&mut self, until: f64) {
         self.until = until;
         if self.outputs.len() >= BATCH_OUTPUTS {
             self.flush();

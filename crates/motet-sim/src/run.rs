@@ -43,11 +43,11 @@ pub type Progress<'a> = &'a mut dyn FnMut(usize, usize);
 struct Collector<'a, P: PlantSink> {
     actuators: &'a [usize],
     tools: &'a [usize],
-    out: &'a mut Vec<Stamped>,
-    /// With a single node, whose outputs come in time order: the plant,
-    /// which then takes them every [`HANDOVER`] outputs instead of at the
-    /// frame's end, so a long frame needs no long buffer.
-    handover: Option<&'a mut P>,
+    plant: &'a mut P,
+    /// Whether this is the only node, whose outputs are then in time order
+    /// as they come: the plant takes them every [`HANDOVER`] outputs
+    /// instead of at the frame's end, so a long frame needs no long buffer.
+    single: bool,
 }
 
 /// Outputs a single node's collector gathers before the plant takes them.
@@ -56,11 +56,10 @@ const HANDOVER: usize = 8192;
 impl<P: PlantSink> Collector<'_, P> {
     #[inline]
     fn push(&mut self, s: Stamped) {
-        self.out.push(s);
-        if self.out.len() >= HANDOVER {
-            if let Some(plant) = self.handover.as_deref_mut() {
-                plant.frame(self.out, s.time);
-            }
+        let out = self.plant.outputs();
+        out.push(s);
+        if self.single && out.len() >= HANDOVER {
+            self.plant.applied(s.time);
         }
     }
 }
@@ -94,7 +93,6 @@ pub struct SimMachine<P: PlantSink = Plant> {
     plant: P,
     frame: f64,
     now: f64,
-    outputs: Vec<Stamped>,
     buf: [u8; MAX_MESSAGE],
     stats: Stats,
 }
@@ -157,7 +155,6 @@ impl<P: PlantSink> SimMachine<P> {
             plant,
             frame,
             now: 0.0,
-            outputs: Vec::new(),
             buf: [0; MAX_MESSAGE],
             stats: Stats {
                 axes: machine
@@ -340,15 +337,14 @@ impl<P: PlantSink> SimMachine<P> {
         if until <= self.now {
             return;
         }
-        self.outputs.clear();
         let single = self.nodes.len() == 1;
         for (k, node) in self.nodes.iter_mut().enumerate() {
             let spec = &self.machine.nodes[k];
             let mut c = Collector {
                 actuators: &spec.actuators,
                 tools: &spec.tools,
-                out: &mut self.outputs,
-                handover: single.then_some(&mut self.plant),
+                plant: &mut self.plant,
+                single,
             };
             // The plant takes every node's outputs up to `until` together
             // (several nodes' are merged in time there): a poll that stops
@@ -358,7 +354,7 @@ impl<P: PlantSink> SimMachine<P> {
                 node.poll(until, &mut c);
             }
         }
-        self.plant.frame(&mut self.outputs, until);
+        self.plant.applied(until);
         self.now = until;
     }
 
