@@ -184,6 +184,9 @@ pub const REPEAT: ValueRange = ValueRange::new(1.0, 1_000.0, "");
 /// `bench --long`: the job written this many times over (100 times the
 /// benchmark print is 550 MB of G-code on disk).
 pub const LONG_JOB: ValueRange = ValueRange::new(2.0, 100.0, "");
+/// `bench --instructions`: lines of the job run under callgrind (about
+/// fifty times slower than a plain run).
+pub const INSTRUCTION_LINES: ValueRange = ValueRange::new(100.0, 1_000_000.0, "");
 /// `bench-net --jitter-us`: extra delay of every frame.
 pub const JITTER_US: ValueRange = ValueRange::new(0.0, 1e6, "µs");
 /// `bench-net --faults`: the rate of each fault per frame.

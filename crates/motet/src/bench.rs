@@ -49,6 +49,7 @@ pub fn bench(
     no_sim: bool,
     microsteps: Option<u32>,
     long: usize,
+    instructions: Option<usize>,
 ) -> Result<()> {
     let scratch = Scratch::new()?;
     // The machine `motet run` is measured on: the file, or its edited copy.
@@ -160,6 +161,17 @@ pub fn bench(
         drop(loaded);
         let once = run_peak_mib(&run_machine, job_path, &scratch.0.join("once"))?;
         println!("peak memory: {once:.1} MiB for `motet run` on the job (its own process)");
+        if let Some(n) = instructions {
+            match crate::bench_instructions::measure(&run_machine, &data, n, &scratch)? {
+                Some(p) => println!(
+                    "instructions per step (callgrind, `motet run` on the first {n} lines, {} steps): nodes {:.0}, observer {:.0}, whole run {:.0}",
+                    p.steps, p.node, p.observer, p.whole
+                ),
+                None => println!(
+                    "instructions per step: valgrind is not installed (Debian: apt-get install valgrind)"
+                ),
+            }
+        }
         if long > 1 {
             let name = format!("{}-x{long}.gcode", job_name(job_path));
             let long_job = scratch.0.join(name);

@@ -2,6 +2,7 @@
 //! prints; all behaviour lives in the crates.
 
 mod bench;
+mod bench_instructions;
 mod bench_memory;
 mod bench_net;
 mod bench_wire;
@@ -251,6 +252,10 @@ enum Cmd {
         /// over into one file.
         #[arg(long, value_parser = flags::count::<u32>(ranges::LONG_JOB))]
         long: Option<u32>,
+        /// Also count instructions per step under callgrind (valgrind) on
+        /// the job's first N lines.
+        #[arg(long, value_name = "LINES", value_parser = flags::count::<u32>(ranges::INSTRUCTION_LINES))]
+        instructions: Option<u32>,
     },
     /// Bytes on the wire per second of motion for a job (batched and plain segments).
     BenchWire(bench_wire::Args),
@@ -406,6 +411,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             no_sim,
             microsteps,
             long,
+            instructions,
         } => bench::bench(
             &machine,
             &job,
@@ -413,6 +419,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             no_sim,
             microsteps,
             long.map_or(0, |n| n as usize),
+            instructions.map(|n| n as usize),
         ),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
