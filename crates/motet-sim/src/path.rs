@@ -4,13 +4,23 @@
 use motet_render::Stroke;
 use motet_trajectory::Point;
 
+/// The open stroke's state is kept in plain fields rather than in an
+/// `Option<Stroke>`: [`PathRecorder::sample`] runs once per step, and its
+/// common case (same stroke, movement below the resolution) is then a
+/// comparison and one squared distance against values already at hand.
 pub struct PathRecorder {
     x: usize,
     y: usize,
     /// Smallest movement worth a new point, mm.
     resolution: f64,
-    /// The stroke being recorded.
-    open: Option<Stroke>,
+    /// `resolution` squared, compared on every step.
+    r2: f64,
+    /// The open stroke's tool state (`None`: no stroke open).
+    open_on: Option<bool>,
+    /// The open stroke's points.
+    points: Vec<[f64; 2]>,
+    /// The open stroke's last point (meaningful while a stroke is open).
+    last: [f64; 2],
     /// Finished strokes not yet taken, simplified.
     done: Vec<Stroke>,
     /// The true latest position, kept even when thinning drops it.
@@ -28,7 +38,10 @@ impl PathRecorder {
             x,
             y,
             resolution,
-            open: None,
+            r2: resolution * resolution,
+            open_on: None,
+            points: Vec::new(),
+            last: [0.0; 2],
             done: Vec::new(),
             current: None,
         }
@@ -45,8 +58,9 @@ impl PathRecorder {
 
     /// Whether the stroke being recorded is a tool-on one (`None`: none is
     /// open yet).
+    #[inline]
     pub fn tool_on(&self) -> Option<bool> {
-        self.open.as_ref().map(|s| s.tool_on)
+        self.open_on
     }
 
     /// Adds the machine's position after a step or a tool change.
@@ -54,19 +68,14 @@ impl PathRecorder {
     pub fn sample(&mut self, p: &Point, tool_on: bool) {
         let q = [p[self.x], p[self.y]];
         // The common case, once per step: the same stroke goes on.
-        if let Some(s) = self.open.as_mut() {
-            if s.tool_on == tool_on && s.points.len() < MAX_STROKE_POINTS {
-                // Squared: this runs on every step.
-                let r2 = self.resolution * self.resolution;
-                if s.points.last().is_none_or(|l| {
-                    let (dx, dy) = (l[0] - q[0], l[1] - q[1]);
-                    dx * dx + dy * dy >= r2
-                }) {
-                    s.points.push(q);
-                }
-                self.current = Some(q);
-                return;
+        if self.open_on == Some(tool_on) && self.points.len() < MAX_STROKE_POINTS {
+            let (dx, dy) = (self.last[0] - q[0], self.last[1] - q[1]);
+            if dx * dx + dy * dy >= self.r2 {
+                self.points.push(q);
+                self.last = q;
             }
+            self.current = Some(q);
+            return;
         }
         self.sample_new_stroke(q, tool_on);
     }
@@ -75,55 +84,57 @@ impl PathRecorder {
     /// stroke is full.
     #[inline(never)]
     fn sample_new_stroke(&mut self, q: [f64; 2], tool_on: bool) {
-        let same_state = self.open.as_ref().is_some_and(|s| s.tool_on == tool_on);
-        if !same_state {
+        if self.open_on != Some(tool_on) {
             // Close the previous stroke where the machine really was, and start the
             // new one there, so strokes join without gaps.
-            let mut points = Vec::new();
-            if let Some(c) = self.current {
+            let start = self.current;
+            if let Some(c) = start {
                 self.close(c);
-                points.push(c);
             }
-            self.open = Some(Stroke { points, tool_on });
-        } else {
+            self.open(start, tool_on);
+        } else if let Some(&last) = self.points.last() {
             // A long stroke goes on as a new piece from its last point.
-            let last = self.open.as_ref().and_then(|s| s.points.last().copied());
-            if let Some(last) = last {
-                self.close(last);
-                self.open = Some(Stroke {
-                    points: vec![last],
-                    tool_on,
-                });
-            }
+            self.close(last);
+            self.open(Some(last), tool_on);
         }
-        if let Some(s) = self.open.as_mut() {
-            let r2 = self.resolution * self.resolution;
-            if s.points.last().is_none_or(|l| {
-                let (dx, dy) = (l[0] - q[0], l[1] - q[1]);
-                dx * dx + dy * dy >= r2
-            }) {
-                s.points.push(q);
-            }
+        let far = self.points.last().is_none_or(|l| {
+            let (dx, dy) = (l[0] - q[0], l[1] - q[1]);
+            dx * dx + dy * dy >= self.r2
+        });
+        if far {
+            self.points.push(q);
+            self.last = q;
         }
         self.current = Some(q);
     }
 
+    /// Opens a stroke, starting at `start` if given.
+    fn open(&mut self, start: Option<[f64; 2]>, tool_on: bool) {
+        self.points.clear();
+        if let Some(s) = start {
+            self.points.push(s);
+            self.last = s;
+        }
+        self.open_on = Some(tool_on);
+    }
+
     /// Ends the open stroke at `c`, simplified, into the finished ones.
     fn close(&mut self, c: [f64; 2]) {
-        if let Some(mut s) = self.open.take() {
-            if s.points.last() != Some(&c) {
-                s.points.push(c);
-            }
-            simplify(&mut s.points, 0.5 * self.resolution);
-            self.done.push(s);
+        let Some(tool_on) = self.open_on.take() else {
+            return;
+        };
+        let mut points = std::mem::take(&mut self.points);
+        if points.last() != Some(&c) {
+            points.push(c);
         }
+        simplify(&mut points, 0.5 * self.resolution);
+        self.done.push(Stroke { points, tool_on });
     }
 
     /// How many points the recorder holds: the open stroke's and the finished
     /// strokes' not yet taken.
     pub fn held_points(&self) -> usize {
-        self.open.as_ref().map_or(0, |s| s.points.len())
-            + self.done.iter().map(|s| s.points.len()).sum::<usize>()
+        self.points.len() + self.done.iter().map(|s| s.points.len()).sum::<usize>()
     }
 
     /// The strokes finished since the last call, in order; the open one stays.
