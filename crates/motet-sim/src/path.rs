@@ -203,3 +203,84 @@ fn simplify(points: &mut Vec<[f64; 2]>, tol: f64) {
         keep[i - 1]
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn point(x: f64, y: f64) -> Point {
+        let mut p = [0.0; motet_trajectory::MAX_AXES];
+        p[0] = x;
+        p[1] = y;
+        p
+    }
+
+    /// Samples as a walk: each moves by a small step, sometimes toggling
+    /// the tool.
+    fn walk() -> impl Strategy<Value = Vec<(f64, f64, bool)>> {
+        prop::collection::vec(
+            (-0.3f64..0.3, -0.3f64..0.3, prop::bool::weighted(0.02)),
+            1..4000,
+        )
+        .prop_map(|moves| {
+            let (mut x, mut y, mut on) = (0.0, 0.0, false);
+            moves
+                .into_iter()
+                .map(|(dx, dy, toggle)| {
+                    (x, y) = (x + dx, y + dy);
+                    on ^= toggle;
+                    (x, y, on)
+                })
+                .collect()
+        })
+    }
+
+    proptest! {
+        /// Strokes join without gaps, change state only where the tool did,
+        /// end where the machine last was, and never exceed their size.
+        #[test]
+        fn strokes_are_continuous(samples in walk(), take_every in 1usize..3000) {
+            let mut r = PathRecorder::new(0, 1, 0.25);
+            let mut strokes = Vec::new();
+            for (i, &(x, y, on)) in samples.iter().enumerate() {
+                r.sample(&point(x, y), on);
+                if i % take_every == 0 {
+                    strokes.extend(r.take_finished());
+                }
+            }
+            strokes.extend(r.take());
+            let &(lx, ly, lon) = samples.last().unwrap();
+            let last = strokes.last().unwrap();
+            prop_assert_eq!(last.points.last().copied(), Some([lx, ly]));
+            prop_assert_eq!(last.tool_on, lon);
+            let first_on = samples[0].2;
+            prop_assert_eq!(strokes[0].tool_on, first_on);
+            let toggles = samples.windows(2).filter(|w| w[0].2 != w[1].2).count();
+            let changes = strokes.windows(2).filter(|w| w[0].tool_on != w[1].tool_on).count();
+            prop_assert_eq!(changes, toggles);
+            for w in strokes.windows(2) {
+                prop_assert_eq!(w[0].points.last(), w[1].points.first());
+            }
+            for s in &strokes {
+                prop_assert!(s.points.len() <= MAX_STROKE_POINTS + 1);
+            }
+        }
+    }
+
+    #[test]
+    fn a_long_stroke_goes_on_in_pieces() {
+        let mut r = PathRecorder::new(0, 1, 0.1);
+        let n = 3 * MAX_STROKE_POINTS;
+        // A zigzag, so simplification keeps every point.
+        for i in 0..n {
+            r.sample(&point(i as f64, (i % 2) as f64), true);
+        }
+        let strokes = r.take();
+        assert!(strokes.len() >= 3, "{} strokes", strokes.len());
+        let total: usize = strokes.iter().map(|s| s.points.len()).sum();
+        // Each piece after the first repeats its predecessor's last point.
+        assert_eq!(total, n + strokes.len() - 1);
+        assert!(strokes.iter().all(|s| s.tool_on));
+    }
+}
