@@ -393,16 +393,25 @@ impl Planner {
             }
         }
         for jl in &self.limits.joints {
-            let path = JointPath::between(&jl.map, start, end, length, 0.0);
-            let rate = path.max_rate(0.0, length);
-            if rate > 0.0 {
-                v = v.min(jl.max_velocity / rate);
-            }
-            if let JointMap::Linear { .. } = jl.map {
+            if let JointMap::Linear { coeffs } = jl.map {
+                // A linear joint moves at a constant rate along the line:
+                // its coefficients projected on the direction.
+                let rate = coeffs
+                    .iter()
+                    .zip(unit)
+                    .map(|(c, u)| c * u)
+                    .sum::<f64>()
+                    .abs();
                 if rate > 0.0 {
+                    v = v.min(jl.max_velocity / rate);
                     a = a.min(jl.max_acceleration / rate);
                 }
             } else {
+                let path = JointPath::between(&jl.map, start, end, length, 0.0);
+                let rate = path.max_rate(0.0, length);
+                if rate > 0.0 {
+                    v = v.min(jl.max_velocity / rate);
+                }
                 // joint'' = rate · a + curvature · v²: give each term half the budget.
                 if rate > 0.0 {
                     a = a.min(0.5 * jl.max_acceleration / rate);

@@ -39,15 +39,24 @@ impl ValueRange {
     }
 
     /// `v` if it is in the range, else the error naming `what`.
+    #[inline]
     pub fn check(&self, what: impl fmt::Display, v: f64) -> Result<f64, OutOfRange> {
         if self.contains(v) {
             Ok(v)
         } else {
-            Err(OutOfRange {
-                what: what.to_string(),
-                value: v,
-                range: *self,
-            })
+            Err(self.out_of_range(&what, v))
+        }
+    }
+
+    /// The error for `v`: out of line, since checks run on every move and
+    /// almost never fail.
+    #[cold]
+    #[inline(never)]
+    fn out_of_range(&self, what: &dyn fmt::Display, v: f64) -> OutOfRange {
+        OutOfRange {
+            what: what.to_string(),
+            value: v,
+            range: *self,
         }
     }
 
