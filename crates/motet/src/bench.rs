@@ -164,8 +164,8 @@ pub fn bench(
         if let Some(n) = instructions {
             match crate::bench_instructions::measure(&run_machine, &data, n, &scratch)? {
                 Some(p) => println!(
-                    "instructions per step (callgrind, `motet run` on the first {n} lines, {} steps): nodes {:.0}, observer {:.0}, whole run {:.0}",
-                    p.steps, p.node, p.observer, p.whole
+                    "instructions per step (callgrind, `motet run` on the first {n} lines, {} steps): nodes {:.0} (of which the step solve {:.0}), observer {:.0}, whole run {:.0}",
+                    p.steps, p.node, p.solve, p.observer, p.whole
                 ),
                 None => println!(
                     "instructions per step: valgrind is not installed (Debian: apt-get install valgrind)"

@@ -19,6 +19,10 @@ pub struct PerStep {
     /// The nodes (`Node::poll`, inclusive): solving every step and handing
     /// it out in time order.
     pub node: f64,
+    /// Of the nodes' share, the step solve (`Channel::solve_ahead`,
+    /// inclusive): each step's time from the segment's profile and joint
+    /// path, the arithmetic firmware runs per step.
+    pub solve: f64,
     /// The observer (`Plant::apply`, inclusive): checking every step and
     /// recording the executed path.
     pub observer: f64,
@@ -29,6 +33,7 @@ pub struct PerStep {
 
 /// The function names (as callgrind_annotate prints them) of the parts.
 const NODE: &str = "motet_node::node::Node<_,_>::poll";
+const SOLVE: &str = "motet_node::channel::Channel::solve_ahead";
 const OBSERVER: &str = "motet_sim::plant::Plant::apply";
 const TOTAL: &str = "PROGRAM TOTALS";
 
@@ -119,6 +124,7 @@ fn per_step(annotated: &str, steps: u64) -> Result<PerStep> {
     Ok(PerStep {
         steps,
         node: per(get(NODE)?),
+        solve: per(get(SOLVE)?),
         observer: per(get(OBSERVER)?),
         whole: per(get(TOTAL)?),
     })
@@ -157,6 +163,7 @@ Ir                     file:function
 --------------------------------------------------------------------------------
 1,011,390,312 (24.00%)  crates/motet-node/src/node.rs:motet_node::node::Node<_,_>::poll [/x/motet]
 1,011,000,000 (23.99%)  /x/crates/motet-node/src/node.rs:motet_node::node::Node<_,_>::poll
+  300,000,000 ( 7.12%)  crates/motet-node/src/channel.rs:motet_node::channel::Channel::solve_ahead [/x/motet]
   742,233,171 (17.61%)  crates/motet-sim/src/plant.rs:motet_sim::plant::Plant::apply [/x/motet]
   100,000,000 ( 2.37%)  crates/motet-sim/src/plant.rs:motet_sim::plant::Plant::apply_more [/x/motet]
 ";
@@ -165,6 +172,7 @@ Ir                     file:function
     fn reads_the_parts_per_step() {
         let p = per_step(LISTING, 1_000_000).unwrap();
         assert_eq!(p.node, 1011.390312);
+        assert_eq!(p.solve, 300.0);
         assert_eq!(p.observer, 742.233171);
         assert_eq!(p.whole, 4213.790249);
     }
