@@ -4,7 +4,7 @@
 use motet_host::Machine;
 use motet_planner::{Command, Located, Planned, Planner};
 use motet_sim::{SimError, SimMachine};
-use motet_trajectory::{JointMap, Point};
+use motet_trajectory::Point;
 
 /// Planned items (segments and events) looked at per job: enough for every
 /// kind of junction, arc and event, and quick.
@@ -75,7 +75,7 @@ fn move_steps(machine: &Machine, from: &Point, to: &Point) -> f64 {
         .map(|a| {
             let map = &machine.joints[a.joint].map;
             let mut d = (map.value(to, 0.0) - map.value(from, 0.0)).abs();
-            if let JointMap::PolarAngle { .. } = map {
+            if map.is_angle() {
                 d = d.min(180.0);
             }
             d * a.steps_per_unit.abs()

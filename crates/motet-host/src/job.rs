@@ -116,7 +116,10 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Str
             ));
         }
     }
-    if let (KinematicsKind::Polar, Some((x, y))) = (machine.kinematics, machine.xy) {
+    if let Some((x, y)) = machine.xy {
+        check_reach(machine.kinematics, (from[x], from[y]), (to[x], to[y]))?;
+    }
+    if let (KinematicsKind::Polar(_), Some((x, y))) = (machine.kinematics, machine.xy) {
         let (px, py) = (from[x], from[y]);
         let (wx, wy) = (to[x] - px, to[y] - py);
         let ww = wx * wx + wy * wy;
@@ -130,6 +133,39 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Str
             return Err(format!(
                 "move passes {:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {} mm",
                 d, machine.min_radius
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Points per millimetre of a move at which an arm's reach is checked, and
+/// the most per move: the kinematics' singularity margins are far wider
+/// than a millimetre's worth of joint motion.
+const REACH_PER_MM: f64 = 1.0;
+const REACH_MAX_POINTS: usize = 4096;
+
+/// Whether every point of the straight move from `a` to `b` in the plane is
+/// within the arms' reach, clear of singularities (kinematics whose joints
+/// are not linear and have no closed form: arms and linkages).
+fn check_reach(kin: KinematicsKind, a: (f64, f64), b: (f64, f64)) -> Result<(), String> {
+    if kin.joints().is_empty()
+        || kin.linear(0).is_some()
+        || kin.closed_form(0, a, (0.0, 0.0), 0.0).is_some()
+    {
+        return Ok(());
+    }
+    let length = (b.0 - a.0).hypot(b.1 - a.1);
+    let n = ((length * REACH_PER_MM).ceil() as usize).clamp(1, REACH_MAX_POINTS);
+    for k in 0..=n {
+        let t = k as f64 / n as f64;
+        let (px, py) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+        if let Err(why) = kin.reach(px, py) {
+            return Err(format!(
+                "move passes ({}, {}), {why} of the {} kinematics",
+                rounded(px),
+                rounded(py),
+                kin.name()
             ));
         }
     }

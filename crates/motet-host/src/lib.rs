@@ -5,6 +5,7 @@ pub mod distribute;
 pub mod job;
 pub mod machine;
 mod machine_file;
+mod machine_kinematics;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck};

@@ -37,8 +37,14 @@ fn joint_speed_bound(j: &Joint, axes: &[Axis]) -> Option<f64> {
                 .map(|(i, c)| c.abs() * v(i))
                 .sum::<f64>(),
         ),
-        JointMap::PolarRadius { x, y } => Some(v(x as usize).hypot(v(y as usize))),
-        JointMap::PolarAngle { .. } => None,
+        // A polar radius moves no faster than the planar speed.
+        JointMap::Plane {
+            kinematics: KinematicsKind::Polar(_),
+            joint: 0,
+            x,
+            y,
+        } => Some(v(x as usize).hypot(v(y as usize))),
+        JointMap::Plane { .. } => None,
     };
     match (j.max_velocity, derived) {
         (Some(a), Some(b)) => Some(a.min(b)),
@@ -291,9 +297,19 @@ impl Machine {
             let spu = a.steps_per_unit.abs();
             let per_unit = match self.joints[a.joint].map {
                 JointMap::Linear { coeffs } => coeffs.get(axis).map_or(0.0, |c| c.abs()),
-                JointMap::PolarRadius { x, y } if [x, y].contains(&(axis as u8)) => 1.0,
+                JointMap::Plane {
+                    kinematics: KinematicsKind::Polar(_),
+                    joint: 0,
+                    x,
+                    y,
+                } if [x, y].contains(&(axis as u8)) => 1.0,
                 // Degrees per mm of x or y at the closest allowed radius.
-                JointMap::PolarAngle { x, y } if [x, y].contains(&(axis as u8)) => {
+                JointMap::Plane {
+                    kinematics: KinematicsKind::Polar(_),
+                    x,
+                    y,
+                    ..
+                } if [x, y].contains(&(axis as u8)) => {
                     if self.min_radius > 0.0 {
                         1.0f64.to_degrees() / self.min_radius
                     } else {
@@ -316,18 +332,9 @@ impl Machine {
 
 fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, MachineError> {
     let m = &raw.motion;
-    let kinematics = match m.kinematics.get_ref().as_str() {
-        "cartesian" => KinematicsKind::Cartesian,
-        "corexy" => KinematicsKind::CoreXY,
-        "hbot" => KinematicsKind::HBot,
-        "polar" => KinematicsKind::Polar,
-        other => {
-            return Err(src.err(
-                m.kinematics.span(),
-                format!("unknown kinematics `{other}`; expected cartesian, corexy, hbot or polar"),
-            ))
-        }
-    };
+    let kinematics =
+        crate::machine_kinematics::kinematics_from(&m.kinematics, raw.geometry.as_ref())
+            .map_err(|(span, message)| src.err(span, message))?;
     let profile = match m.profile.get_ref().as_str() {
         "trapezoid" => ProfileKind::Trapezoid,
         "scurve" => ProfileKind::SCurve,
@@ -448,7 +455,7 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
     let axis_index = |n: &str| axes.iter().position(|a| a.name == n);
 
     // Joints: the kinematics replaces x and y; every other axis is its own joint.
-    let xy = if kinematics == KinematicsKind::Cartesian {
+    let xy = if kinematics.joints().is_empty() {
         None
     } else {
         match (axis_index("x"), axis_index("y")) {
@@ -465,12 +472,12 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
     // Where each joint comes from, for "no actuator" errors.
     let mut joint_spans = Vec::new();
     if let Some((x, y)) = xy {
-        for (j, name) in kinematics.xy_joints().iter().enumerate() {
+        for (j, spec) in kinematics.joints().iter().enumerate() {
             joint_spans.push(m.kinematics.span());
-            let angle = kinematics.joint_is_angle(j);
+            let angle = spec.angle;
             joints.push(Joint {
-                name: (*name).to_string(),
-                map: kinematics.xy_joint_map(j, x, y),
+                name: spec.name.to_string(),
+                map: kinematics.joint_map(j, x, y),
                 unit: if angle {
                     Unit::Degree
                 } else {
@@ -830,7 +837,20 @@ fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, Machine
         }
         start[i] = *v;
     }
-    if let (KinematicsKind::Polar, Some((x, y))) = (kinematics, xy) {
+    if let Some((x, y)) = xy {
+        if let Err(why) = kinematics.reach(start[x], start[y]) {
+            return Err(src.err(
+                m.start.span(),
+                format!(
+                    "[motion] start ({}, {}) is {why} of the {} kinematics; set [motion] start = {{ x = …, y = … }}",
+                    start[x],
+                    start[y],
+                    kinematics.name()
+                ),
+            ));
+        }
+    }
+    if let (KinematicsKind::Polar(_), Some((x, y))) = (kinematics, xy) {
         if start[x].hypot(start[y]) < *m.min_radius.get_ref() {
             return Err(src.err(
                 m.kinematics.span(),

@@ -15,6 +15,9 @@ pub struct MachineFile {
     pub description: Option<String>,
     #[serde(default)]
     pub motion: MotionFile,
+    /// The kinematics' geometry (arm lengths and the like).
+    #[serde(default)]
+    pub geometry: Option<crate::machine_kinematics::GeometryFile>,
     pub axes: BTreeMap<String, Spanned<AxisFile>>,
     pub actuators: BTreeMap<String, Spanned<ActuatorFile>>,
     #[serde(default)]

@@ -302,7 +302,7 @@ fn a_planned_job_is_routed_consistently() {
                 // Around the middle of the travel, away from any polar centre.
                 let phase = k as f64 * 0.7 + i as f64;
                 target[i] = lo + (hi - lo) * (0.5 + 0.3 * phase.sin());
-                if m.kinematics == KinematicsKind::Polar && i < 2 {
+                if m.kinematics == KinematicsKind::POLAR && i < 2 {
                     let angle = k as f64 * 0.4;
                     target[i] = 80.0 * if i == 0 { angle.cos() } else { angle.sin() };
                 }

@@ -3,6 +3,7 @@
 
 use motet_host::Machine;
 use motet_planner::ToolKind;
+use motet_trajectory::kinematics::{FiveBar, Scara};
 use motet_trajectory::{JointMap, KinematicsKind, ProfileKind, MAX_AXES};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -48,8 +49,63 @@ struct Expect {
 const GT2_20: f64 = 3200.0 / 40.0; // 20 teeth × 2 mm, 1.8°, 1/16
 const EXAMPLES: &[Expect] = &[
     Expect {
+        file: "scara.toml",
+        kinematics: KinematicsKind::Scara(Scara {
+            l1: 150.0,
+            l2: 120.0,
+            elbow: 1.0,
+        }),
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [-270.0, 270.0], true, None),
+            ("y", [-270.0, 270.0], true, None),
+        ],
+        joints: &["shoulder", "elbow"],
+        actuators: &[
+            ("elbow_motor", "elbow", 5.0 * 3200.0 / 360.0),
+            ("shoulder_motor", "shoulder", 5.0 * 3200.0 / 360.0),
+        ],
+        tools: &[("pen", ToolKind::Pen, 0.1, true)],
+        nodes: &[("arm", &["shoulder_motor", "elbow_motor"], &["pen"])],
+        start: &[150.0, 80.0],
+        joint_limits: &[("shoulder", 120.0, 1200.0), ("elbow", 120.0, 1200.0)],
+        draw_feed: 40.0,
+        tolerance: 0.01,
+        junction_deviation: 0.02,
+        min_radius: 1.0,
+    },
+    Expect {
+        file: "fivebar.toml",
+        kinematics: KinematicsKind::FiveBar(FiveBar {
+            s: 60.0,
+            l1: 80.0,
+            l2: 80.0,
+            l3: 120.0,
+            l4: 120.0,
+            ext: 0.0,
+        }),
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [-100.0, 160.0], true, None),
+            ("y", [0.0, 220.0], true, None),
+        ],
+        joints: &["theta1", "theta2"],
+        actuators: &[
+            ("left_motor", "theta1", 4.0 * 3200.0 / 360.0),
+            ("right_motor", "theta2", 4.0 * 3200.0 / 360.0),
+        ],
+        tools: &[("pen", ToolKind::Pen, 0.1, true)],
+        nodes: &[("arm", &["left_motor", "right_motor"], &["pen"])],
+        start: &[30.0, 130.0],
+        joint_limits: &[("theta1", 150.0, 1500.0), ("theta2", 150.0, 1500.0)],
+        draw_feed: 30.0,
+        tolerance: 0.01,
+        junction_deviation: 0.02,
+        min_radius: 1.0,
+    },
+    Expect {
         file: "printer.toml",
-        kinematics: KinematicsKind::Cartesian,
+        kinematics: KinematicsKind::CARTESIAN,
         profile: ProfileKind::Trapezoid,
         axes: &[
             ("x", [0.0, 220.0], true, None),
@@ -80,7 +136,7 @@ const EXAMPLES: &[Expect] = &[
     },
     Expect {
         file: "plotter.toml",
-        kinematics: KinematicsKind::CoreXY,
+        kinematics: KinematicsKind::COREXY,
         profile: ProfileKind::Trapezoid,
         axes: &[
             ("x", [0.0, 300.0], true, None),
@@ -102,7 +158,7 @@ const EXAMPLES: &[Expect] = &[
     },
     Expect {
         file: "laser.toml",
-        kinematics: KinematicsKind::Cartesian,
+        kinematics: KinematicsKind::CARTESIAN,
         profile: ProfileKind::Trapezoid,
         axes: &[
             ("x", [0.0, 400.0], true, None),
@@ -125,7 +181,7 @@ const EXAMPLES: &[Expect] = &[
     },
     Expect {
         file: "clay-printer.toml",
-        kinematics: KinematicsKind::Polar,
+        kinematics: KinematicsKind::POLAR,
         profile: ProfileKind::Trapezoid,
         axes: &[
             ("x", [-150.0, 150.0], true, None),
@@ -156,7 +212,7 @@ const EXAMPLES: &[Expect] = &[
     },
     Expect {
         file: "gestalt-3axis.toml",
-        kinematics: KinematicsKind::Cartesian,
+        kinematics: KinematicsKind::CARTESIAN,
         profile: ProfileKind::SCurve,
         axes: &[
             ("x", [0.0, 150.0], true, Some(8000.0)),
@@ -233,7 +289,7 @@ fn check(e: &Expect) -> Vec<String> {
     let joints: Vec<&str> = m.joints.iter().map(|j| j.name.as_str()).collect();
     want(joints == e.joints, format!("joints {joints:?}"));
     match (m.kinematics, m.xy) {
-        (KinematicsKind::Cartesian, xy) => {
+        (KinematicsKind::Cartesian(_), xy) => {
             want(xy.is_none(), format!("cartesian xy {xy:?}"));
             for (i, j) in m.joints.iter().enumerate() {
                 want(
@@ -242,7 +298,7 @@ fn check(e: &Expect) -> Vec<String> {
                 );
             }
         }
-        (KinematicsKind::CoreXY, Some((0, 1))) => {
+        (KinematicsKind::CoreXY(_), Some((0, 1))) => {
             let mut a = [0.0; MAX_AXES];
             let mut b = [0.0; MAX_AXES];
             (a[0], a[1], b[0], b[1]) = (1.0, 1.0, 1.0, -1.0);
@@ -255,17 +311,25 @@ fn check(e: &Expect) -> Vec<String> {
                 format!("corexy b {:?}", m.joints[1].map),
             );
         }
-        (KinematicsKind::Polar, Some((0, 1))) => {
+        (KinematicsKind::Polar(_), Some((0, 1))) => {
             want(
-                m.joints[0].map == JointMap::PolarRadius { x: 0, y: 1 },
+                m.joints[0].map == JointMap::polar_radius(0, 1),
                 format!("polar r {:?}", m.joints[0].map),
             );
             want(
-                m.joints[1].map == JointMap::PolarAngle { x: 0, y: 1 },
+                m.joints[1].map == JointMap::polar_angle(0, 1),
                 format!("polar theta {:?}", m.joints[1].map),
             );
             want(m.joints[2].map == JointMap::axis(2), "polar z".into());
             want(m.joints[3].map == JointMap::axis(3), "polar e".into());
+        }
+        (k @ (KinematicsKind::Scara(_) | KinematicsKind::FiveBar(_)), Some((0, 1))) => {
+            for j in 0..2 {
+                want(
+                    m.joints[j].map == k.joint_map(j, 0, 1),
+                    format!("{} joint {j}: {:?}", k.name(), m.joints[j].map),
+                );
+            }
         }
         (k, xy) => want(false, format!("{k:?} with xy {xy:?}")),
     }

@@ -40,7 +40,6 @@ pub struct Channel {
     /// Index of the segment being followed, relative to the queue's head.
     seg: usize,
     path: Option<JointPath>,
-    turn: Option<f64>,
     /// Distance into the current segment up to which steps are found.
     s: f64,
     /// The current leg: the stretch of the segment up to its turning point
@@ -130,7 +129,6 @@ impl Channel {
             position: 0,
             seg: 0,
             path: None,
-            turn: None,
             s: 0.0,
             leg: Leg::NONE,
             timer: TimeCursor::START,
@@ -152,7 +150,14 @@ impl Channel {
 
     /// Sets the step count from the machine at rest at `p`, without stepping.
     pub fn set_position(&mut self, p: &motet_trajectory::Point) {
-        let value = self.config.map.value(p, self.joint_ref);
+        // A point out of an arm's reach (the origin, before the host sets
+        // the start) leaves no value to keep an angle's turn by.
+        let reference = if self.joint_ref.is_finite() {
+            self.joint_ref
+        } else {
+            0.0
+        };
+        let value = self.config.map.value(p, reference);
         self.joint_ref = value;
         self.position = libm_round(value * self.spu);
         self.seg = 0;
@@ -324,7 +329,6 @@ impl Channel {
             return false;
         }
         let p = JointPath::new(&self.config.map, seg, self.joint_ref);
-        self.turn = p.turning_point();
         self.s = 0.0;
         self.path = Some(p);
         self.timer = TimeCursor::START;
@@ -356,10 +360,7 @@ impl Channel {
         let Some(path) = self.path.as_ref() else {
             return;
         };
-        let hi = match self.turn {
-            Some(t) if self.s < t => t,
-            _ => path.length(),
-        };
+        let hi = path.next_turn(self.s).unwrap_or(path.length());
         let line = path.line().map(|(a0, k)| {
             let rate = k * self.spu;
             let per_step = if rate == 0.0 { 0.0 } else { 1.0 / rate };

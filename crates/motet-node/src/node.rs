@@ -776,7 +776,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.channels.iter().all(|ch| {
             let c = ch.config();
             let mut travel = JointPath::new(&c.map, seg, 0.0).max_rate(0.0, length) * length;
-            if let JointMap::PolarAngle { .. } = c.map {
+            if c.map.is_angle() {
                 // A straight line subtends less than half a turn.
                 travel = travel.min(180.0);
             }
@@ -1198,12 +1198,7 @@ fn segment_is_finite(m: &SegmentMsg) -> bool {
 /// the next SetPosition or poll), a non-finite coefficient makes every joint
 /// value NaN (a channel that silently never steps).
 fn map_is_valid(map: &JointMap) -> bool {
-    match *map {
-        JointMap::Linear { coeffs } => coeffs.iter().all(|c| c.is_finite()),
-        JointMap::PolarRadius { x, y } | JointMap::PolarAngle { x, y } => {
-            (x as usize) < MAX_AXES && (y as usize) < MAX_AXES
-        }
-    }
+    map.is_valid()
 }
 
 /// The first frame of a graph committed when the node had run up to `now`:

@@ -105,14 +105,14 @@ fn check_steps(
 }
 
 fn all_kinds(spu: [f64; 7]) -> Vec<ChannelConfig> {
-    let k = KinematicsKind::CoreXY;
+    let k = KinematicsKind::COREXY;
     vec![
         channel(0, JointMap::axis(0), spu[0]),
         channel(1, JointMap::axis(1), spu[1]),
-        channel(2, k.xy_joint_map(0, 0, 1), spu[2]),
-        channel(3, k.xy_joint_map(1, 0, 1), spu[3]),
-        channel(4, JointMap::PolarRadius { x: 0, y: 1 }, spu[4]),
-        channel(5, JointMap::PolarAngle { x: 0, y: 1 }, spu[5]),
+        channel(2, k.joint_map(0, 0, 1), spu[2]),
+        channel(3, k.joint_map(1, 0, 1), spu[3]),
+        channel(4, JointMap::polar_radius(0, 1), spu[4]),
+        channel(5, JointMap::polar_angle(0, 1), spu[5]),
         channel(6, JointMap::axis(2), spu[6]),
     ]
 }
@@ -240,12 +240,12 @@ proptest! {
 #[test]
 fn linear_maps_through_the_origin() {
     let spu = [40.0, -40.0, 25.0, -25.0];
-    let k = KinematicsKind::CoreXY;
+    let k = KinematicsKind::COREXY;
     let configs = vec![
         channel(0, JointMap::axis(0), spu[0]),
         channel(1, JointMap::axis(1), spu[1]),
-        channel(2, k.xy_joint_map(0, 0, 1), spu[2]),
-        channel(3, k.xy_joint_map(1, 0, 1), spu[3]),
+        channel(2, k.joint_map(0, 0, 1), spu[2]),
+        channel(3, k.joint_map(1, 0, 1), spu[3]),
     ];
     let cmds: Vec<Command> = vec![
         feed(-60.0, 0.0, 1.0, 100.0),

@@ -86,15 +86,8 @@ fn bad_channels() -> Vec<ChannelConfig> {
         out.push(channel(0, JointMap::axis(0), spu));
     }
     // Maps that name axes a point does not have, or have non-finite coefficients.
-    out.push(channel(
-        0,
-        JointMap::PolarRadius {
-            x: MAX_AXES as u8,
-            y: 1,
-        },
-        40.0,
-    ));
-    out.push(channel(1, JointMap::PolarAngle { x: 0, y: 200 }, 8.0));
+    out.push(channel(0, JointMap::polar_radius(MAX_AXES as u8, 1), 40.0));
+    out.push(channel(1, JointMap::polar_angle(0, 200), 8.0));
     let mut coeffs = [0.0; MAX_AXES];
     coeffs[1] = f64::NAN;
     out.push(channel(2, JointMap::Linear { coeffs }, 40.0));
@@ -527,8 +520,8 @@ fn small() -> impl Strategy<Value = f64> {
 fn arb_map() -> impl Strategy<Value = JointMap> {
     prop_oneof![
         prop::array::uniform6(small()).prop_map(|coeffs| JointMap::Linear { coeffs }),
-        (0..10u8, 0..10u8).prop_map(|(x, y)| JointMap::PolarRadius { x, y }),
-        (0..10u8, 0..10u8).prop_map(|(x, y)| JointMap::PolarAngle { x, y }),
+        (0..10u8, 0..10u8).prop_map(|(x, y)| JointMap::polar_radius(x, y)),
+        (0..10u8, 0..10u8).prop_map(|(x, y)| JointMap::polar_angle(x, y)),
     ]
 }
 

@@ -223,8 +223,8 @@ proptest! {
 
     #[test]
     fn corexy_motor_limits_hold(moves in arb_moves()) {
-        let kin = KinematicsKind::CoreXY;
-        let joints = (0..2).map(|j| JointLimits { map: kin.xy_joint_map(j, 0, 1), max_velocity: 150.0, max_acceleration: 1500.0 }).collect();
+        let kin = KinematicsKind::COREXY;
+        let joints = (0..2).map(|j| JointLimits { map: kin.joint_map(j, 0, 1), max_velocity: 150.0, max_acceleration: 1500.0 }).collect();
         let l = limits(ProfileKind::Trapezoid, joints);
         let (cmds, targets) = absolute(&moves);
         let segs = segments(&plan(&l, &cmds, false));
@@ -235,8 +235,8 @@ proptest! {
     #[test]
     fn polar_joint_limits_hold(moves in arb_moves()) {
         let joints = vec![
-            JointLimits { map: JointMap::PolarRadius { x: 0, y: 1 }, max_velocity: 100.0, max_acceleration: 1000.0 },
-            JointLimits { map: JointMap::PolarAngle { x: 0, y: 1 }, max_velocity: 360.0, max_acceleration: 3600.0 },
+            JointLimits { map: JointMap::polar_radius(0, 1), max_velocity: 100.0, max_acceleration: 1000.0 },
+            JointLimits { map: JointMap::polar_angle(0, 1), max_velocity: 360.0, max_acceleration: 3600.0 },
         ];
         let l = limits(ProfileKind::Trapezoid, joints);
         // Keep away from the centre, where the angle is undefined.

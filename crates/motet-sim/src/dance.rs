@@ -675,7 +675,7 @@ pub fn run_dance_with(
         .collect();
     let kin = machine.kinematics;
     let xy_idx: Option<(usize, usize)> = {
-        let names = kin.xy_joints();
+        let names = kin.joints().iter().map(|j| j.name).collect::<Vec<_>>();
         let (a, b) = if names.is_empty() {
             ("x", "y")
         } else {

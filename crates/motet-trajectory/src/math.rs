@@ -53,3 +53,11 @@ pub fn cos(x: f64) -> f64 {
 pub fn round(x: f64) -> f64 {
     libm::round(x)
 }
+#[inline]
+pub fn acos(x: f64) -> f64 {
+    libm::acos(x)
+}
+#[inline]
+pub fn hypot(x: f64, y: f64) -> f64 {
+    libm::hypot(x, y)
+}

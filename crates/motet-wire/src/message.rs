@@ -355,7 +355,7 @@ mod tests {
             HostMessage::Reset,
             HostMessage::ConfigureChannel(ChannelConfig {
                 channel: 2,
-                map: JointMap::PolarAngle { x: 0, y: 1 },
+                map: JointMap::polar_angle(0, 1),
                 steps_per_unit: -44.4,
                 pulse_us: 2.5,
                 dir_setup_us: 0.0,

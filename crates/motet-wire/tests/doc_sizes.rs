@@ -35,12 +35,25 @@ fn documented_sizes() {
         (
             HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
                 channel: 0,
-                map: motet_trajectory::JointMap::PolarRadius { x: 0, y: 1 },
+                map: motet_trajectory::JointMap::polar_radius(0, 1),
                 steps_per_unit: 80.0,
                 pulse_us: 2.0,
                 dir_setup_us: 1.0,
             }),
-            21,
+            23,
+        ),
+        (
+            HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
+                channel: 0,
+                map: motet_trajectory::KinematicsKind::FiveBar(
+                    motet_trajectory::kinematics::FiveBar::new(60.0, 80.0, 80.0, 120.0, 120.0),
+                )
+                .joint_map(0, 0, 1),
+                steps_per_unit: 80.0,
+                pulse_us: 2.0,
+                dir_setup_us: 1.0,
+            }),
+            71,
         ),
         (
             HostMessage::ConfigureChannel(motet_wire::ChannelConfig {

@@ -26,6 +26,8 @@ const EXAMPLES: &[(&str, &str)] = &[
     ("laser.toml", "laser-badge.gcode"),
     ("clay-printer.toml", "clay-vase.gcode"),
     ("gestalt-3axis.toml", "gestalt-3d.gcode"),
+    ("scara.toml", "scara-star.gcode"),
+    ("fivebar.toml", "fivebar-star.gcode"),
 ];
 
 #[test]

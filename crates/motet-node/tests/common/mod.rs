@@ -224,12 +224,12 @@ pub fn cartesian() -> Machine {
 }
 
 pub fn corexy() -> Machine {
-    let k = KinematicsKind::CoreXY;
+    let k = KinematicsKind::COREXY;
     Machine {
         name: "corexy",
         channels: vec![
-            channel(0, k.xy_joint_map(0, 0, 1), 40.0),
-            channel(1, k.xy_joint_map(1, 0, 1), -40.0),
+            channel(0, k.joint_map(0, 0, 1), 40.0),
+            channel(1, k.joint_map(1, 0, 1), -40.0),
             channel(2, JointMap::axis(2), -200.0),
         ],
         tools: default_tools(),
@@ -241,8 +241,8 @@ pub fn polar() -> Machine {
     Machine {
         name: "polar",
         channels: vec![
-            channel(0, JointMap::PolarRadius { x: 0, y: 1 }, 40.0),
-            channel(1, JointMap::PolarAngle { x: 0, y: 1 }, -8.0),
+            channel(0, JointMap::polar_radius(0, 1), 40.0),
+            channel(1, JointMap::polar_angle(0, 1), -8.0),
             channel(2, JointMap::axis(2), 200.0),
         ],
         tools: default_tools(),

@@ -1,0 +1,23 @@
+; A square, a star and a circle for the five-bar drawing arm.
+G21 G90
+G0 X0.000 Y100.000
+M3 S1000                     ; pen down
+G1 X60.000 Y100.000 F1800
+G1 X60.000 Y160.000 F1800
+G1 X0.000 Y160.000 F1800
+G1 X0.000 Y100.000 F1800
+M5                           ; pen up
+G0 X30.000 Y154.000           ; a five-pointed star
+M3 S1000
+G1 X44.107 Y110.584
+G1 X7.175 Y137.416
+G1 X52.825 Y137.416
+G1 X15.893 Y110.584
+G1 X30.000 Y154.000
+M5
+G0 X50.000 Y130.000           ; a circle in two arcs
+M3 S1000
+G3 X10.000 Y130.000 I-20.000 J0
+G3 X50.000 Y130.000 I20.000 J0
+M5
+G0 X30.000 Y130.000

@@ -1,0 +1,23 @@
+; A square, a star and a circle for the SCARA arm, across most of its reach.
+G21 G90
+G0 X100.000 Y30.000
+M3 S1000                     ; pen down
+G1 X200.000 Y30.000 F2400
+G1 X200.000 Y130.000 F2400
+G1 X100.000 Y130.000 F2400
+G1 X100.000 Y30.000 F2400
+M5                           ; pen up
+G0 X150.000 Y120.000           ; a five-pointed star
+M3 S1000
+G1 X173.511 Y47.639
+G1 X111.958 Y92.361
+G1 X188.042 Y92.361
+G1 X126.489 Y47.639
+G1 X150.000 Y120.000
+M5
+G0 X180.000 Y80.000           ; a circle in two arcs
+M3 S1000
+G3 X120.000 Y80.000 I-30.000 J0
+G3 X180.000 Y80.000 I30.000 J0
+M5
+G0 X150.000 Y80.000
