@@ -13,6 +13,7 @@ use crate::codes::{
 use crate::lex::{code10, number, Lexer, Word};
 
 impl Interp {
+    /// Reads one line into its words and executes it.
     pub(crate) fn line(&mut self, line: &str, line_no: u32) -> Result<(), SourceError> {
         self.line.clear();
         self.line.push_str(line);
@@ -54,68 +55,67 @@ impl Interp {
                         );
                     }
                 }
-                l => {
-                    let slot = match l {
-                        b'I' => &mut w.ijk[0],
-                        b'J' => &mut w.ijk[1],
-                        b'K' => &mut w.ijk[2],
-                        b'R' => &mut w.r,
-                        b'F' => &mut w.f,
-                        b'S' => &mut w.s,
-                        b'P' => &mut w.p,
-                        b'L' => &mut w.l,
-                        _ => match axis_slot(l) {
-                            Some(s) => {
-                                if self.letter_axis[s].is_none() {
-                                    return Err(self.error(
-                                        word.at,
-                                        format!(
-                                            "axis {} is not on this machine (axes: {})",
-                                            l as char,
-                                            self.axes_list()
-                                        ),
-                                    ));
-                                }
-                                &mut w.axes[s]
-                            }
-                            None => {
-                                let what = format!("unsupported word {}{}", l as char, word.text);
-                                self.unknown(word, what)?;
-                                w.unknown_g = true;
-                                continue;
-                            }
-                        },
-                    };
-                    if slot.is_some() {
-                        return Err(self
-                            .error(word.at, format!("{} appears twice on this line", l as char)));
-                    }
-                    let value = if word.text.is_empty() {
-                        if axis_slot(l).is_none() {
-                            return Err(
-                                self.error(word.at, format!("{} without a number", l as char))
-                            );
-                        }
-                        None
-                    } else {
-                        match number(word.text) {
-                            Some(v) => Some(v),
-                            None => {
-                                return Err(self.error(
-                                    word.at,
-                                    format!(
-                                        "bad number '{}' in {}{}",
-                                        word.text, l as char, word.text
-                                    ),
-                                ))
-                            }
-                        }
-                    };
-                    *slot = Some(Param { value, at: word.at });
-                }
+                _ => self.param_word(&mut w, word)?,
             }
         }
         self.execute(&w)
+    }
+
+    /// A parameter word (axis, I J K R F S P L) into its slot, once per line.
+    fn param_word(&mut self, w: &mut Words, word: Word<'_>) -> Result<(), SourceError> {
+        let l = word.letter;
+        let slot = match l {
+            b'I' => &mut w.ijk[0],
+            b'J' => &mut w.ijk[1],
+            b'K' => &mut w.ijk[2],
+            b'R' => &mut w.r,
+            b'F' => &mut w.f,
+            b'S' => &mut w.s,
+            b'P' => &mut w.p,
+            b'L' => &mut w.l,
+            _ => match axis_slot(l) {
+                Some(s) => {
+                    if self.letter_axis[s].is_none() {
+                        return Err(self.error(
+                            word.at,
+                            format!(
+                                "axis {} is not on this machine (axes: {})",
+                                l as char,
+                                self.axes_list()
+                            ),
+                        ));
+                    }
+                    &mut w.axes[s]
+                }
+                None => {
+                    let what = format!("unsupported word {}{}", l as char, word.text);
+                    self.unknown(word, what)?;
+                    w.unknown_g = true;
+                    return Ok(());
+                }
+            },
+        };
+        if slot.is_some() {
+            return Err(self.error(word.at, format!("{} appears twice on this line", l as char)));
+        }
+        let value = if word.text.is_empty() {
+            if axis_slot(l).is_none() {
+                return Err(self.error(word.at, format!("{} without a number", l as char)));
+            }
+            None
+        } else {
+            match number(word.text) {
+                Some(v) => Some(v),
+                None => {
+                    return Err(self.error(
+                        word.at,
+                        format!("bad number '{}' in {}{}", word.text, l as char, word.text),
+                    ))
+                }
+            }
+        };
+        *slot = Some(Param { value, at: word.at });
+        Ok(())
     }
 }
 

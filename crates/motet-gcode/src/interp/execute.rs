@@ -11,10 +11,39 @@ use crate::block::Words;
 use crate::codes::{Motion, NonModal, Stop};
 
 impl Interp {
+    /// Executes one collected block, in the order of the crate documentation.
     pub(super) fn execute(&mut self, w: &Words) -> Result<(), SourceError> {
         let lenient = w.unknown_g;
-
         // Modes first: they only change how later steps read the words.
+        self.set_modes(w);
+        self.feed_words(w)?;
+        self.select_extruder(w);
+        // S and M3/M4/M5.
+        self.spindle(w, lenient)?;
+        self.coolant(w);
+        // Printer codes (temperatures, fans, M400).
+        if let Some((pc, code, at, args)) = w.printer {
+            self.printer(pc, code, at, args)?;
+        }
+        self.dwell(w, lenient)?;
+        // Motion mode.
+        if let Some((m, _)) = w.motion {
+            self.motion = Some(m);
+        }
+        let machine_coords = self.group_zero(w, lenient)?;
+        let axes_used = matches!(
+            w.nonmodal,
+            Some((NonModal::Home | NonModal::SetPosition, _))
+        ) || (matches!(w.nonmodal, Some((NonModal::G10, _))) && w.l.is_some());
+        if !axes_used {
+            self.motion(w, machine_coords)?;
+        }
+        self.stop(w);
+        Ok(())
+    }
+
+    /// Units, plane, distance modes and coordinate system.
+    fn set_modes(&mut self, w: &Words) {
         if let Some((inch, _)) = w.units {
             self.inch = inch;
         }
@@ -36,8 +65,10 @@ impl Interp {
                 self.update_offset();
             }
         }
+    }
 
-        // Feed mode, then F.
+    /// G93/G94, then F (read in this line's units).
+    fn feed_words(&mut self, w: &Words) -> Result<(), SourceError> {
         if let Some((inv, _)) = w.feed_mode {
             if inv != self.inverse_time {
                 self.inverse_time = inv;
@@ -67,8 +98,11 @@ impl Interp {
                 self.feed = Some(f);
             }
         }
+        Ok(())
+    }
 
-        // T: the extruder temperatures apply to.
+    /// T: the extruder temperatures apply to.
+    fn select_extruder(&mut self, w: &Words) {
         if let Some((t, at)) = w.t {
             if t != 0 {
                 self.warn(WarnKey(b'T', 0), at, || {
@@ -77,11 +111,10 @@ impl Interp {
             }
             self.extruder = t;
         }
+    }
 
-        // S and M3/M4/M5.
-        self.spindle(w, lenient)?;
-
-        // M7/M8/M9.
+    /// M7/M8/M9.
+    fn coolant(&mut self, w: &Words) {
         if let Some((v, at)) = w.coolant {
             self.coolant_on = v != 0;
             self.emit(
@@ -93,13 +126,10 @@ impl Interp {
                 },
             );
         }
+    }
 
-        // Printer codes (temperatures, fans, M400).
-        if let Some((pc, code, at, args)) = w.printer {
-            self.printer(pc, code, at, args)?;
-        }
-
-        // G4.
+    /// G4, and P and L words where nothing on the line uses them.
+    fn dwell(&mut self, w: &Words, lenient: bool) -> Result<(), SourceError> {
         if let Some((NonModal::Dwell, at)) = w.nonmodal {
             // With M3/M4 on the line, S is the tool's; otherwise it is seconds.
             let s = if w.spindle.is_some() { None } else { w.s };
@@ -134,13 +164,12 @@ impl Interp {
                 return Err(self.error(l.at, "L is only used with G10"));
             }
         }
+        Ok(())
+    }
 
-        // Motion mode.
-        if let Some((m, _)) = w.motion {
-            self.motion = Some(m);
-        }
-
-        // Group 0 codes that use the axis words or change offsets.
+    /// Group 0 codes that use the axis words or change offsets. Returns
+    /// whether this line's motion is in machine coordinates (G53).
+    fn group_zero(&mut self, w: &Words, lenient: bool) -> Result<bool, SourceError> {
         let mut machine_coords = false;
         match w.nonmodal {
             Some((nm @ (NonModal::Home | NonModal::SetPosition), at)) => {
@@ -184,15 +213,11 @@ impl Interp {
             }
             _ => {}
         }
-        let axes_used = matches!(
-            w.nonmodal,
-            Some((NonModal::Home | NonModal::SetPosition, _))
-        ) || (matches!(w.nonmodal, Some((NonModal::G10, _))) && w.l.is_some());
-        if !axes_used {
-            self.motion(w, machine_coords)?;
-        }
+        Ok(machine_coords)
+    }
 
-        // Stop.
+    /// M0/M1 pause; M2/M30 switch the tool and coolant off and end the program.
+    fn stop(&mut self, w: &Words) {
         if let Some((stop, at)) = w.stop {
             match stop {
                 Stop::Pause => self.emit(at, Command::Pause { optional: false }),
@@ -219,7 +244,6 @@ impl Interp {
                 }
             }
         }
-        Ok(())
     }
 
     /// An explicit motion code with axis words next to a code that uses them.
