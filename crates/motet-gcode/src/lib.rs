@@ -108,10 +108,12 @@
 //!   units/s, so power follows speed. It is emitted again before the next feed
 //!   move whenever that move's feed differs (F changed, or G93) and at once
 //!   when S changes. On a pen or spindle M4 acts as M3, with a warning.
-//! - `M7`/`M8`/`M9`: [`AuxChannel::Coolant`] 1 (mist), 2 (flood), 0 (off).
+//! - `M7`/`M8`/`M9`: [`AuxChannel::Coolant`](motet_planner::AuxChannel::Coolant)
+//!   1 (mist), 2 (flood), 0 (off).
 //! - `M82`/`M83` absolute/relative E.
-//! - `M104 S [T]`, `M109 S|R [T]`: [`AuxChannel::Hotend`] of extruder T (or the
-//!   one selected by the last `T` word), M109 waits. `M140`/`M190` the bed,
+//! - `M104 S [T]`, `M109 S|R [T]`:
+//!   [`AuxChannel::Hotend`](motet_planner::AuxChannel::Hotend) of extruder T
+//!   (or the one selected by the last `T` word), M109 waits. `M140`/`M190` the bed,
 //!   `M141`/`M191` the chamber, the same way. `M106 [P] [S]` fan P (default 0)
 //!   at S/255 (full without S), `M107 [P]` fan off. `M400` [`Command::Sync`].
 //!   These codes read the rest of their line as their own arguments.
