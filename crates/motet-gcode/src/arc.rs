@@ -2,9 +2,20 @@
 
 use core::f64::consts::{FRAC_PI_2, TAU};
 use motet_trajectory::{Point, MAX_AXES};
+use thiserror::Error;
 
 /// Most chords a single arc may be flattened into.
 pub(crate) const MAX_ARC_SEGMENTS: usize = 100_000;
+
+/// Why an arc cannot be flattened.
+#[derive(Clone, Copy, Debug, Error, PartialEq)]
+pub(crate) enum ArcError {
+    /// The sweep at this radius needs more chords than an arc may have.
+    #[error(
+        "arc of radius {radius} needs more than {MAX_ARC_SEGMENTS} chords at tolerance {tolerance}"
+    )]
+    TooManyChords { radius: f64, tolerance: f64 },
+}
 
 /// An arc in machine space: the plane is given by axis indices `x` and `y`;
 /// every other axis moves linearly from `start` to `end` (a helix).
@@ -35,7 +46,7 @@ impl Arc {
         &self,
         tolerance: f64,
         mut emit: impl FnMut(Point),
-    ) -> Result<(), String> {
+    ) -> Result<(), ArcError> {
         let [cx, cy] = self.center;
         let (r0, r1) = self.radii();
         let a0 = (self.start[self.y] - cy).atan2(self.start[self.x] - cx);
@@ -66,9 +77,10 @@ impl Arc {
         };
         let n = (sweep.abs() / max_step).ceil();
         if !n.is_finite() || n > MAX_ARC_SEGMENTS as f64 {
-            return Err(format!(
-                "arc of radius {r} needs more than {MAX_ARC_SEGMENTS} chords at tolerance {tolerance}"
-            ));
+            return Err(ArcError::TooManyChords {
+                radius: r,
+                tolerance,
+            });
         }
         let n = (n as usize).max(1);
         for k in 1..n {

@@ -3,7 +3,8 @@
 //! its radius and then takes them one by one from the front of a vector, so
 //! one arc of radius 1e40 keeps it busy for hours.
 
-use crate::{invalid, ElemInfo};
+use crate::error::invalid;
+use crate::source::ElemInfo;
 use motet_planner::SourceError;
 use std::collections::HashMap;
 use svgtypes::{PathParser, PathSegment};

@@ -554,6 +554,7 @@ fn count(alive: &mut [u32], lo: usize, hi: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     /// Brute force: the nearest alive id, the lowest among equals.
     fn brute(pts: &[[f64; 2]], alive: &[bool], q: [f64; 2]) -> Option<u32> {
@@ -595,6 +596,81 @@ mod tests {
                 tree.remove(k as u32);
                 alive[k] = false;
             }
+        }
+    }
+
+    /// Random stroke sets straight through the optimiser.
+    fn random_shapes(seed: u64, n: usize) -> Vec<(Vec<[f64; 2]>, bool)> {
+        let mut x = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407)
+            | 1;
+        let mut rnd = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let c = [rnd() * 500.0, rnd() * 500.0];
+                let closed = rnd() < 0.5;
+                let k = 2 + (rnd() * 6.0) as usize;
+                let pts = (0..k)
+                    .map(|_| [c[0] + rnd() * 5.0, c[1] + rnd() * 5.0])
+                    .collect();
+                (pts, closed)
+            })
+            .collect()
+    }
+
+    fn check_tour(start: [f64; 2], set: &[(Vec<[f64; 2]>, bool)]) -> (f64, f64) {
+        let shapes: Vec<Shape> = set
+            .iter()
+            .map(|(p, c)| Shape { pts: p, closed: *c })
+            .collect();
+        let tour = optimize(start, &shapes);
+        let mut seen: Vec<usize> = tour.iter().map(|p| p.index).collect();
+        seen.sort_unstable();
+        assert_eq!(
+            seen,
+            (0..set.len()).collect::<Vec<_>>(),
+            "not a permutation"
+        );
+        for p in &tour {
+            let s = &shapes[p.index];
+            assert!(p.rotate < s.pts.len());
+            assert!(!(s.closed && p.reversed));
+            assert!(s.closed || p.rotate == 0);
+        }
+        let before = travel(start, &shapes, &identity(set.len())).0;
+        let after = travel(start, &shapes, &tour).0;
+        (before, after)
+    }
+
+    #[test]
+    fn ordering_many_paths() {
+        for n in [1, 2, 3, 10, 1000, 10_000] {
+            let set = random_shapes(n as u64, n);
+            let t = std::time::Instant::now();
+            let (before, after) = check_tour([0.0, 0.0], &set);
+            println!(
+                "{n} paths: travel {before:.0} -> {after:.0} mm in {:?}",
+                t.elapsed()
+            );
+            assert!(after <= before + 1e-9);
+            if n >= 1000 {
+                assert!(after < 0.2 * before, "{before} -> {after}");
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn optimizer_never_worse(seed in any::<u64>(), n in 1usize..60, start in (0.0f64..500.0, 0.0f64..500.0)) {
+            let set = random_shapes(seed, n);
+            let (before, after) = check_tour([start.0, start.1], &set);
+            prop_assert!(after <= before + 1e-9, "{} -> {}", before, after);
         }
     }
 }
