@@ -7,7 +7,8 @@ use motet_api::reader::MAX_LINE;
 use motet_api::{scan_job, JobOptions, JobReader};
 use motet_host::{check_job, Machine};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempfile::TempDir;
 
 fn machine(name: &str) -> Machine {
     Machine::load(Path::new(&format!(
@@ -17,10 +18,12 @@ fn machine(name: &str) -> Machine {
     .unwrap()
 }
 
-fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-reader-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// An empty scratch folder, removed when dropped.
+fn scratch(tag: &str) -> TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("motet-reader-{tag}-"))
+        .tempdir()
+        .unwrap()
 }
 
 fn gzip(data: &[u8]) -> Vec<u8> {
@@ -70,7 +73,8 @@ fn whole(m: &Machine, data: &[u8]) -> (Vec<motet_planner::Located<motet_planner:
 #[test]
 fn a_file_read_as_a_stream_gives_the_whole_text_parse() {
     let m = machine("plotter.toml");
-    let dir = scratch("same");
+    let tmp = scratch("same");
+    let dir = tmp.path();
     let opts = JobOptions {
         allow_unknown: true,
     };
@@ -107,7 +111,8 @@ fn a_file_read_as_a_stream_gives_the_whole_text_parse() {
 #[test]
 fn errors_name_the_file_and_line() {
     let m = machine("plotter.toml");
-    let dir = scratch("errors");
+    let tmp = scratch("errors");
+    let dir = tmp.path();
     let too_long = {
         let mut d = b"G1 X1 F600\n; ".to_vec();
         d.resize(MAX_LINE + 100, b'x');

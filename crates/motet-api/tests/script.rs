@@ -200,7 +200,11 @@ fn the_machine_can_go_on_after_wait() {
         m.time()
     );
     assert!((get(&m.position(), "x") - 10.0).abs() < 0.01);
-    let dir = std::env::temp_dir().join(format!("motet-api-{}", std::process::id()));
+    let tmp = tempfile::Builder::new()
+        .prefix("motet-api-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path().join("out");
     m.save(&dir).unwrap();
     assert!(dir.join("path.png").exists() && dir.join("report.json").exists());
 }
@@ -331,8 +335,11 @@ fn save_makes_its_folder_but_no_missing_parent() {
     let mut m = machine("plotter.toml");
     m.move_to(&[("x", 10.0)], None).unwrap();
     m.wait().unwrap();
-    let base = std::env::temp_dir().join(format!("motet-api-save-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&base);
+    let tmp = tempfile::Builder::new()
+        .prefix("motet-api-save-")
+        .tempdir()
+        .unwrap();
+    let base = tmp.path().join("base");
     let deep = base.join("missing").join("out");
     let err = m.save(&deep).unwrap_err();
     assert!(matches!(err, ApiError::NoParent { .. }), "{err}");
@@ -345,7 +352,6 @@ fn save_makes_its_folder_but_no_missing_parent() {
     std::fs::create_dir(&base).unwrap();
     m.save(base.join("out")).unwrap();
     assert!(base.join("out/path.png").exists());
-    std::fs::remove_dir_all(&base).unwrap();
 }
 
 #[test]

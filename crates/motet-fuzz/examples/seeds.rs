@@ -128,8 +128,11 @@ fn journals() {
     )
     .expect("drawing");
     let cmds = job.commands[..40].to_vec();
-    let dir = std::env::temp_dir().join(format!("motet-seeds-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp folder");
+    let scratch = tempfile::Builder::new()
+        .prefix("motet-seeds-")
+        .tempdir()
+        .expect("temp folder");
+    let dir = scratch.path();
     for (name, kill_at) in [
         ("run.journal", None),
         ("stopped.journal", Some(4_500_000u64)),
@@ -174,7 +177,6 @@ fn journals() {
             );
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 fn main() {

@@ -181,12 +181,13 @@ mod tests {
                 firmware: "0.1.0".into(),
             },
         );
-        let dir = std::env::temp_dir().join(format!("motet-pairing-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("m.nodes.toml");
+        let dir = tempfile::Builder::new()
+            .prefix("motet-pairing-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("m.nodes.toml");
         f.save(&path).unwrap();
         assert_eq!(PairingFile::load(&path).unwrap(), f);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -206,10 +206,13 @@ mod tests {
 
     #[test]
     fn a_record_reads_back_and_bad_ones_say_what() {
-        let dir = std::env::temp_dir().join(format!("motet-record-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        record().save(&dir).unwrap();
-        assert_eq!(RunRecord::load(&dir).unwrap(), record());
+        let scratch = tempfile::Builder::new()
+            .prefix("motet-record-")
+            .tempdir()
+            .unwrap();
+        let dir = scratch.path();
+        record().save(dir).unwrap();
+        assert_eq!(RunRecord::load(dir).unwrap(), record());
         let text = std::fs::read_to_string(dir.join("resume.toml")).unwrap();
         let cases = [
             ("lead_ms = 100.0", "lead_ms = 1e12", "lead_ms must be from"),
@@ -236,9 +239,8 @@ mod tests {
         ];
         for (from, to, want) in cases {
             std::fs::write(dir.join("resume.toml"), text.replace(from, to)).unwrap();
-            let e = RunRecord::load(&dir).unwrap_err().to_string();
+            let e = RunRecord::load(dir).unwrap_err().to_string();
             assert!(e.contains("resume.toml") && e.contains(want), "{to}: {e}");
         }
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

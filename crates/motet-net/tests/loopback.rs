@@ -224,9 +224,11 @@ fn each_node_tallies_what_the_replay_computes() {
     ] {
         let (m, cmds) = load(machine, job);
         let n = m.nodes.len();
-        let dir = std::env::temp_dir().join(format!("motet-tally-{}-{n}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let jpath = dir.join(format!("journal-{}", m.name.len()));
+        let dir = tempfile::Builder::new()
+            .prefix("motet-tally-")
+            .tempdir()
+            .unwrap();
+        let jpath = dir.path().join(format!("journal-{}", m.name.len()));
         let mut lb = Loopback::with_journal(
             &m,
             cmds.clone(),
@@ -245,6 +247,5 @@ fn each_node_tallies_what_the_replay_computes() {
         let want = motet_net::replay::replay(&m, cmds, &header).unwrap();
         assert_eq!(got, want, "{machine} {job}");
         assert!(got.iter().any(|t| t.steps.iter().sum::<u32>() > 1000));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

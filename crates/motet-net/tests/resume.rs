@@ -17,17 +17,14 @@ use motet_net::{NetConfig, Phase, RunIdentity};
 use motet_planner::{Command, Located};
 use proptest::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU32, Ordering};
+use tempfile::TempDir;
 
-fn temp_dir() -> PathBuf {
-    static N: AtomicU32 = AtomicU32::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "motet-resume-{}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A scratch folder for one run's journal, removed when dropped.
+fn temp_dir() -> TempDir {
+    tempfile::Builder::new()
+        .prefix("motet-resume-")
+        .tempdir()
+        .unwrap()
 }
 
 /// What a stopped run leaves: the files it was made from, its record and
@@ -40,6 +37,8 @@ struct Stopped {
     record: RunRecord,
     journal: String,
     lb: Loopback,
+    /// The folder its journal is written in, kept as long as the run.
+    _dir: TempDir,
 }
 
 impl Stopped {
@@ -75,7 +74,7 @@ fn started(machine: &str, job: &str) -> (Stopped, PathBuf) {
     let identity = RunIdentity::new(Digest::of(machine_text.as_bytes()), Digest::of(&job_bytes));
     let n = m.nodes.len();
     let dir = temp_dir();
-    let jpath = dir.join("journal");
+    let jpath = dir.path().join("journal");
     let mut lb = Loopback::with_journal(
         &m,
         cmds.clone(),
@@ -120,6 +119,7 @@ fn started(machine: &str, job: &str) -> (Stopped, PathBuf) {
             record,
             journal: String::new(),
             lb,
+            _dir: dir,
         },
         jpath,
     )
@@ -201,7 +201,7 @@ fn a_resumed_run_stopped_again_resumes_from_its_own_journal() {
         );
         let r = t.prove(None).unwrap();
         let dir = temp_dir();
-        let jpath = dir.join("journal");
+        let jpath = dir.path().join("journal");
         let identity = RunIdentity::new(t.record.machine_sha256, t.record.job_sha256);
         t.lb.restart_host(
             &t.m,

@@ -9,18 +9,21 @@ use motet_sim::dance::{
     DANCE_TAPE,
 };
 use std::path::{Path, PathBuf};
+use tempfile::TempDir;
 
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/dance/stencil")
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "motet-dance-recording-{}-{name}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+/// A path `name` in an empty scratch folder, which is removed when the
+/// returned guard is dropped.
+fn scratch(name: &str) -> (TempDir, PathBuf) {
+    let d = tempfile::Builder::new()
+        .prefix("motet-dance-recording-")
+        .tempdir()
+        .unwrap();
+    let path = d.path().join(name);
+    (d, path)
 }
 
 fn index(r: &DanceReport, name: &str) -> usize {
@@ -92,7 +95,7 @@ fn stencil_recording_saves_decodes_and_replays() {
     assert_eq!(r.stage_marks[1].stage, "record#1");
 
     // The tape: one byte per frame of the `record` stage.
-    let path = scratch("stencil.rec");
+    let (_tmp, path) = scratch("stencil.rec");
     run.recording.save(&path).unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let len_text = std::fs::read_to_string(Recording::len_path(&path)).unwrap();
@@ -155,12 +158,11 @@ fn stencil_recording_saves_decodes_and_replays() {
         played.channels[index(&played, "ch_y")].position_steps,
         net(counts[1])
     );
-    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }
 
 #[test]
 fn malformed_recordings_name_the_file() {
-    let path = scratch("bad.rec");
+    let (_tmp, path) = scratch("bad.rec");
     std::fs::write(&path, [0b1111u8, 0b1010, 0]).unwrap();
     let lp = Recording::len_path(&path);
     let lps = lp.display().to_string();
@@ -202,5 +204,4 @@ fn malformed_recordings_name_the_file() {
         .unwrap()
         .to_string();
     assert!(e.contains("tape only"), "{e}");
-    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }

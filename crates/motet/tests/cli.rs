@@ -1,19 +1,21 @@
 //! The `motet` command line end to end: outputs on success, located errors on
 //! bad input.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use tempfile::TempDir;
 
 mod common;
 use common::{motet, root};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> TempDir {
     common::scratch("cli", name)
 }
 
 #[test]
 fn run_writes_render_and_report() {
-    let out = scratch("run");
+    let tmp = scratch("run");
+    let out = tmp.path();
     let (ok, stdout, stderr) = motet(&[
         "run",
         "examples/plotter.toml",
@@ -55,7 +57,8 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
 
 #[test]
 fn bad_input_gets_a_located_error_and_no_output() {
-    let dir = scratch("bad");
+    let tmp = scratch("bad");
+    let dir = tmp.path();
     let printer = "examples/printer.toml";
     let plotter = "examples/plotter.toml";
     // (machine, job file name, job text, expected substring of the error)
@@ -69,7 +72,7 @@ fn bad_input_gets_a_located_error_and_no_output() {
         (printer, "job.docx", "hello", "unknown job type"),
     ];
     for (machine, name, text, want) in cases {
-        let job = write(&dir, name, text);
+        let job = write(dir, name, text);
         let out = dir.join(format!("out-{name}"));
         let (ok, _, stderr) = motet(&[
             "run",
@@ -94,7 +97,8 @@ fn bad_input_gets_a_located_error_and_no_output() {
 
 #[test]
 fn bad_machine_file_gets_a_located_error() {
-    let dir = scratch("machine");
+    let tmp = scratch("machine");
+    let dir = tmp.path();
     let good = std::fs::read_to_string(root().join("examples/printer.toml")).unwrap();
     let cases: &[(&str, String, &str)] = &[
         (
@@ -117,7 +121,7 @@ fn bad_machine_file_gets_a_located_error() {
         ),
     ];
     for (name, text, want) in cases {
-        let m = write(&dir, name, text);
+        let m = write(dir, name, text);
         let (ok, _, stderr) = motet(&["check", &m]);
         assert!(!ok, "{name} should fail");
         assert!(
@@ -135,7 +139,8 @@ fn bad_machine_file_gets_a_located_error() {
 #[test]
 fn dance_takes_live_inputs_from_stdin() {
     use std::io::Write;
-    let out = scratch("live");
+    let tmp = scratch("live");
+    let out = tmp.path();
     let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
         .args([
             "dance",
@@ -189,6 +194,7 @@ fn dance_takes_live_inputs_from_stdin() {
 #[test]
 fn a_closed_pipe_is_no_panic() {
     use std::process::{Command, Stdio};
+    let tmp = scratch("pipe");
     let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
         .args([
             "run",
@@ -196,7 +202,7 @@ fn a_closed_pipe_is_no_panic() {
             "examples/jobs/drawing.svg",
             "--out",
         ])
-        .arg(std::env::temp_dir().join(format!("motet-pipe-{}", std::process::id())))
+        .arg(tmp.path().join("out"))
         .current_dir(root())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -212,14 +218,15 @@ fn a_closed_pipe_is_no_panic() {
 /// same steps as a run of the edited file.
 #[test]
 fn bench_microsteps_is_the_edited_machine() {
-    let dir = scratch("microsteps");
+    let tmp = scratch("microsteps");
+    let dir = tmp.path();
     let job = root().join("examples/jobs/printer-vase-layers.gcode");
     let job = job.to_str().unwrap();
     let printer = root().join("examples/printer.toml");
     let text = std::fs::read_to_string(&printer).unwrap();
     assert!(text.contains("microstep = 16"));
     let edited = write(
-        &dir,
+        dir,
         "printer.toml",
         &text.replace("microstep = 16", "microstep = 32"),
     );

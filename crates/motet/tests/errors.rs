@@ -2,16 +2,13 @@
 //! an error that says where, and says each thing once.
 
 use std::collections::HashSet;
-use std::path::PathBuf;
+use tempfile::TempDir;
 
 mod common;
 use common::motet;
 
-fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-errors-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn scratch() -> TempDir {
+    common::scratch("errors", "cases")
 }
 
 /// One bad input: files to write into the scratch folder, the command (`%`
@@ -199,7 +196,8 @@ fn repeated(text: &str) -> Option<String> {
 
 #[test]
 fn every_bad_input_fails_with_a_located_error_said_once() {
-    let dir = scratch();
+    let tmp = scratch();
+    let dir = tmp.path();
     let at = |s: &str| s.replace('%', dir.to_str().unwrap());
     let mut failures = Vec::new();
     for case in CASES {
@@ -236,7 +234,6 @@ fn every_bad_input_fails_with_a_located_error_said_once() {
             let _ = std::fs::remove_file(dir.join(name));
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

@@ -3,12 +3,13 @@
 //! or the flag), before anything runs; coordinates within half a step of the
 //! travel are clamped and counted; reports never hold NaN or infinity.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempfile::TempDir;
 
 mod common;
 use common::{motet, root};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> TempDir {
     common::scratch("extreme", name)
 }
 
@@ -34,7 +35,8 @@ const MOVES: &str = "G21\nG90\nG1 X10 Y10 F600\nM3\nG1 X20 Y20\nM5\n";
 
 #[test]
 fn values_out_of_range_are_refused_where_they_are() {
-    let dir = scratch("refused");
+    let tmp = scratch("refused");
+    let dir = tmp.path();
     let d = dir.display().to_string();
     let days = "G21\nG1 X1 F600\n".to_string() + &"G4 S86400\n".repeat(31);
     // (machine file name and text, job name and text, extra flags, expected
@@ -118,8 +120,8 @@ fn values_out_of_range_are_refused_where_they_are() {
         ),
     ];
     for (mname, mtext, jname, jtext, flags, want) in &cases {
-        let m = write(&dir, mname, mtext);
-        let j = write(&dir, jname, jtext);
+        let m = write(dir, mname, mtext);
+        let j = write(dir, jname, jtext);
         let out = dir.join(format!("out-{jname}"));
         let mut commands = vec![vec!["run", &m, &j, "--out", out.to_str().unwrap()]];
         commands[0].extend(flags.iter());
@@ -224,9 +226,10 @@ fn assert_finite(v: &serde_json::Value, at: &str) {
 fn the_slowest_machine_reports_finite_figures() {
     // The lowest velocity allowed, the longest dwell allowed, a pen that
     // settles for an hour: long, but every figure a number.
-    let dir = scratch("slow");
+    let tmp = scratch("slow");
+    let dir = tmp.path();
     let m = write(
-        &dir,
+        dir,
         "slow.toml",
         &plotter_with("max_velocity = 250", "max_velocity = 0.001").replacen(
             "settle = 0.12",
@@ -234,11 +237,7 @@ fn the_slowest_machine_reports_finite_figures() {
             1,
         ),
     );
-    let j = write(
-        &dir,
-        "slow.gcode",
-        "G21\nG1 X0.01 F600\nM3\nG4 S86400\nM5\n",
-    );
+    let j = write(dir, "slow.gcode", "G21\nG1 X0.01 F600\nM3\nG4 S86400\nM5\n");
     let out = dir.join("out");
     let (ok, stdout, stderr) = motet(&["run", &m, &j, "--out", out.to_str().unwrap()]);
     assert!(ok, "{stderr}");
@@ -258,7 +257,8 @@ fn the_slowest_machine_reports_finite_figures() {
 
 #[test]
 fn strokes_on_the_sheet_edge_are_drawn_and_small_overshoots_clamped() {
-    let dir = scratch("edges");
+    let tmp = scratch("edges");
+    let dir = tmp.path();
     // A millimetre page whose f32 transform put its bottom edge at
     // y = -0.00001 mm; an icon (24 px) whose path starts 0.0117 px (0.0031 mm)
     // left of its box; and one 0.02 px (0.0053 mm) left of it, more than half
@@ -280,7 +280,7 @@ fn strokes_on_the_sheet_edge_are_drawn_and_small_overshoots_clamped() {
         ("far.svg", icon("-0.02"), None),
     ];
     for (name, text, want) in cases {
-        let job = write(&dir, name, &text);
+        let job = write(dir, name, &text);
         let out = dir.join(format!("out-{name}"));
         let (ok, stdout, stderr) = motet(&["run", PLOTTER, &job, "--out", out.to_str().unwrap()]);
         match want {
@@ -312,14 +312,15 @@ fn strokes_on_the_sheet_edge_are_drawn_and_small_overshoots_clamped() {
 
 #[test]
 fn deep_nesting_is_refused_with_its_depth() {
-    let dir = scratch("nest");
+    let tmp = scratch("nest");
+    let dir = tmp.path();
     let n = 200_000;
     let svg = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10mm\" height=\"10mm\">\n{}<path d=\"M1 1 L2 2\" stroke=\"black\"/>{}</svg>\n",
         "<g>".repeat(n),
         "</g>".repeat(n)
     );
-    let job = write(&dir, "nest.svg", &svg);
+    let job = write(dir, "nest.svg", &svg);
     let (ok, _, stderr) = motet(&["check", PLOTTER, &job]);
     assert!(!ok);
     assert!(

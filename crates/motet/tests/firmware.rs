@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
+use tempfile::TempDir;
 
 mod common;
 use common::{journal_seals, motet, resume_to_done, root};
@@ -23,7 +24,7 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
     SERIAL.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> TempDir {
     common::scratch("fw", name)
 }
 
@@ -228,10 +229,11 @@ fn pulses(console: &str) -> Vec<u64> {
 #[test]
 fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
     let _serial = serial();
-    let dir = scratch("run");
+    let tmp = scratch("run");
+    let dir = tmp.path();
     let fw = firmware();
-    let factory = image(&dir, &fw.node, "mps2-an500", "0.1.0");
-    let board = Board::boot(&dir, Some(&factory));
+    let factory = image(dir, &fw.node, "mps2-an500", "0.1.0");
+    let board = Board::boot(dir, Some(&factory));
     board.wait_console("motet: stepper node on mps2-an500, firmware 0.1.0");
 
     let (ok, stdout, stderr) = motet(&["nodes", "scan", "--link", &board.link]);
@@ -242,15 +244,15 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
             && stdout.contains("unpaired"),
         "{stdout}"
     );
-    let machine = plotter(&dir);
+    let machine = plotter(dir);
     pair(&machine, &board);
 
     // Images the board must refuse, each leaving 0.1.0 running: (image,
     // part of the error).
     let junk = dir.join("junk.bin");
     std::fs::write(&junk, vec![0x5Au8; 3000]).unwrap();
-    let foreign = image(&dir, &junk, "teensy41", "9.0.0");
-    let not_an_app = image(&dir, &junk, "mps2-an500", "0.3.0");
+    let foreign = image(dir, &junk, "teensy41", "9.0.0");
+    let not_an_app = image(dir, &junk, "mps2-an500", "0.3.0");
     let mut flipped = std::fs::read(&factory).unwrap();
     flipped[5000] ^= 0x10;
     let corrupt = dir.join("corrupt.img");
@@ -282,7 +284,7 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
 
     // A freshly built image: the bootloader installs it, the board runs it,
     // and keeps its address across the restart.
-    let fresh = image(&dir, &fw.node, "mps2-an500", "0.2.0");
+    let fresh = image(dir, &fw.node, "mps2-an500", "0.2.0");
     let (ok, stdout, stderr) = motet(&[
         "nodes",
         "flash",
@@ -351,11 +353,12 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
 #[test]
 fn a_killed_host_leaves_the_board_braked_and_resume_finishes() {
     let _serial = serial();
-    let dir = scratch("kill");
+    let tmp = scratch("kill");
+    let dir = tmp.path();
     let fw = firmware();
-    let factory = image(&dir, &fw.node, "mps2-an500", "0.1.0");
-    let board = Board::boot(&dir, Some(&factory));
-    let machine = plotter(&dir);
+    let factory = image(dir, &fw.node, "mps2-an500", "0.1.0");
+    let board = Board::boot(dir, Some(&factory));
+    let machine = plotter(dir);
     pair(&machine, &board);
     let out = dir.join("out");
     let mut host = Command::new(env!("CARGO_BIN_EXE_motet"))
@@ -407,11 +410,12 @@ fn a_killed_host_leaves_the_board_braked_and_resume_finishes() {
 #[test]
 fn a_silent_vanishing_or_too_slow_board_is_a_clear_error() {
     let _serial = serial();
-    let dir = scratch("bad");
-    let machine = plotter(&dir);
+    let tmp = scratch("bad");
+    let dir = tmp.path();
+    let machine = plotter(dir);
 
     // No application: the bootloader halts, nothing answers.
-    let empty = Board::boot(&dir, None);
+    let empty = Board::boot(dir, None);
     empty.wait_console("boot: no factory image either");
     let (ok, stdout, _) = motet(&["nodes", "scan", "--link", &empty.link]);
     assert!(ok && stdout.contains("no node answered"), "{stdout}");
@@ -425,8 +429,8 @@ fn a_silent_vanishing_or_too_slow_board_is_a_clear_error() {
     assert!(!ok && stderr.contains("no node answered"), "{stderr}");
     drop(empty);
 
-    let factory = image(&dir, &firmware().node, "mps2-an500", "0.1.0");
-    let board = Board::boot(&dir, Some(&factory));
+    let factory = image(dir, &firmware().node, "mps2-an500", "0.1.0");
+    let board = Board::boot(dir, Some(&factory));
 
     // 256 microsteps and 0.5 µs pulses: the plotter's motors would step
     // faster than the board's channels go.

@@ -6,11 +6,12 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+use tempfile::TempDir;
 
 mod common;
 use common::{journal_seals, motet, resume_to_done, root};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> TempDir {
     common::scratch("net", name)
 }
 
@@ -76,7 +77,8 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
 #[test]
 fn spawned_nodes_run_a_job_to_the_end() {
     let _serial = serial();
-    let out = scratch("spawn");
+    let tmp = scratch("spawn");
+    let out = tmp.path();
     let mut args = vec![
         "run",
         "examples/gestalt-3axis.toml",
@@ -103,8 +105,9 @@ fn spawned_nodes_run_a_job_to_the_end() {
 #[test]
 fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
     let _serial = serial();
-    let dir = scratch("pair");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("pair");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     for listen in ["udp:127.0.0.1:0", "pty"] {
         let state = dir.join(format!("node-{}.state", listen.len()));
         let node = start_node(&[
@@ -173,8 +176,9 @@ fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
 #[test]
 fn button_pairing_takes_the_pressed_node() {
     let _serial = serial();
-    let dir = scratch("button");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("button");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     let node = start_node(&["--auto-press"]);
     let ebb = format!("ebb={}", node.link);
     let (ok, stdout, stderr) = motet(&[
@@ -197,8 +201,9 @@ fn button_pairing_takes_the_pressed_node() {
 #[test]
 fn firmware_upload_verifies_and_refuses_bad_images() {
     let _serial = serial();
-    let dir = scratch("flash");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("flash");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     let node = start_node(&[]);
     let (ok, _, stderr) = motet(&[
         "nodes",
@@ -290,8 +295,9 @@ fn firmware_upload_verifies_and_refuses_bad_images() {
 #[test]
 fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
     let _serial = serial();
-    let dir = scratch("kill");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("kill");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     let node = start_node(&["--time-scale", "5"]);
     let (ok, _, stderr) = motet(&[
         "nodes",
@@ -372,8 +378,9 @@ fn free_udp_port() -> u16 {
 #[test]
 fn a_crashed_node_is_lost_and_resume_trusts_nothing() {
     let _serial = serial();
-    let dir = scratch("crash");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("crash");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     std::fs::copy(
         root().join("examples/jobs/drawing.svg"),
         dir.join("drawing.svg"),
@@ -428,7 +435,7 @@ fn a_crashed_node_is_lost_and_resume_trusts_nothing() {
             "out",
         ])
         .args(FAST)
-        .current_dir(&dir)
+        .current_dir(dir)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -536,8 +543,9 @@ fn a_crashed_node_is_lost_and_resume_trusts_nothing() {
 #[test]
 fn bad_network_input_is_a_clear_error() {
     let _serial = serial();
-    let dir = scratch("bad");
-    let machine = machine_copy(&dir, "plotter.toml");
+    let tmp = scratch("bad");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "plotter.toml");
     let m = machine.to_str().unwrap();
     // (arguments, expected part of the error)
     let cases: Vec<(Vec<&str>, &str)> = vec![
@@ -615,8 +623,9 @@ fn bad_network_input_is_a_clear_error() {
 #[test]
 fn one_device_for_two_nodes_is_refused_and_status_names_silent_nodes() {
     let _serial = serial();
-    let dir = scratch("twice");
-    let machine = machine_copy(&dir, "clay-printer.toml");
+    let tmp = scratch("twice");
+    let dir = tmp.path();
+    let machine = machine_copy(dir, "clay-printer.toml");
     let m = machine.to_str().unwrap();
     let pairing = dir.join("clay-printer.nodes.toml");
     let a = start_node(&[]);

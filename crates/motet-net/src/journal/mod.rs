@@ -146,11 +146,11 @@ mod tests {
     }
 
     fn write_one() -> String {
-        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!("motet-journal-{}-{n}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("journal");
+        let dir = tempfile::Builder::new()
+            .prefix("motet-journal-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("journal");
         let mut w = JournalWriter::create(&path).unwrap();
         w.header(&header()).unwrap();
         let segs = segs();
@@ -185,9 +185,7 @@ mod tests {
         })
         .unwrap();
         drop(w);
-        let text = std::fs::read_to_string(&path).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
-        text
+        std::fs::read_to_string(&path).unwrap()
     }
 
     #[test]

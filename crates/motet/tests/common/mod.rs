@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
+use tempfile::TempDir;
 
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -22,13 +23,15 @@ pub fn motet(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// An empty scratch folder for one test: `motet-KIND-PID-NAME` under the
-/// system's temporary folder.
-pub fn scratch(kind: &str, name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("motet-{kind}-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// An empty scratch folder for one test, `motet-KIND-NAME-…` under the
+/// system's temporary folder. It is removed when the guard is dropped, also
+/// when the test fails: hold it until the test no longer needs the folder
+/// (after any process writing into it has ended).
+pub fn scratch(kind: &str, name: &str) -> TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("motet-{kind}-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Seals the journal of a networked run in `out` holds so far.
