@@ -9,7 +9,7 @@ use crate::graph::{
 use crate::tally::{StepTally, Tallying};
 use crate::tool::ToolOutput;
 use heapless::{Deque, Vec};
-use motet_trajectory::{Contingency, JointMap, JointPath, Point, Profile, Segment, MAX_AXES};
+use motet_trajectory::{Contingency, JointPath, Point, Profile, Segment, MAX_AXES};
 use motet_wire::message::{GraphInputKind, GraphMode};
 use motet_wire::stream::{BatchReader, StreamState};
 use motet_wire::{
@@ -455,7 +455,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         let valid = spu.is_finite()
             && spu > 0.0
             && spu <= MAX_STEPS_PER_UNIT
-            && map_is_valid(&c.map)
+            && c.map.is_valid()
             && c.timing_is_valid();
         if !valid || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
@@ -1191,14 +1191,6 @@ fn segment_is_finite(m: &SegmentMsg) -> bool {
         && [p.length, p.v0, p.vc, p.v1, p.accel, p.jerk, p.dwell, m.t0]
             .iter()
             .all(|x| x.is_finite())
-}
-
-/// Whether a joint map only names axes a point has and has finite coefficients:
-/// a polar map naming axis 6 or more would index out of every point (a panic on
-/// the next SetPosition or poll), a non-finite coefficient makes every joint
-/// value NaN (a channel that silently never steps).
-fn map_is_valid(map: &JointMap) -> bool {
-    map.is_valid()
 }
 
 /// The first frame of a graph committed when the node had run up to `now`:

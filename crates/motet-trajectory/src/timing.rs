@@ -147,58 +147,19 @@ impl TimeCursor {
         let n = ds.len().min(out.len());
         let p = self.piece;
         let (d_end, span) = (self.d_end, self.span);
-        // Where a distance is outside the piece's inside, the single-step
-        // rule gives the answer (the piece's start or end).
-        let edge = |d: f64| -> Option<f64> {
-            let x = d - p.d0;
-            if x <= 0.0 {
-                Some(p.t0)
-            } else if x >= span {
-                Some(p.t0 + p.duration)
-            } else {
-                None
-            }
-        };
         match self.solve {
-            Solve::Quadratic { vv, two_a } => {
-                for k in 0..n {
-                    let d = ds[k];
-                    if d > d_end {
-                        return k;
-                    }
-                    out[k] = match edge(d) {
-                        Some(t) => t,
-                        None => {
-                            let x = d - p.d0;
-                            let disc = vv + two_a * x;
-                            let root = sqrt(if disc > 0.0 { disc } else { 0.0 });
-                            let denom = p.v + root;
-                            let u = if denom > 0.0 {
-                                2.0 * x / denom
-                            } else {
-                                p.duration
-                            };
-                            p.t0 + if u < p.duration { u } else { p.duration }
-                        }
-                    };
+            Solve::Quadratic { vv, two_a } => fill_piece(&p, d_end, span, &ds[..n], out, |x| {
+                let disc = vv + two_a * x;
+                let root = sqrt(if disc > 0.0 { disc } else { 0.0 });
+                let denom = p.v + root;
+                if denom > 0.0 {
+                    2.0 * x / denom
+                } else {
+                    p.duration
                 }
-                n
-            }
+            }),
             Solve::Cruise { per_unit } => {
-                for k in 0..n {
-                    let d = ds[k];
-                    if d > d_end {
-                        return k;
-                    }
-                    out[k] = match edge(d) {
-                        Some(t) => t,
-                        None => {
-                            let u = (d - p.d0) * per_unit;
-                            p.t0 + if u < p.duration { u } else { p.duration }
-                        }
-                    };
-                }
-                n
+                fill_piece(&p, d_end, span, &ds[..n], out, |x| x * per_unit)
             }
             // Newton carries its last answer from one distance to the next.
             _ => {
@@ -344,4 +305,35 @@ mod tests {
             assert!((c.time_at(&p, length) - p.duration()).abs() <= 1e-9);
         }
     }
+}
+
+/// [`TimeCursor::times_in_piece`]'s loop for a closed form `inside` (the
+/// time after the piece's start for a distance `x` into it): one loop per
+/// form, the form chosen once outside it. Where a distance is outside the
+/// piece's inside, the single-step rule gives the answer (the piece's start
+/// or end).
+#[inline(always)]
+fn fill_piece(
+    p: &Piece,
+    d_end: f64,
+    span: f64,
+    ds: &[f64],
+    out: &mut [f64],
+    inside: impl Fn(f64) -> f64,
+) -> usize {
+    for (k, (&d, t)) in ds.iter().zip(out.iter_mut()).enumerate() {
+        if d > d_end {
+            return k;
+        }
+        let x = d - p.d0;
+        *t = if x <= 0.0 {
+            p.t0
+        } else if x >= span {
+            p.t0 + p.duration
+        } else {
+            let u = inside(x);
+            p.t0 + if u < p.duration { u } else { p.duration }
+        };
+    }
+    ds.len()
 }

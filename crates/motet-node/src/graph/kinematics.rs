@@ -4,8 +4,9 @@
 
 use super::component::{positive, Kind, ParamError};
 use super::io::Ctx;
-use super::math::{acos, atan2, cos, hypot, sin, sqrt, unwrap_near};
+use super::math::{atan2, cos, hypot, sin, unwrap_near};
 use super::port::{Port, PortSpec, Unit};
+use motet_trajectory::kinematics::FiveBar;
 
 /// CoreXY: `a = x + y`, `b = x − y`; inverse `x = (a + b)/2`, `y = (a − b)/2`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -149,46 +150,28 @@ impl FiveBarForward {
         }
     }
 
+    /// The linkage as the kinematics table has it: one five-bar, shared
+    /// with machines whose arms are five-bars.
+    fn linkage(&self) -> FiveBar {
+        FiveBar {
+            s: self.s,
+            l1: self.l1,
+            l2: self.l2,
+            l3: self.l3,
+            l4: self.l4,
+            ext: self.ext,
+        }
+    }
+
     /// The stylus point; `None` when the distal links cannot meet.
     pub fn forward(&self, t1: f64, t2: f64) -> Option<(f64, f64)> {
-        let (e1x, e1y) = (self.l1 * cos(t1), self.l1 * sin(t1));
-        let (e2x, e2y) = (self.s + self.l2 * cos(t2), self.l2 * sin(t2));
-        let (dx, dy) = (e2x - e1x, e2y - e1y);
-        let d = hypot(dx, dy);
-        if d == 0.0 || d > self.l3 + self.l4 || d < (self.l3 - self.l4).abs() {
-            return None;
-        }
-        let a = (self.l3 * self.l3 - self.l4 * self.l4 + d * d) / (2.0 * d);
-        let h = sqrt((self.l3 * self.l3 - a * a).max(0.0));
-        let (ux, uy) = (dx / d, dy / d);
-        let px = e1x + a * ux - h * uy;
-        let py = e1y + a * uy + h * ux;
-        let k = (self.l3 + self.ext) / self.l3;
-        Some((e1x + (px - e1x) * k, e1y + (py - e1y) * k))
+        self.linkage().point(t1, t2)
     }
 
     /// Joint angles for a stylus point, elbows outward (left elbow
     /// counter-clockwise of the left pivot→joint line, right elbow clockwise).
     pub fn inverse(&self, x: f64, y: f64) -> Option<(f64, f64)> {
-        // Left arm: a rigid link of l3 + ext from the left elbow to the stylus.
-        let l = self.l3 + self.ext;
-        let d1 = hypot(x, y);
-        let c1 = (self.l1 * self.l1 + d1 * d1 - l * l) / (2.0 * self.l1 * d1);
-        if d1 == 0.0 || !(-1.0..=1.0).contains(&c1) {
-            return None;
-        }
-        let t1 = atan2(y, x) + acos(c1);
-        let (e1x, e1y) = (self.l1 * cos(t1), self.l1 * sin(t1));
-        // The joint, l3 along the left distal link.
-        let (px, py) = (e1x + (x - e1x) * self.l3 / l, e1y + (y - e1y) * self.l3 / l);
-        let (rx, ry) = (px - self.s, py);
-        let d2 = hypot(rx, ry);
-        let c2 = (self.l2 * self.l2 + d2 * d2 - self.l4 * self.l4) / (2.0 * self.l2 * d2);
-        if d2 == 0.0 || !(-1.0..=1.0).contains(&c2) {
-            return None;
-        }
-        let t2 = atan2(ry, rx) - acos(c2);
-        Some((t1, t2))
+        self.linkage().angles(x, y)
     }
 
     fn write(&self, ports: &mut [Port]) {

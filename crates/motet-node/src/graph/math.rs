@@ -24,10 +24,6 @@ pub fn atan2(y: f64, x: f64) -> f64 {
     libm::atan2(y, x)
 }
 #[inline]
-pub fn acos(x: f64) -> f64 {
-    libm::acos(x.clamp(-1.0, 1.0))
-}
-#[inline]
 pub fn floor(x: f64) -> f64 {
     libm::floor(x)
 }

@@ -192,12 +192,6 @@ impl JointPath {
         }
     }
 
-    /// The first turning point of the radius (its closest approach to the
-    /// centre) or of any bracketed joint.
-    pub fn turning_point(&self) -> Option<f64> {
-        self.next_turn(0.0)
-    }
-
     /// A bracketed joint's first extremum after `after`: where successive
     /// samples' differences change sign, refined by golden section.
     fn sampled_turn(&self, after: f64) -> Option<f64> {

@@ -95,7 +95,7 @@ fn solve_inverts_value_for_every_shape() {
             let path = JointPath::new(m, s, 0.0);
             let len = path.length();
             let mut pieces = [(0.0, len), (len, len)];
-            if let Some(t) = path.turning_point() {
+            if let Some(t) = path.next_turn(0.0) {
                 pieces = [(0.0, t), (t, len)];
             }
             for (lo, hi) in pieces {
