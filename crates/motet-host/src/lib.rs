@@ -4,6 +4,7 @@
 pub mod distribute;
 pub mod job;
 pub mod machine;
+mod machine_build;
 mod machine_file;
 mod machine_kinematics;
 
