@@ -264,6 +264,37 @@ fn newton(p: &Piece, half_a: f64, sixth_j: f64, half_j: f64, x: f64, start: f64)
     u
 }
 
+/// [`TimeCursor::times_in_piece`]'s loop for a closed form `inside` (the
+/// time after the piece's start for a distance `x` into it): one loop per
+/// form, the form chosen once outside it. Where a distance is outside the
+/// piece's inside, the single-step rule gives the answer (the piece's start
+/// or end).
+#[inline(always)]
+fn fill_piece(
+    p: &Piece,
+    d_end: f64,
+    span: f64,
+    ds: &[f64],
+    out: &mut [f64],
+    inside: impl Fn(f64) -> f64,
+) -> usize {
+    for (k, (&d, t)) in ds.iter().zip(out.iter_mut()).enumerate() {
+        if d > d_end {
+            return k;
+        }
+        let x = d - p.d0;
+        *t = if x <= 0.0 {
+            p.t0
+        } else if x >= span {
+            p.t0 + p.duration
+        } else {
+            let u = inside(x);
+            p.t0 + if u < p.duration { u } else { p.duration }
+        };
+    }
+    ds.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -305,35 +336,4 @@ mod tests {
             assert!((c.time_at(&p, length) - p.duration()).abs() <= 1e-9);
         }
     }
-}
-
-/// [`TimeCursor::times_in_piece`]'s loop for a closed form `inside` (the
-/// time after the piece's start for a distance `x` into it): one loop per
-/// form, the form chosen once outside it. Where a distance is outside the
-/// piece's inside, the single-step rule gives the answer (the piece's start
-/// or end).
-#[inline(always)]
-fn fill_piece(
-    p: &Piece,
-    d_end: f64,
-    span: f64,
-    ds: &[f64],
-    out: &mut [f64],
-    inside: impl Fn(f64) -> f64,
-) -> usize {
-    for (k, (&d, t)) in ds.iter().zip(out.iter_mut()).enumerate() {
-        if d > d_end {
-            return k;
-        }
-        let x = d - p.d0;
-        *t = if x <= 0.0 {
-            p.t0
-        } else if x >= span {
-            p.t0 + p.duration
-        } else {
-            let u = inside(x);
-            p.t0 + if u < p.duration { u } else { p.duration }
-        };
-    }
-    ds.len()
 }
