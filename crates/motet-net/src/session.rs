@@ -3,7 +3,7 @@
 //! checked against the machine before any motion is sent.
 
 use crate::admin::{Admin, AdminError};
-use crate::clock::Clock;
+use crate::clock::{Clock, SharedClock};
 use crate::pairing_file::{format_uid, parse_uid, PairingFile};
 use crate::peer::{Incoming, Peer};
 use crate::registry;
@@ -50,7 +50,8 @@ pub struct Session {
 }
 
 fn isn(k: usize) -> u16 {
-    // Differs across host runs, so a node sees a new session.
+    // Differs across host runs, so a node sees a new session: the calendar
+    // time serves as a seed here, not as a clock.
     let t = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_micros() as u64)
@@ -58,19 +59,25 @@ fn isn(k: usize) -> u16 {
     (t as u16) ^ ((k as u16) << 12)
 }
 
-fn open(node: &str, link: &str) -> Result<Admin, SessionError> {
+fn open(node: &str, link: &str, clock: &SharedClock) -> Result<Admin, SessionError> {
     let t = motet_link::open(link).map_err(|e| SessionError::Open {
         node: node.into(),
         link: link.into(),
         message: e.to_string(),
     })?;
-    Ok(Admin::new(t, link))
+    Ok(Admin::with_clock(t, link, clock.clone()))
 }
 
 impl Session {
     /// Starts one simulated node process per machine node (`exe node --sim
-    /// …` plus `extra`) and pairs each (alone on its link).
-    pub fn spawn(machine: &Machine, exe: &Path, extra: &[String]) -> Result<Session, SessionError> {
+    /// …` plus `extra`) and pairs each (alone on its link). Requests wait
+    /// on `clock`.
+    pub fn spawn(
+        machine: &Machine,
+        exe: &Path,
+        extra: &[String],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
             nodes: Vec::new(),
@@ -84,7 +91,7 @@ impl Session {
                     source,
                 })?;
             let address = 2 + k as u16;
-            let mut a = open(&spec.name, &node.link)?;
+            let mut a = open(&spec.name, &node.link, clock)?;
             let admin_err = |source| SessionError::Admin {
                 node: spec.name.clone(),
                 source,
@@ -113,6 +120,7 @@ impl Session {
         machine: &Machine,
         file: &PairingFile,
         path: &Path,
+        clock: &SharedClock,
     ) -> Result<Session, SessionError> {
         let mut nodes = Vec::new();
         let mut uids = Vec::new();
@@ -131,18 +139,23 @@ impl Session {
             });
             uids.push(parse_uid(&p.uid));
         }
-        Session::attach_checked(machine, &nodes, &uids)
+        Session::attach_checked(machine, &nodes, &uids, clock)
     }
 
     /// Nodes at known links and addresses.
-    pub fn attach(machine: &Machine, nodes: &[NodeAddr]) -> Result<Session, SessionError> {
-        Session::attach_checked(machine, nodes, &vec![None; nodes.len()])
+    pub fn attach(
+        machine: &Machine,
+        nodes: &[NodeAddr],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
+        Session::attach_checked(machine, nodes, &vec![None; nodes.len()], clock)
     }
 
     fn attach_checked(
         machine: &Machine,
         nodes: &[NodeAddr],
         uids: &[Option<u64>],
+        clock: &SharedClock,
     ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
@@ -151,7 +164,7 @@ impl Session {
             spawned: Vec::new(),
         };
         for (k, (spec, n)) in machine.nodes.iter().zip(nodes).enumerate() {
-            let mut a = open(&spec.name, &n.link)?;
+            let mut a = open(&spec.name, &n.link, clock)?;
             let info = a.info(n.address).map_err(|source| SessionError::Admin {
                 node: spec.name.clone(),
                 source,
@@ -212,7 +225,7 @@ pub fn locate(
         if got.iter().all(|g| g.is_some()) {
             break;
         }
-        std::thread::sleep(Duration::from_micros(500));
+        clock.sleep_us(500);
     }
     got
 }
