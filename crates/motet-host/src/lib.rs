@@ -7,5 +7,5 @@ pub mod machine;
 mod machine_file;
 
 pub use distribute::{Distributor, Subscription};
-pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck};
+pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};
 pub use machine::{Actuator, Axis, Joint, Machine, MachineError, NodeSpec, Tool};

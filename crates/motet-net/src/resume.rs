@@ -144,8 +144,11 @@ pub enum ResumeError {
     },
     #[error("--assume-position names no axis {0:?} of this machine")]
     AssumeAxis(String),
-    #[error("resume would {what}: {message}")]
-    Beyond { what: String, message: String },
+    #[error("resume would {what}: {source}")]
+    Beyond {
+        what: String,
+        source: motet_host::MoveError,
+    },
 }
 
 /// What a node answered when asked where it is.
@@ -562,13 +565,13 @@ pub fn prove(ev: &Evidence, assumed: Option<&[(usize, f64)]>) -> Result<Resumpti
         );
     }
     let res = resume_at(ev.job, from, to, command);
-    check_move(m, &from, &from).map_err(|message| ResumeError::Beyond {
+    check_move(m, &from, &from).map_err(|source| ResumeError::Beyond {
         what: format!("start from {}", show(m, &from, u8::MAX)),
-        message,
+        source,
     })?;
-    check_move(m, &from, &to).map_err(|message| ResumeError::Beyond {
+    check_move(m, &from, &to).map_err(|source| ResumeError::Beyond {
         what: format!("travel to {}", show(m, &to, u8::MAX)),
-        message,
+        source,
     })?;
     let prelude = res.commands.len() - (ev.job.len() - res.command);
     Ok(Resumption {

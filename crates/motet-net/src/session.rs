@@ -30,6 +30,11 @@ pub enum SessionError {
     Admin { node: String, source: AdminError },
     #[error("node {node}: {message}")]
     Node { node: String, message: String },
+    #[error("node {node}: {source}")]
+    Mismatch {
+        node: String,
+        source: registry::Mismatch,
+    },
 }
 
 /// Where a node of the run is.
@@ -98,9 +103,9 @@ impl Session {
             };
             a.set_address(node.uid, address).map_err(admin_err)?;
             let info = a.info(address).map_err(admin_err)?;
-            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|source| SessionError::Mismatch {
                 node: spec.name.clone(),
-                message,
+                source,
             })?;
             s.nodes.push(NodeAddr {
                 name: spec.name.clone(),
@@ -183,9 +188,9 @@ impl Session {
                     });
                 }
             }
-            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|source| SessionError::Mismatch {
                 node: spec.name.clone(),
-                message,
+                source,
             })?;
             s.infos.push(info);
             s.peers

@@ -384,7 +384,7 @@ impl NetRun {
                     }
                     Incoming::Motion(NodeMessage::Refused { reason }) => {
                         let node = self.peers[k].name.clone();
-                        let message = format!("refused a message: {reason:?}");
+                        let message = format!("refused a message: {reason}");
                         if matches!(self.phase, Phase::Starting) {
                             return Err(NetError::Node { node, message });
                         }
