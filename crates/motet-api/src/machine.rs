@@ -19,7 +19,7 @@ pub enum ApiError {
     #[error("unknown tool `{name}`; this machine's tools are {tools}")]
     UnknownTool { name: String, tools: String },
     #[error("{0}")]
-    Unreachable(String),
+    Unreachable(motet_host::MoveError),
     /// A feed outside [`ranges::VELOCITY`].
     #[error("feed must be {}, got {}", ranges::VELOCITY, number(*.0))]
     BadFeed(f64),

@@ -67,17 +67,39 @@ impl JobCheck {
         let Command::Move(m) = &mut c.item else {
             return Ok(());
         };
-        let d = clamp_move(machine, &self.pos, &mut m.target)
-            .map_err(|message| SourceError { loc, message })?;
+        let d = clamp_move(machine, &self.pos, &mut m.target).map_err(|e| SourceError {
+            loc,
+            message: e.to_string(),
+        })?;
         self.clamps.add(d);
         self.pos = m.target;
         Ok(())
     }
 }
 
+/// Why the machine cannot make a move.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MoveError {
+    #[error("move to {axis}={value}: not a number")]
+    NotANumber { axis: String, value: f64 },
+    #[error(
+        "move to {axis}={} is {} beyond the axis's travel [{}, {}] (half a step is {})",
+        rounded(*.value), rounded(*.beyond), rounded(.travel[0]), rounded(.travel[1]), rounded(*.half_step)
+    )]
+    BeyondTravel {
+        axis: String,
+        value: f64,
+        beyond: f64,
+        travel: [f64; 2],
+        half_step: f64,
+    },
+    #[error("move passes {distance:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {min_radius} mm")]
+    PolarCentre { distance: f64, min_radius: f64 },
+}
+
 /// [`check_move`] after clamping `to` onto the travel where it is beyond it
 /// by less than [`Machine::half_step`]; returns the largest clamp (0 if none).
-pub fn clamp_move(machine: &Machine, from: &Point, to: &mut Point) -> Result<f64, String> {
+pub fn clamp_move(machine: &Machine, from: &Point, to: &mut Point) -> Result<f64, MoveError> {
     let mut largest = 0.0f64;
     for (i, a) in machine.axes.iter().enumerate() {
         let [lo, hi] = a.travel;
@@ -95,25 +117,26 @@ pub fn clamp_move(machine: &Machine, from: &Point, to: &mut Point) -> Result<f64
 /// Whether the machine can move straight from `from` to `to`; the reason if
 /// not. A coordinate may be beyond travel by less than half a step (what
 /// [`clamp_move`] would clamp).
-pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), String> {
+pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), MoveError> {
     for (i, a) in machine.axes.iter().enumerate() {
         let v = to[i];
         let [lo, hi] = a.travel;
         if !v.is_finite() {
-            return Err(format!("move to {}={v}: not a number", a.name));
+            return Err(MoveError::NotANumber {
+                axis: a.name.clone(),
+                value: v,
+            });
         }
         let beyond = if v < lo { lo - v } else { v - hi };
         let half = machine.half_step(i);
         if beyond >= half {
-            return Err(format!(
-                "move to {}={} is {} beyond the axis's travel [{}, {}] (half a step is {})",
-                a.name,
-                rounded(v),
-                rounded(beyond),
-                rounded(lo),
-                rounded(hi),
-                rounded(half)
-            ));
+            return Err(MoveError::BeyondTravel {
+                axis: a.name.clone(),
+                value: v,
+                beyond,
+                travel: [lo, hi],
+                half_step: half,
+            });
         }
     }
     if let Some((x, y)) = machine.xy {
@@ -130,10 +153,10 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Str
         };
         let d = ((px + wx * t).powi(2) + (py + wy * t).powi(2)).sqrt();
         if d < machine.min_radius && (ww > 0.0 || d == 0.0) {
-            return Err(format!(
-                "move passes {:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {} mm",
-                d, machine.min_radius
-            ));
+            return Err(MoveError::PolarCentre {
+                distance: d,
+                min_radius: machine.min_radius,
+            });
         }
     }
     Ok(())

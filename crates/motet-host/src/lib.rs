@@ -9,5 +9,5 @@ mod machine_file;
 mod machine_kinematics;
 
 pub use distribute::{Distributor, Subscription};
-pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck};
+pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};
 pub use machine::{Actuator, Axis, Joint, Machine, MachineError, NodeSpec, Tool};

@@ -13,7 +13,7 @@
 //! is needed, and the receiver collects fragments per sender id.
 
 use crate::slcan::{fd_round_up, CanFrame, MAX_EXT_ID, MAX_STD_ID};
-use crate::{LinkStats, StreamSplitter, Transport};
+use crate::{Inbox, LinkStats, StreamSplitter, Transport};
 use std::collections::{BTreeMap, VecDeque};
 use std::fmt;
 use std::io;
@@ -215,7 +215,7 @@ pub struct CanTransport {
     /// Only frames from this id are taken (all senders if `None`).
     peer: Option<u32>,
     splitters: BTreeMap<u32, StreamSplitter>,
-    ready: VecDeque<Vec<u8>>,
+    inbox: Inbox,
     stats: LinkStats,
 }
 
@@ -226,7 +226,7 @@ impl CanTransport {
             node,
             peer,
             splitters: BTreeMap::new(),
-            ready: VecDeque::new(),
+            inbox: Inbox::new(),
             stats: LinkStats::default(),
         }
     }
@@ -256,32 +256,20 @@ impl Transport for CanTransport {
     /// The simulated bus is synchronous: this runs it until idle and never
     /// waits, whatever `timeout` says.
     fn recv(&mut self, _timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        if self.ready.is_empty() {
+        if self.inbox.is_empty() {
             self.node.bus().run(MAX_SLOTS_PER_RECV);
             while let Some(f) = self.node.receive() {
                 if self.peer.is_some_and(|p| p != f.id) || !f.fd {
                     continue;
                 }
-                let ready = &mut self.ready;
-                self.splitters
-                    .entry(f.id)
-                    .or_default()
-                    .push(&f.data, &mut |fr| ready.push_back(fr));
+                self.inbox.take_from(&mut self.splitters, f.id, &f.data);
             }
         }
-        let f = self.ready.pop_front();
-        if let Some(f) = &f {
-            self.stats.received(f.len());
-        }
-        Ok(f)
+        Ok(self.inbox.pop(&mut self.stats))
     }
 
     fn stats(&self) -> &LinkStats {
         &self.stats
-    }
-
-    fn stats_mut(&mut self) -> &mut LinkStats {
-        &mut self.stats
     }
 }
 
@@ -485,8 +473,8 @@ mod tests {
         let bus = CanBus::new();
         let mut a = CanTransport::new(bus.attach(0x10, false).unwrap(), Some(0x11));
         let mut b = CanTransport::new(bus.attach(0x11, false).unwrap(), Some(0x10));
-        let got = link_exchange(&mut a, &mut b, 1000, None);
-        assert_eq!(got, (0..1000).collect::<Vec<u32>>());
-        assert_eq!(a.stats().retransmits, 0);
+        let x = link_exchange(&mut a, &mut b, 1000, None);
+        assert_eq!(x.got, (0..1000).collect::<Vec<u32>>());
+        assert_eq!(x.host.retransmits, 0);
     }
 }

@@ -7,10 +7,9 @@
 //! Delays are counted in later frames or in µs of a [`FaultClock`], which is
 //! either real time or a simulated clock the caller advances.
 
+pub use crate::clock::SimClock;
 use crate::{LinkStats, Transport};
 use std::io;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// xorshift64*: tiny, seeded, reproducible.
@@ -76,25 +75,16 @@ impl FaultClock {
     }
 }
 
-/// A simulated clock in µs, shared by clones.
-#[derive(Clone, Debug, Default)]
-pub struct SimClock(Arc<AtomicU64>);
-
-impl SimClock {
-    pub fn new() -> SimClock {
-        SimClock::default()
+impl crate::clock::Clock for FaultClock {
+    fn now_us(&self) -> u64 {
+        FaultClock::now_us(self)
     }
 
-    pub fn get(&self) -> u64 {
-        self.0.load(Ordering::Relaxed)
-    }
-
-    pub fn set(&self, us: u64) {
-        self.0.store(us, Ordering::Relaxed);
-    }
-
-    pub fn advance(&self, us: u64) {
-        self.0.fetch_add(us, Ordering::Relaxed);
+    fn real(&self, us: u64) -> Duration {
+        match self {
+            FaultClock::Real(_) => Duration::from_micros(us),
+            FaultClock::Simulated(_) => Duration::ZERO,
+        }
     }
 }
 
@@ -413,10 +403,6 @@ impl<T: Transport> Transport for Faulty<T> {
     fn stats(&self) -> &LinkStats {
         &self.stats
     }
-
-    fn stats_mut(&mut self) -> &mut LinkStats {
-        &mut self.stats
-    }
 }
 
 #[cfg(test)]
@@ -614,15 +600,15 @@ mod tests {
         let sim = || FaultClock::Simulated(clock.clone());
         let mut a = Faulty::with_clock(a, FaultConfig::all(11, 0.01), sim());
         let mut b = Faulty::with_clock(b, FaultConfig::all(12, 0.01), sim());
-        let got = link_exchange_clocked(&mut a, &mut b, 10_000, None, &mut || {
+        let x = link_exchange_clocked(&mut a, &mut b, 10_000, None, &mut || {
             clock.advance(50);
             clock.get()
         });
-        assert_eq!(got, (0..10_000).collect::<Vec<u32>>());
+        assert_eq!(x.got, (0..10_000).collect::<Vec<u32>>());
         assert_faults_happened(a.counts());
         assert_faults_happened(b.counts());
-        assert!(a.stats().retransmits > 0);
-        assert!(a.stats().crc_errors + b.stats().crc_errors > 0);
+        assert!(x.host.retransmits > 0);
+        assert!(x.host.crc_errors + x.node.crc_errors > 0);
     }
 
     #[test]
@@ -637,7 +623,8 @@ mod tests {
             3_000,
             Some(Duration::from_micros(500)),
             &mut || t0.elapsed().as_micros() as u64,
-        );
+        )
+        .got;
         assert_eq!(got, (0..3_000).collect::<Vec<u32>>());
         let (ca, cb) = (a.counts(), b.counts());
         assert!(ca.injected() + cb.injected() > 0);

@@ -4,13 +4,20 @@
 //! COBS-stuffed bytes, with or without the trailing 0x00) and hands received
 //! frames back one at a time, without blocking or with a timeout. Datagram
 //! transports (channels, UDP) keep frame boundaries themselves; stream
-//! transports (serial, CAN-FD) find them at the 0x00 delimiter.
+//! transports (serial, CAN-FD) find them at the 0x00 delimiter with a
+//! [`StreamSplitter`] and queue them in an [`Inbox`], whose
+//! [`Inbox::recv`] is the receive loop they share.
+//!
+//! Fault injection for tests and benchmarks is a wrapper ([`Faulty`]), not
+//! part of the trait.
 
 use std::io;
 use std::time::Duration;
 
 pub mod can;
+pub mod clock;
 pub mod fault;
+pub mod inbox;
 pub mod mem;
 pub mod serial;
 pub mod slcan;
@@ -19,26 +26,25 @@ pub mod spec;
 pub mod udp;
 
 pub use can::{CanBus, CanNode, CanTransport};
-pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty, SimClock};
+pub use clock::{Clock, SimClock, WallClock};
+pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty};
+pub use inbox::Inbox;
 pub use mem::{pair, MemTransport};
 pub use serial::SerialTransport;
 pub use slcan_port::{SlcanConfig, SlcanTransport};
 pub use spec::{open, LinkSpec, OpenError, SpecError};
 pub use udp::UdpTransport;
 
-/// Traffic counters of one transport. Frames and bytes are counted by the
-/// transport; CRC errors, retransmits and the RTT estimate come from the
-/// `motet_wire::link::Link` that rides on it ([`LinkStats::absorb`]).
+/// Traffic counters of one transport: frames and bytes as they crossed it.
+/// Link-level figures (CRC errors, retransmits, round-trip time) belong to
+/// the `motet_wire::link::Link` that rides on the transport and are read
+/// from it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LinkStats {
     pub frames_out: u64,
     pub bytes_out: u64,
     pub frames_in: u64,
     pub bytes_in: u64,
-    pub crc_errors: u64,
-    pub retransmits: u64,
-    /// Smoothed round-trip time in µs (0 before any sample).
-    pub rtt_us: u64,
 }
 
 impl LinkStats {
@@ -53,21 +59,142 @@ impl LinkStats {
         self.frames_in += 1;
         self.bytes_in += bytes as u64;
     }
-
-    /// Copies the link-level figures from a `Link`'s statistics.
-    pub fn absorb(&mut self, link: &motet_wire::link::Stats) {
-        self.crc_errors = link.crc_errors;
-        self.retransmits = link.retransmits;
-        self.rtt_us = link.srtt_us;
-    }
 }
 
 /// One end of a carrier of motet frames.
+///
+/// A transport moves whole encoded frames and nothing else: it does not
+/// decode them, acknowledge them, retransmit them or read a clock. The
+/// `motet_wire::link::Link` above it does all of that with the time its
+/// caller passes in, so a transport that loses, corrupts, duplicates or
+/// reorders frames is still correct, only slower.
+///
+/// # What each method must do
+///
+/// - [`name`](Transport::name): a short label for messages and logs, fixed
+///   when the transport is made (`"udp:127.0.0.1:4000->127.0.0.1:5000"`).
+/// - [`send`](Transport::send): hand one frame to the medium and return
+///   without waiting for it to arrive. The frame is the COBS-stuffed bytes,
+///   usually ending with the 0x00 delimiter. A datagram transport sends it as
+///   one datagram, as given; a stream transport appends the delimiter if it
+///   is missing, because the receiver finds frame boundaries only there.
+///   Count it with [`LinkStats::sent`]. Return `Err` only when the medium is
+///   gone (port closed, peer dropped, no route); a frame lost in transit is
+///   not an error.
+/// - [`recv`](Transport::recv): the next frame received, or `Ok(None)`.
+///   `timeout` `None` must not block at all (the caller polls in its own
+///   loop); `Some(d)` may block up to `d` of real time for the first frame,
+///   and must return as soon as one frame is ready. Hand frames out one per
+///   call, in arrival order, with their delimiter if the medium carried it.
+///   Bytes that cannot be a frame are handed on anyway (the decoder counts
+///   them as CRC errors); a run longer than `motet_wire::frame::MAX_FRAME`
+///   without a delimiter is cut ([`StreamSplitter`] does both). Count each
+///   frame handed out with [`LinkStats::received`].
+/// - [`stats`](Transport::stats): the counters above.
+///
+/// # Timestamps
+///
+/// The transport owns none. The caller reads its clock before and after
+/// `recv` and passes the time to the link; a transport simulated in
+/// process (the CAN bus, [`Faulty`] on a [`SimClock`]) never waits for its
+/// own notion of time inside `recv`.
+///
+/// # Framing help
+///
+/// A byte-stream medium keeps a [`StreamSplitter`] (one per sender if
+/// several share the medium) that cuts the stream at 0x00, and an [`Inbox`]
+/// of frames completed but not yet handed out; [`Inbox::recv`] then is the
+/// whole of `recv`: the transport only says how to read its medium once.
+///
+/// # Example
+///
+/// A transport over any `Read + Write` byte stream, here an in-memory loop
+/// that receives what it sent:
+///
+/// ```
+/// use motet_link::{Inbox, LinkStats, StreamSplitter, Transport};
+/// use std::io::{self, Read, Write};
+/// use std::time::Duration;
+///
+/// struct StreamTransport<S> {
+///     name: String,
+///     stream: S,
+///     splitter: StreamSplitter,
+///     inbox: Inbox,
+///     stats: LinkStats,
+/// }
+///
+/// impl<S: Read + Write> Transport for StreamTransport<S> {
+///     fn name(&self) -> &str {
+///         &self.name
+///     }
+///
+///     fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+///         self.stream.write_all(frame)?;
+///         if frame.last() != Some(&0) {
+///             self.stream.write_all(&[0])?;
+///         }
+///         self.stats.sent(frame.len());
+///         Ok(())
+///     }
+///
+///     fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
+///         // Read the medium once, waiting at most `_wait` (this stream
+///         // never blocks), and say whether bytes arrived.
+///         let (stream, splitter) = (&mut self.stream, &mut self.splitter);
+///         self.inbox.recv(timeout, &mut self.stats, |inbox, _wait| {
+///             let mut buf = [0u8; 256];
+///             let n = stream.read(&mut buf)?;
+///             inbox.take_stream(splitter, &buf[..n]);
+///             Ok(n > 0)
+///         })
+///     }
+///
+///     fn stats(&self) -> &LinkStats {
+///         &self.stats
+///     }
+/// }
+///
+/// /// Bytes written come back to be read.
+/// #[derive(Default)]
+/// struct Echo(std::collections::VecDeque<u8>);
+/// impl Read for Echo {
+///     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+///         self.0.read(buf)
+///     }
+/// }
+/// impl Write for Echo {
+///     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+///         self.0.extend(buf);
+///         Ok(buf.len())
+///     }
+///     fn flush(&mut self) -> io::Result<()> {
+///         Ok(())
+///     }
+/// }
+///
+/// let mut t = StreamTransport {
+///     name: "echo".into(),
+///     stream: Echo::default(),
+///     splitter: StreamSplitter::default(),
+///     inbox: Inbox::default(),
+///     stats: LinkStats::default(),
+/// };
+/// t.send(&[1, 2, 3]).unwrap();
+/// t.send(&[4, 0]).unwrap();
+/// assert_eq!(t.recv(None).unwrap(), Some(vec![1, 2, 3, 0]));
+/// assert_eq!(t.recv(Some(Duration::from_millis(1))).unwrap(), Some(vec![4, 0]));
+/// assert_eq!(t.recv(None).unwrap(), None);
+/// assert_eq!(t.stats().frames_in, 2);
+/// ```
+///
+/// To make the transport reachable by a link specification
+/// (`motet run --link …`), add its scheme to [`spec`].
 pub trait Transport {
     /// A short human-readable name ("mem:a", "udp:127.0.0.1:4000", ...).
     fn name(&self) -> &str;
 
-    /// Sends one encoded frame.
+    /// Sends one encoded frame without waiting for it to arrive.
     fn send(&mut self, frame: &[u8]) -> io::Result<()>;
 
     /// The next received frame, if any: `timeout` `None` does not block,
@@ -76,9 +203,6 @@ pub trait Transport {
 
     /// Counters so far.
     fn stats(&self) -> &LinkStats;
-
-    /// Counters, for the caller to fill in link-level figures.
-    fn stats_mut(&mut self) -> &mut LinkStats;
 }
 
 /// Collects a byte stream into frames ending at 0x00. Empty frames (repeated
@@ -131,8 +255,15 @@ impl StreamSplitter {
 pub(crate) mod testutil {
     use super::Transport;
     use motet_wire::frame::MAX_FRAME;
-    use motet_wire::link::{Config, Link};
+    use motet_wire::link::{Config, Link, Stats};
     use std::time::Duration;
+
+    /// What [`link_exchange`] delivered, and the two links' figures.
+    pub struct Exchanged {
+        pub got: Vec<u32>,
+        pub host: Stats,
+        pub node: Stats,
+    }
 
     /// Drives an active host link and a passive node link over two
     /// transports until the node has received `count` payloads; returns them.
@@ -143,7 +274,7 @@ pub(crate) mod testutil {
         b: &mut dyn Transport,
         count: u32,
         wait: Option<Duration>,
-    ) -> Vec<u32> {
+    ) -> Exchanged {
         let mut now = 0u64;
         link_exchange_clocked(a, b, count, wait, &mut || {
             now += 50;
@@ -159,7 +290,7 @@ pub(crate) mod testutil {
         count: u32,
         wait: Option<Duration>,
         clock: &mut dyn FnMut() -> u64,
-    ) -> Vec<u32> {
+    ) -> Exchanged {
         let mut host = Link::new(Config {
             isn: 1000,
             ..Config::new(1, 2, true)
@@ -201,9 +332,11 @@ pub(crate) mod testutil {
                 let _ = host.on_frame(&f, now);
             }
         }
-        a.stats_mut().absorb(host.stats());
-        b.stats_mut().absorb(node.stats());
-        got
+        Exchanged {
+            got,
+            host: *host.stats(),
+            node: *node.stats(),
+        }
     }
 }
 

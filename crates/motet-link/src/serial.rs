@@ -1,11 +1,10 @@
 //! Serial transport: the COBS-stuffed stream over a serial port (USB CDC,
 //! UART, a pseudo-terminal), frames ending at 0x00.
 
-use crate::{LinkStats, StreamSplitter, Transport};
+use crate::{Inbox, LinkStats, StreamSplitter, Transport};
 use serialport::SerialPort;
-use std::collections::VecDeque;
-use std::io::{self, Read, Write};
-use std::time::{Duration, Instant};
+use std::io::{self, Write};
+use std::time::Duration;
 
 /// Opens the device at `path` in raw mode, 8N1, no flow control, reads not
 /// blocking.
@@ -20,12 +19,33 @@ pub fn open_raw(path: &str, baud: u32) -> io::Result<Box<dyn SerialPort>> {
         .map_err(io::Error::from)
 }
 
+/// Reads once from `port` into `buf`, waiting at most `wait`; 0 when nothing
+/// arrived in time.
+pub(crate) fn read_port(
+    port: &mut dyn SerialPort,
+    wait: Duration,
+    buf: &mut [u8],
+) -> io::Result<usize> {
+    port.set_timeout(wait).map_err(io::Error::from)?;
+    match port.read(buf) {
+        Err(e)
+            if matches!(
+                e.kind(),
+                io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+            ) =>
+        {
+            Ok(0)
+        }
+        r => r,
+    }
+}
+
 /// A serial port carrying motet frames.
 pub struct SerialTransport {
     name: String,
     port: Box<dyn SerialPort>,
     splitter: StreamSplitter,
-    ready: VecDeque<Vec<u8>>,
+    inbox: Inbox,
     stats: LinkStats,
 }
 
@@ -34,7 +54,7 @@ impl std::fmt::Debug for SerialTransport {
         f.debug_struct("SerialTransport")
             .field("name", &self.name)
             .field("pending", &self.splitter.pending())
-            .field("ready", &self.ready.len())
+            .field("ready", &self.inbox.len())
             .field("stats", &self.stats)
             .finish()
     }
@@ -53,7 +73,7 @@ impl SerialTransport {
             name,
             port,
             splitter: StreamSplitter::default(),
-            ready: VecDeque::new(),
+            inbox: Inbox::new(),
             stats: LinkStats::default(),
         }
     }
@@ -63,29 +83,6 @@ impl SerialTransport {
     pub fn write_raw(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.port.write_all(bytes)?;
         self.port.flush()
-    }
-
-    /// Reads once, waiting at most `wait`; returns whether bytes arrived.
-    fn fill(&mut self, wait: Duration) -> io::Result<bool> {
-        self.port.set_timeout(wait).map_err(io::Error::from)?;
-        let mut buf = [0u8; 512];
-        match self.port.read(&mut buf) {
-            Ok(0) => Ok(false),
-            Ok(n) => {
-                let ready = &mut self.ready;
-                self.splitter.push(&buf[..n], &mut |f| ready.push_back(f));
-                Ok(true)
-            }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                ) =>
-            {
-                Ok(false)
-            }
-            Err(e) => Err(e),
-        }
     }
 }
 
@@ -106,30 +103,17 @@ impl Transport for SerialTransport {
     }
 
     fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        let deadline = timeout.map(|d| Instant::now() + d);
-        while self.ready.is_empty() {
-            let wait = match deadline {
-                None => Duration::ZERO,
-                Some(t) => t.saturating_duration_since(Instant::now()),
-            };
-            let got = self.fill(wait)?;
-            if !got && (deadline.is_none() || wait.is_zero()) {
-                break;
-            }
-        }
-        let f = self.ready.pop_front();
-        if let Some(f) = &f {
-            self.stats.received(f.len());
-        }
-        Ok(f)
+        let (port, splitter) = (&mut self.port, &mut self.splitter);
+        self.inbox.recv(timeout, &mut self.stats, |inbox, wait| {
+            let mut buf = [0u8; 512];
+            let n = read_port(port.as_mut(), wait, &mut buf)?;
+            inbox.take_stream(splitter, &buf[..n]);
+            Ok(n > 0)
+        })
     }
 
     fn stats(&self) -> &LinkStats {
         &self.stats
-    }
-
-    fn stats_mut(&mut self) -> &mut LinkStats {
-        &mut self.stats
     }
 }
 
@@ -282,7 +266,7 @@ mod tests {
     #[test]
     fn link_over_pty_delivers_in_order() {
         let (mut m, mut s) = pty::pair();
-        let got = link_exchange(&mut m, &mut s, 300, Some(Duration::from_millis(20)));
+        let got = link_exchange(&mut m, &mut s, 300, Some(Duration::from_millis(20))).got;
         assert_eq!(got, (0..300).collect::<Vec<u32>>());
     }
 }

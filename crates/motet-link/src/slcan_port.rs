@@ -12,12 +12,13 @@
 
 use crate::can::fragment;
 use crate::serial::open_raw;
+use crate::serial::read_port;
 use crate::slcan::{self, CanFrame, Command, LineSplitter, BITRATES, MAX_EXT_ID, MAX_STD_ID};
-use crate::{LinkStats, StreamSplitter, Transport};
+use crate::{Inbox, LinkStats, StreamSplitter, Transport};
 use serialport::SerialPort;
-use std::collections::{BTreeMap, VecDeque};
-use std::io::{self, Read, Write};
-use std::time::{Duration, Instant};
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+use std::time::Duration;
 
 /// Settings of an slcan transport.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,11 +70,18 @@ pub struct SlcanTransport {
     name: String,
     port: Box<dyn SerialPort>,
     cfg: SlcanConfig,
+    rx: Lines,
+    inbox: Inbox,
+    stats: LinkStats,
+}
+
+/// What is read from the adapter: its lines, the frames' fragments per
+/// sender, and the counts of everything else it said.
+#[derive(Default)]
+struct Lines {
     lines: LineSplitter,
     splitters: BTreeMap<u32, StreamSplitter>,
-    ready: VecDeque<Vec<u8>>,
     counts: AdapterCounts,
-    stats: LinkStats,
 }
 
 impl std::fmt::Debug for SlcanTransport {
@@ -81,8 +89,8 @@ impl std::fmt::Debug for SlcanTransport {
         f.debug_struct("SlcanTransport")
             .field("name", &self.name)
             .field("cfg", &self.cfg)
-            .field("ready", &self.ready.len())
-            .field("counts", &self.counts)
+            .field("ready", &self.inbox.len())
+            .field("counts", &self.rx.counts)
             .field("stats", &self.stats)
             .finish()
     }
@@ -124,10 +132,8 @@ impl SlcanTransport {
             name,
             port,
             cfg,
-            lines: LineSplitter::default(),
-            splitters: BTreeMap::new(),
-            ready: VecDeque::new(),
-            counts: AdapterCounts::default(),
+            rx: Lines::default(),
+            inbox: Inbox::new(),
             stats: LinkStats::default(),
         };
         let mut setup = Vec::new();
@@ -144,10 +150,30 @@ impl SlcanTransport {
     }
 
     pub fn adapter_counts(&self) -> &AdapterCounts {
-        &self.counts
+        &self.rx.counts
+    }
+}
+
+impl Lines {
+    /// Reads once, waiting at most `wait`; returns whether bytes arrived.
+    fn fill(
+        &mut self,
+        port: &mut dyn SerialPort,
+        cfg: &SlcanConfig,
+        inbox: &mut Inbox,
+        wait: Duration,
+    ) -> io::Result<bool> {
+        let mut buf = [0u8; 1024];
+        let n = read_port(port, wait, &mut buf)?;
+        let mut lines = Vec::new();
+        self.lines.push(&buf[..n], &mut |l| lines.push(l));
+        for l in lines {
+            self.on_line(cfg, inbox, &l);
+        }
+        Ok(n > 0)
     }
 
-    fn on_line(&mut self, line: &[u8]) {
+    fn on_line(&mut self, cfg: &SlcanConfig, inbox: &mut Inbox, line: &[u8]) {
         match line {
             [] | [b'z'] | [b'Z'] => {
                 self.counts.acks += 1;
@@ -166,49 +192,19 @@ impl SlcanTransport {
                 return;
             }
         };
-        if !self.wanted(&f) {
+        if !wanted(cfg, &f) {
             self.counts.skipped += 1;
             return;
         }
-        let ready = &mut self.ready;
-        self.splitters
-            .entry(f.id)
-            .or_default()
-            .push(&f.data, &mut |fr| ready.push_back(fr));
+        inbox.take_from(&mut self.splitters, f.id, &f.data);
     }
+}
 
-    fn wanted(&self, f: &CanFrame) -> bool {
-        f.fd && !f.rtr
-            && f.extended == self.cfg.extended
-            && f.id != self.cfg.id
-            && self.cfg.peer.is_none_or(|p| p == f.id)
-    }
-
-    /// Reads once, waiting at most `wait`; returns whether bytes arrived.
-    fn fill(&mut self, wait: Duration) -> io::Result<bool> {
-        self.port.set_timeout(wait).map_err(io::Error::from)?;
-        let mut buf = [0u8; 1024];
-        match self.port.read(&mut buf) {
-            Ok(0) => Ok(false),
-            Ok(n) => {
-                let mut lines = Vec::new();
-                self.lines.push(&buf[..n], &mut |l| lines.push(l));
-                for l in lines {
-                    self.on_line(&l);
-                }
-                Ok(true)
-            }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                ) =>
-            {
-                Ok(false)
-            }
-            Err(e) => Err(e),
-        }
-    }
+fn wanted(cfg: &SlcanConfig, f: &CanFrame) -> bool {
+    f.fd && !f.rtr
+        && f.extended == cfg.extended
+        && f.id != cfg.id
+        && cfg.peer.is_none_or(|p| p == f.id)
 }
 
 impl Drop for SlcanTransport {
@@ -238,30 +234,14 @@ impl Transport for SlcanTransport {
     }
 
     fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        let deadline = timeout.map(|d| Instant::now() + d);
-        while self.ready.is_empty() {
-            let wait = match deadline {
-                None => Duration::ZERO,
-                Some(t) => t.saturating_duration_since(Instant::now()),
-            };
-            let got = self.fill(wait)?;
-            if !got && (deadline.is_none() || wait.is_zero()) {
-                break;
-            }
-        }
-        let f = self.ready.pop_front();
-        if let Some(f) = &f {
-            self.stats.received(f.len());
-        }
-        Ok(f)
+        let (port, cfg, rx) = (&mut self.port, &self.cfg, &mut self.rx);
+        self.inbox.recv(timeout, &mut self.stats, |inbox, wait| {
+            rx.fill(port.as_mut(), cfg, inbox, wait)
+        })
     }
 
     fn stats(&self) -> &LinkStats {
         &self.stats
-    }
-
-    fn stats_mut(&mut self) -> &mut LinkStats {
-        &mut self.stats
     }
 }
 
@@ -271,6 +251,7 @@ mod tests {
     use crate::can::{CanBus, CanTransport};
     use crate::serial::pty;
     use crate::testutil::link_exchange;
+    use std::io::Read;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
     use std::thread;
@@ -368,7 +349,7 @@ mod tests {
         stranger.transmit(&[1, 2, 3, 0]).unwrap();
         let stop = Arc::new(AtomicBool::new(false));
         let sim = adapter(master, bus, stop.clone());
-        let got = link_exchange(&mut host, &mut node, 1000, Some(Duration::from_millis(20)));
+        let got = link_exchange(&mut host, &mut node, 1000, Some(Duration::from_millis(20))).got;
         stop.store(true, Ordering::Relaxed);
         let log = sim.join().unwrap();
         assert_eq!(got, (0..1000).collect::<Vec<u32>>());

@@ -3,6 +3,7 @@
 //! and are repeated until answered, so no link has to be set up first; every
 //! request here is safe to repeat (a page written twice writes the same bytes).
 
+use crate::clock::{self, SharedClock};
 use motet_link::Transport;
 use motet_wire::decode;
 use motet_wire::frame::{self, Flags, BROADCAST, MAX_RAW};
@@ -10,7 +11,7 @@ use motet_wire::image;
 use motet_wire::service::{
     is_node_address, Info, ServiceReply, ServiceRequest, Version, HOST_ADDRESS, PAGE_SIZE,
 };
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AdminError {
@@ -86,10 +87,12 @@ pub struct Found {
     pub info: Info,
 }
 
-/// Administrative requests over one transport.
+/// Administrative requests over one transport. Waits are measured on its
+/// clock (the wall clock unless given another, [`Admin::with_clock`]).
 pub struct Admin {
     transport: Box<dyn Transport + Send>,
     link: String,
+    clock: SharedClock,
     /// Wait for an answer before repeating the request.
     pub timeout: Duration,
     pub tries: u32,
@@ -97,9 +100,19 @@ pub struct Admin {
 
 impl Admin {
     pub fn new(transport: Box<dyn Transport + Send>, link: &str) -> Admin {
+        Admin::with_clock(transport, link, clock::wall())
+    }
+
+    /// Requests whose waits are measured on `clock`.
+    pub fn with_clock(
+        transport: Box<dyn Transport + Send>,
+        link: &str,
+        clock: SharedClock,
+    ) -> Admin {
         Admin {
             transport,
             link: link.to_string(),
+            clock,
             timeout: Duration::from_millis(200),
             tries: 5,
         }
@@ -126,14 +139,19 @@ impl Admin {
         r.map_err(|e| self.io(e))
     }
 
-    /// The next service reply datagram to the host before `until`, with its source.
-    fn receive(&mut self, until: Instant) -> Result<Option<(u16, u8, ServiceReply)>, AdminError> {
+    fn now(&self) -> u64 {
+        self.clock.now_us()
+    }
+
+    /// The next service reply datagram to the host before `until` (µs of
+    /// the clock), with its source.
+    fn receive(&mut self, until: u64) -> Result<Option<(u16, u8, ServiceReply)>, AdminError> {
         loop {
-            let now = Instant::now();
+            let now = self.now();
             if now >= until {
                 return Ok(None);
             }
-            let r = self.transport.recv(Some(until - now));
+            let r = self.transport.recv(Some(self.clock.real(until - now)));
             let Some(bytes) = r.map_err(|e| self.io(e))? else {
                 continue;
             };
@@ -155,7 +173,7 @@ impl Admin {
         let mut stranger = None;
         for _ in 0..self.tries {
             self.send(dst, req)?;
-            let until = Instant::now() + self.timeout;
+            let until = self.now() + us(self.timeout);
             while let Some((src, port, reply)) = self.receive(until)? {
                 if port != req.port() {
                     continue;
@@ -200,11 +218,11 @@ impl Admin {
     /// Every node that answers a broadcast Info within `wait`.
     pub fn scan(&mut self, wait: Duration) -> Result<Vec<Found>, AdminError> {
         let mut found: Vec<Found> = Vec::new();
-        let start = Instant::now();
+        let start = self.now();
         // Asked a few times: a datagram may be lost.
         for _ in 0..3 {
             self.send(BROADCAST, &ServiceRequest::Info)?;
-            let until = (Instant::now() + wait / 3).min(start + wait);
+            let until = (self.now() + us(wait / 3)).min(start + us(wait));
             while let Some((src, _, reply)) = self.receive(until)? {
                 if let ServiceReply::Info(info) = reply {
                     if !found.iter().any(|f| f.info.uid == info.uid) {
@@ -269,15 +287,16 @@ impl Admin {
     /// Asks every unpaired node to blink and waits up to `wait` for a person
     /// to press one's button; that node takes `address`. Returns its uid.
     pub fn pair_by_button(&mut self, address: u16, wait: Duration) -> Result<u64, AdminError> {
-        let start = Instant::now();
+        let start = self.now();
+        let end = start + us(wait);
         let mut next_ask = start;
-        while start.elapsed() < wait {
-            if Instant::now() >= next_ask {
+        while self.now() < end {
+            if self.now() >= next_ask {
                 // Repeated so that a lost datagram or a node started late still blinks.
                 self.send(BROADCAST, &ServiceRequest::Pair { address })?;
-                next_ask = Instant::now() + Duration::from_secs(1);
+                next_ask = self.now() + 1_000_000;
             }
-            let until = next_ask.min(start + wait);
+            let until = next_ask.min(end);
             while let Some((_, _, reply)) = self.receive(until)? {
                 if let ServiceReply::Paired { uid, address: got } = reply {
                     let _ = self.send(BROADCAST, &ServiceRequest::PairCancel);
@@ -396,7 +415,7 @@ impl Admin {
     /// Waits for the node at `address` to answer after a firmware start (a
     /// board restarts through its bootloader) and checks it runs `version`.
     fn running(&mut self, address: u16, version: Version) -> Result<(), AdminError> {
-        let until = Instant::now() + Duration::from_secs(15);
+        let until = self.now() + 15_000_000;
         loop {
             match self.info(address) {
                 Ok(i) if i.firmware == version => return Ok(()),
@@ -408,7 +427,7 @@ impl Admin {
                         running: i.firmware,
                     })
                 }
-                Err(AdminError::NoAnswer { .. }) if Instant::now() < until => {}
+                Err(AdminError::NoAnswer { .. }) if self.now() < until => {}
                 Err(e) => return Err(e),
             }
         }
@@ -420,6 +439,11 @@ impl Admin {
             other => Err(self.unexpected(address, req, &other)),
         }
     }
+}
+
+/// A wait in µs.
+fn us(d: Duration) -> u64 {
+    d.as_micros().min(u64::MAX as u128) as u64
 }
 
 /// The next free node address not in `taken`.
@@ -515,5 +539,62 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("refused"), "{e}");
+    }
+
+    /// A transport on which every receive lets `step` µs of a simulated
+    /// clock pass and nothing ever arrives.
+    struct Silent {
+        inner: motet_link::MemTransport,
+        clock: motet_link::SimClock,
+        step: u64,
+    }
+
+    impl Transport for Silent {
+        fn name(&self) -> &str {
+            "silent"
+        }
+        fn send(&mut self, frame: &[u8]) -> std::io::Result<()> {
+            self.inner.send(frame)
+        }
+        fn recv(&mut self, _: Option<Duration>) -> std::io::Result<Option<Vec<u8>>> {
+            self.clock.advance(self.step);
+            Ok(None)
+        }
+        fn stats(&self) -> &motet_link::LinkStats {
+            self.inner.stats()
+        }
+    }
+
+    #[test]
+    fn waits_are_measured_on_the_admin_clock() {
+        // (timeout, tries, µs per receive, receives until the request gives up)
+        let cases = [
+            (200_000u64, 5u32, 50_000u64, 20u32),
+            (1_000, 3, 1_000, 3),
+            (10_000, 1, 3_000, 4),
+        ];
+        for (timeout, tries, step, receives) in cases {
+            let clock = motet_link::SimClock::new();
+            let (a, _b) = motet_link::pair("host", "node");
+            let silent = Silent {
+                inner: a,
+                clock: clock.clone(),
+                step,
+            };
+            let mut admin =
+                Admin::with_clock(Box::new(silent), "sim", std::sync::Arc::new(clock.clone()));
+            admin.timeout = Duration::from_micros(timeout);
+            admin.tries = tries;
+            let e = admin.info(2).unwrap_err();
+            assert!(
+                matches!(e, AdminError::NoAnswer { tries: t, .. } if t == tries),
+                "{e}"
+            );
+            assert_eq!(
+                clock.get(),
+                step * receives as u64,
+                "{timeout} {tries} {step}"
+            );
+        }
     }
 }

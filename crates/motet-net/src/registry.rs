@@ -33,47 +33,69 @@ pub fn driver(kind: &str) -> Option<&'static Driver> {
     DRIVERS.iter().find(|d| d.kind == kind)
 }
 
-/// Why a node cannot serve a machine node of `machine`.
-pub fn check(machine: &Machine, spec: &NodeSpec, info: &Info) -> Result<&'static Driver, String> {
-    let d = driver(info.kind.as_str()).ok_or_else(|| {
-        format!(
-            "node kind `{}` has no driver on this host (known: {})",
-            info.kind,
-            DRIVERS
-                .iter()
-                .map(|d| d.kind)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
+/// Why a node cannot serve a machine node.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Mismatch {
+    #[error("node kind `{kind}` has no driver on this host (known: {known})")]
+    NoDriver { kind: String, known: String },
+    #[error("the machine gives it {want} actuators but it has {have} channels")]
+    Channels { want: usize, have: u8 },
+    #[error("the machine gives it {want} tools but it has {have} outputs")]
+    Tools { want: usize, have: u8 },
+    #[error("the machine file asks for a queue of {want} but the node holds {have}")]
+    Queue { want: usize, have: u16 },
+    #[error("actuator {actuator} steps up to {hz:.0} times a second at its joint's top speed, but the node's channels reach {max} ({board}): lower its max_velocity or its microstepping")]
+    StepRate {
+        actuator: String,
+        hz: f64,
+        max: u32,
+        board: String,
+    },
+}
+
+/// The driver for a node that can serve machine node `spec` of `machine`,
+/// or why it cannot.
+pub fn check(machine: &Machine, spec: &NodeSpec, info: &Info) -> Result<&'static Driver, Mismatch> {
+    let d = driver(info.kind.as_str()).ok_or_else(|| Mismatch::NoDriver {
+        kind: info.kind.to_string(),
+        known: DRIVERS
+            .iter()
+            .map(|d| d.kind)
+            .collect::<Vec<_>>()
+            .join(", "),
     })?;
     if (info.channels as usize) < spec.actuators.len() {
-        return Err(format!(
-            "the machine gives it {} actuators but it has {} channels",
-            spec.actuators.len(),
-            info.channels
-        ));
+        return Err(Mismatch::Channels {
+            want: spec.actuators.len(),
+            have: info.channels,
+        });
     }
     if (info.tools as usize) < spec.tools.len() {
-        return Err(format!(
-            "the machine gives it {} tools but it has {} outputs",
-            spec.tools.len(),
-            info.tools
-        ));
+        return Err(Mismatch::Tools {
+            want: spec.tools.len(),
+            have: info.tools,
+        });
     }
     if (info.queue_capacity as usize) < spec.queue {
-        return Err(format!(
-            "the machine file asks for a queue of {} but the node holds {}",
-            spec.queue, info.queue_capacity
-        ));
+        return Err(Mismatch::Queue {
+            want: spec.queue,
+            have: info.queue_capacity,
+        });
     }
     if info.max_step_hz > 0 {
         for &a in &spec.actuators {
             let act = &machine.actuators[a];
             if let Some(hz) = act.max_step_hz.filter(|&hz| hz > info.max_step_hz as f64) {
-                return Err(format!(
-                    "actuator {} steps up to {hz:.0} times a second at its joint's top speed, but the node's channels reach {} ({}): lower its max_velocity or its microstepping",
-                    act.name, info.max_step_hz, if info.board.is_empty() { "its board" } else { info.board.as_str() }
-                ));
+                return Err(Mismatch::StepRate {
+                    actuator: act.name.clone(),
+                    hz,
+                    max: info.max_step_hz,
+                    board: if info.board.is_empty() {
+                        "its board".to_string()
+                    } else {
+                        info.board.to_string()
+                    },
+                });
             }
         }
     }
@@ -153,7 +175,7 @@ mod tests {
         for (i, want) in cases {
             match (check(&machine, &spec, &i), want) {
                 (Ok(_), None) => {}
-                (Err(e), Some(w)) => assert!(e.contains(w), "{}: {e}", i.kind),
+                (Err(e), Some(w)) => assert!(e.to_string().contains(w), "{}: {e}", i.kind),
                 (got, want) => panic!("{}: {got:?}, expected {want:?}", i.kind),
             }
         }

@@ -27,7 +27,7 @@ use crate::digest::Digest;
 use crate::journal::{Journal, JournalSegment};
 use crate::plan_feed::replan;
 use crate::run_record::{Continuation, RunRecord};
-use motet_host::{check_move, Distributor, Machine};
+use motet_host::{check_move, Distributor, Machine, Subscription};
 use motet_planner::{Command, Located, Move, MoveKind, PlanError, SourceLoc};
 use motet_trajectory::{Point, Segment, MAX_AXES};
 use motet_wire::service::Version;
@@ -144,8 +144,11 @@ pub enum ResumeError {
     },
     #[error("--assume-position names no axis {0:?} of this machine")]
     AssumeAxis(String),
-    #[error("resume would {what}: {message}")]
-    Beyond { what: String, message: String },
+    #[error("resume would {what}: {source}")]
+    Beyond {
+        what: String,
+        source: motet_host::MoveError,
+    },
 }
 
 /// What a node answered when asked where it is.
@@ -236,323 +239,32 @@ pub struct Resumption {
 /// job; `assumed` is where the person says the machine is, axis by axis.
 pub fn prove(ev: &Evidence, assumed: Option<&[(usize, f64)]>) -> Result<Resumption, ResumeError> {
     let (m, r, j) = (ev.machine, ev.record, ev.journal);
-    let jp = || ev.journal_path.to_string();
-    // The files.
-    for (what, path, recorded, now) in [
-        (
-            "machine file",
-            &r.machine,
-            r.machine_sha256,
-            ev.machine_sha256,
-        ),
-        ("job", &r.job, r.job_sha256, ev.job_sha256),
-    ] {
-        if recorded != now {
-            return Err(ResumeError::Changed {
-                what,
-                path: path.display().to_string(),
-                recorded,
-                now,
-            });
-        }
-    }
+    check_files(ev)?;
     let run = r.run_number().map_err(ResumeError::Record)?;
-    let start = r.start(m.start);
-    // The plan, again, against the journal. One segment more than recorded:
-    // a window that ended at rest continues with the next. A journal with
-    // no header is of a run that stopped before its trajectory started.
-    let plan = match &j.header {
-        None => Vec::new(),
-        Some(h) => {
-            for (what, got, want) in [
-                ("run", format!("{:08x}", h.run), format!("{run:08x}")),
-                (
-                    "machine file",
-                    h.machine.to_string(),
-                    r.machine_sha256.to_string(),
-                ),
-                ("job", h.job.to_string(), r.job_sha256.to_string()),
-                ("start", format!("{:?}", h.start), format!("{start:?}")),
-            ] {
-                if got != want {
-                    return Err(ResumeError::OtherRun {
-                        journal: jp(),
-                        what,
-                        got,
-                        want,
-                    });
-                }
-            }
-            replan(m, r.run_commands(ev.job), h, j.segments.len() + 1)
-                .map_err(|(loc, error)| ResumeError::Replan { loc, error })?
-        }
-    };
-    if plan.len() < j.segments.len() {
-        return Err(ResumeError::TooMany {
-            journal: jp(),
-            recorded: j.segments.len(),
-            planned: plan.len(),
-        });
-    }
-    for (i, s) in j.segments.iter().enumerate() {
-        if let Some(what) = difference(m, s, &plan[i]) {
-            return Err(ResumeError::Differs {
-                journal: jp(),
-                line: j.segment_line(i as u32).unwrap_or(0),
-                index: i as u32,
-                what,
-            });
-        }
-    }
-    let rest_of = |end: u32| -> Point {
-        match end.checked_sub(1) {
-            None => start,
-            Some(i) => plan[i as usize].1.end,
-        }
-    };
-    let tail_of = |end: u32| -> Result<u32, ResumeError> {
-        let Some(seal) = j.seal_ending(end) else {
-            return Ok(end);
-        };
-        let lo = (end as usize).saturating_sub(TAIL_SPAN);
-        let segs: Vec<&Segment> = plan[lo..end as usize].iter().map(|p| &p.1).collect();
-        let (deadline, pos) = crate::tail::deadline(segs);
-        let want = (lo + pos) as u32;
-        if deadline.is_finite() && seal.tail != want {
-            return Err(ResumeError::Tail {
-                journal: jp(),
-                end,
-                got: seal.tail,
-                want,
-            });
-        }
-        Ok(seal.tail)
-    };
-
-    // Every window's tail is where the plan puts it, and no window claims
-    // segments finished before they could have ended.
-    for seal in j.seals.iter().chain(j.stop.as_ref().map(|s| &s.seal)) {
-        tail_of(seal.end)?;
-        if let Some(last) = seal.done.checked_sub(1) {
-            let ended = plan[last as usize].1.t1();
-            if ended > seal.time as f64 + DONE_SLACK_US {
-                return Err(ResumeError::Done {
-                    journal: jp(),
-                    done: seal.done,
-                    time: seal.time,
-                    ended,
-                });
-            }
-        }
-    }
-
-    // The nodes.
+    let plan = Replayed::new(ev, run)?;
+    plan.check_seals()?;
     let subs = Distributor::new(m).subscriptions;
     let mut kept: Vec<(usize, u32)> = Vec::new();
     let mut lost: Vec<(usize, String)> = Vec::new();
-    for (k, spec) in m.nodes.iter().enumerate() {
-        let rn = r.nodes.get(k);
-        let link = rn.map_or_else(String::new, |n| n.link.clone());
-        let silent = || ResumeError::Silent {
-            node: spec.name.clone(),
-            link: link.clone(),
-        };
-        let (uid, firmware, pos) = match ev.nodes.get(k) {
-            Some(NodeSeen::Answered {
-                uid,
-                firmware,
-                position,
-            }) => (*uid, *firmware, position.ok_or_else(silent)?),
-            _ => return Err(silent()),
-        };
-        let uid_text = crate::pairing_file::format_uid(uid);
-        if let Some(n) = rn.filter(|n| n.uid != uid_text) {
-            return Err(ResumeError::OtherDevice {
-                node: spec.name.clone(),
-                link,
-                uid: uid_text,
-                recorded: n.uid.clone(),
-            });
+    for (k, sub) in subs.iter().enumerate().take(m.nodes.len()) {
+        match check_node(ev, run, &plan, sub.axes, k)? {
+            Seen::Kept(committed) => kept.push((k, committed)),
+            Seen::Lost(why) => lost.push((k, why)),
+            Seen::NoPosition => {}
         }
-        if pos.queued > 0 {
-            return Err(ResumeError::Moving {
-                node: spec.name.clone(),
-                queued: pos.queued,
-            });
-        }
-        if spec.actuators.is_empty() {
-            // Tools only: nothing that holds a position.
-            continue;
-        }
-        // A resumed run that stopped before it reconfigured this node: the
-        // node still holds the run before, at rest where this one started.
-        let before = r.continues.as_ref().is_some_and(|c| {
-            format!("{:08x}", pos.run) == c.after_run && pos.committed == c.after_window
-        });
-        let committed = if before { 0 } else { pos.committed };
-        if pos.run != run && !before {
-            let why = if pos.run == 0 {
-                let was = rn.map_or(String::new(), |n| n.firmware.clone());
-                if was != firmware.to_string() && !was.is_empty() {
-                    format!(
-                        "node {} restarted with firmware {firmware} (the run had {was})",
-                        spec.name
-                    )
-                } else {
-                    format!("node {} restarted and holds no run", spec.name)
-                }
-            } else {
-                format!(
-                    "node {} ran another job since (run {:08x})",
-                    spec.name, pos.run
-                )
-            };
-            lost.push((k, why));
-            continue;
-        }
-        if committed > j.committed() {
-            return Err(ResumeError::NodeAhead {
-                node: spec.name.clone(),
-                committed,
-                journal: j.committed(),
-            });
-        }
-        let want = rest_of(committed);
-        let axes = subs[k].axes;
-        if (0..m.axes.len()).any(|i| axes & (1 << i) != 0 && want[i] != pos.at[i]) {
-            return Err(ResumeError::Elsewhere {
-                node: spec.name.clone(),
-                place: match committed {
-                    0 => "where the run started".to_string(),
-                    c => format!("the end of segment {}", c - 1),
-                },
-                at: show(m, &pos.at, axes),
-                want: show(m, &want, axes),
-            });
-        }
-        kept.push((k, committed));
     }
-
-    // Where the machine is, axis by axis.
     let window_end = kept.iter().map(|k| k.1).max().unwrap_or(j.committed());
-    let mut from = rest_of(window_end);
-    let mut known: [Option<(usize, f64)>; MAX_AXES] = [None; MAX_AXES];
-    for &(k, end) in &kept {
-        let p = rest_of(end);
-        for (i, slot) in known.iter_mut().enumerate().take(m.axes.len()) {
-            if subs[k].axes & (1 << i) == 0 {
-                continue;
-            }
-            match *slot {
-                Some((other, v)) if v != p[i] => {
-                    return Err(ResumeError::Disagree {
-                        a: m.nodes[other].name.clone(),
-                        b: m.nodes[k].name.clone(),
-                        axis: m.axes[i].name.clone(),
-                        va: v,
-                        vb: p[i],
-                    })
-                }
-                _ => *slot = Some((k, p[i])),
-            }
-            from[i] = p[i];
-        }
-    }
+    let (mut from, known) = machine_position(m, &subs, &kept, &plan, window_end)?;
     let needed: u8 = lost.iter().fold(0, |a, &(k, _)| a | subs[k].axes);
-    let mut assumed_names = Vec::new();
-    match assumed {
-        None if needed != 0 => {
-            let axes: Vec<&str> = (0..m.axes.len())
-                .filter(|i| needed & (1 << i) != 0)
-                .map(|i| m.axes[i].name.as_str())
-                .collect();
-            return Err(ResumeError::Unknown {
-                nodes: lost
-                    .iter()
-                    .map(|l| l.1.clone())
-                    .collect::<Vec<_>>()
-                    .join("; "),
-                is: if axes.len() == 1 { "is" } else { "are" },
-                example: axes
-                    .iter()
-                    .map(|a| format!("{a}=…"))
-                    .collect::<Vec<_>>()
-                    .join(","),
-                axes: axes.join(", "),
-            });
-        }
-        None => {}
-        Some(_) if needed == 0 => {
-            return Err(ResumeError::AssumeNotNeeded {
-                at: show(m, &from, u8::MAX),
-            })
-        }
-        Some(given) => {
-            for i in (0..m.axes.len()).filter(|i| needed & (1 << i) != 0) {
-                let v = given
-                    .iter()
-                    .rev()
-                    .find(|g| g.0 == i)
-                    .map(|g| g.1)
-                    .ok_or_else(|| ResumeError::Unknown {
-                        nodes: lost
-                            .iter()
-                            .map(|l| l.1.clone())
-                            .collect::<Vec<_>>()
-                            .join("; "),
-                        is: "is",
-                        axes: m.axes[i].name.clone(),
-                        example: format!("{}=…", m.axes[i].name),
-                    })?;
-                from[i] = v;
-            }
-            for &(i, v) in given {
-                if i >= m.axes.len() {
-                    return Err(ResumeError::AssumeAxis(i.to_string()));
-                }
-                if needed & (1 << i) != 0 {
-                    continue;
-                }
-                if let Some((k, known)) = known[i] {
-                    if (v - known).abs() > 1e-6 * (1.0 + known.abs()) {
-                        return Err(ResumeError::AssumeConflict {
-                            axis: m.axes[i].name.clone(),
-                            given: v,
-                            node: m.nodes[k].name.clone(),
-                            known,
-                        });
-                    }
-                }
-            }
-            assumed_names = lost.iter().map(|&(k, _)| m.nodes[k].name.clone()).collect();
-        }
-    }
-
-    // Where the job continues: the first segment a tail slowed down, or,
-    // with a node lost, the first one not every node had finished.
-    let mut segment = window_end;
-    for &(_, end) in &kept {
-        segment = segment.min(tail_of(end)?);
-    }
-    if kept.is_empty() {
-        segment = segment.min(tail_of(window_end)?);
-    }
-    let mut notes = Vec::new();
-    if !lost.is_empty() {
-        let done = j.done().min(window_end);
-        if done < segment {
-            let again = segment - done;
-            notes.push(format!(
-                "the job continues from segment {done}, the last that every node had reported finished: up to {again} segment{} may run twice",
-                if again == 1 { "" } else { "s" }
-            ));
-            segment = done;
-        }
-    }
-    let (to, run_command) = match plan.get(segment as usize) {
+    let assumed_names = apply_assumed(m, assumed, &lost, needed, &known, &mut from)?;
+    let (segment, mut notes) = continue_at(&plan, &kept, !lost.is_empty(), window_end)?;
+    let (to, run_command) = match plan.plan.get(segment as usize) {
         Some((c, s)) => (s.start, *c),
         // Every segment ran: what is left are commands that do not move.
-        None => (rest_of(segment), plan.last().map_or(0, |p| p.0 + 1)),
+        None => (
+            plan.rest_of(segment),
+            plan.plan.last().map_or(0, |p| p.0 + 1),
+        ),
     };
     let (command, prelude_to) = r.job_command(run_command);
     let to = prelude_to.unwrap_or(to);
@@ -562,13 +274,13 @@ pub fn prove(ev: &Evidence, assumed: Option<&[(usize, f64)]>) -> Result<Resumpti
         );
     }
     let res = resume_at(ev.job, from, to, command);
-    check_move(m, &from, &from).map_err(|message| ResumeError::Beyond {
+    check_move(m, &from, &from).map_err(|source| ResumeError::Beyond {
         what: format!("start from {}", show(m, &from, u8::MAX)),
-        message,
+        source,
     })?;
-    check_move(m, &from, &to).map_err(|message| ResumeError::Beyond {
+    check_move(m, &from, &to).map_err(|source| ResumeError::Beyond {
         what: format!("travel to {}", show(m, &to, u8::MAX)),
-        message,
+        source,
     })?;
     let prelude = res.commands.len() - (ev.job.len() - res.command);
     Ok(Resumption {
@@ -589,6 +301,395 @@ pub fn prove(ev: &Evidence, assumed: Option<&[(usize, f64)]>) -> Result<Resumpti
         assumed: assumed_names,
         notes,
     })
+}
+
+/// The machine file and the job are the ones the run was made from.
+fn check_files(ev: &Evidence) -> Result<(), ResumeError> {
+    let r = ev.record;
+    for (what, path, recorded, now) in [
+        (
+            "machine file",
+            &r.machine,
+            r.machine_sha256,
+            ev.machine_sha256,
+        ),
+        ("job", &r.job, r.job_sha256, ev.job_sha256),
+    ] {
+        if recorded != now {
+            return Err(ResumeError::Changed {
+                what,
+                path: path.display().to_string(),
+                recorded,
+                now,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The job planned again, checked segment by segment against the journal.
+struct Replayed<'a> {
+    plan: Vec<(usize, Segment)>,
+    start: Point,
+    journal: &'a Journal,
+    journal_path: &'a str,
+}
+
+impl<'a> Replayed<'a> {
+    /// The plan, again, against the journal. One segment more than
+    /// recorded: a window that ended at rest continues with the next. A
+    /// journal with no header is of a run that stopped before its
+    /// trajectory started.
+    fn new(ev: &'a Evidence, run: u32) -> Result<Replayed<'a>, ResumeError> {
+        let (m, r, j) = (ev.machine, ev.record, ev.journal);
+        let start = r.start(m.start);
+        let jp = || ev.journal_path.to_string();
+        let plan = match &j.header {
+            None => Vec::new(),
+            Some(h) => {
+                for (what, got, want) in [
+                    ("run", format!("{:08x}", h.run), format!("{run:08x}")),
+                    (
+                        "machine file",
+                        h.machine.to_string(),
+                        r.machine_sha256.to_string(),
+                    ),
+                    ("job", h.job.to_string(), r.job_sha256.to_string()),
+                    ("start", format!("{:?}", h.start), format!("{start:?}")),
+                ] {
+                    if got != want {
+                        return Err(ResumeError::OtherRun {
+                            journal: jp(),
+                            what,
+                            got,
+                            want,
+                        });
+                    }
+                }
+                replan(m, r.run_commands(ev.job), h, j.segments.len() + 1)
+                    .map_err(|(loc, error)| ResumeError::Replan { loc, error })?
+            }
+        };
+        if plan.len() < j.segments.len() {
+            return Err(ResumeError::TooMany {
+                journal: jp(),
+                recorded: j.segments.len(),
+                planned: plan.len(),
+            });
+        }
+        for (i, s) in j.segments.iter().enumerate() {
+            if let Some(what) = difference(m, s, &plan[i]) {
+                return Err(ResumeError::Differs {
+                    journal: jp(),
+                    line: j.segment_line(i as u32).unwrap_or(0),
+                    index: i as u32,
+                    what,
+                });
+            }
+        }
+        Ok(Replayed {
+            plan,
+            start,
+            journal: j,
+            journal_path: ev.journal_path,
+        })
+    }
+
+    /// Where the machine rests when the committed window ends at `end`.
+    fn rest_of(&self, end: u32) -> Point {
+        match end.checked_sub(1) {
+            None => self.start,
+            Some(i) => self.plan[i as usize].1.end,
+        }
+    }
+
+    /// The tail start of the window ending at `end`, checked against the
+    /// plan when the journal has its seal.
+    fn tail_of(&self, end: u32) -> Result<u32, ResumeError> {
+        let Some(seal) = self.journal.seal_ending(end) else {
+            return Ok(end);
+        };
+        let lo = (end as usize).saturating_sub(TAIL_SPAN);
+        let segs: Vec<&Segment> = self.plan[lo..end as usize].iter().map(|p| &p.1).collect();
+        let (deadline, pos) = crate::tail::deadline(segs);
+        let want = (lo + pos) as u32;
+        if deadline.is_finite() && seal.tail != want {
+            return Err(ResumeError::Tail {
+                journal: self.journal_path.to_string(),
+                end,
+                got: seal.tail,
+                want,
+            });
+        }
+        Ok(seal.tail)
+    }
+
+    /// Every window's tail is where the plan puts it, and no window claims
+    /// segments finished before they could have ended.
+    fn check_seals(&self) -> Result<(), ResumeError> {
+        let j = self.journal;
+        for seal in j.seals.iter().chain(j.stop.as_ref().map(|s| &s.seal)) {
+            self.tail_of(seal.end)?;
+            if let Some(last) = seal.done.checked_sub(1) {
+                let ended = self.plan[last as usize].1.t1();
+                if ended > seal.time as f64 + DONE_SLACK_US {
+                    return Err(ResumeError::Done {
+                        journal: self.journal_path.to_string(),
+                        done: seal.done,
+                        time: seal.time,
+                        ended,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What a node's answer says about where it is.
+enum Seen {
+    /// At rest at the end of its committed window (this many segments).
+    Kept(u32),
+    /// It no longer holds the run: where it is, the person must say.
+    Lost(String),
+    /// Tools only: nothing that holds a position.
+    NoPosition,
+}
+
+/// Node `k`'s answer, checked: the device paired, at rest, on this run (or
+/// lost with the reason), and where the journal says its window ended.
+fn check_node(
+    ev: &Evidence,
+    run: u32,
+    plan: &Replayed,
+    axes: u8,
+    k: usize,
+) -> Result<Seen, ResumeError> {
+    let (m, r, j) = (ev.machine, ev.record, ev.journal);
+    let spec = &m.nodes[k];
+    let rn = r.nodes.get(k);
+    let link = rn.map_or_else(String::new, |n| n.link.clone());
+    let silent = || ResumeError::Silent {
+        node: spec.name.clone(),
+        link: link.clone(),
+    };
+    let (uid, firmware, pos) = match ev.nodes.get(k) {
+        Some(NodeSeen::Answered {
+            uid,
+            firmware,
+            position,
+        }) => (*uid, *firmware, position.ok_or_else(silent)?),
+        _ => return Err(silent()),
+    };
+    let uid_text = crate::pairing_file::format_uid(uid);
+    if let Some(n) = rn.filter(|n| n.uid != uid_text) {
+        return Err(ResumeError::OtherDevice {
+            node: spec.name.clone(),
+            link,
+            uid: uid_text,
+            recorded: n.uid.clone(),
+        });
+    }
+    if pos.queued > 0 {
+        return Err(ResumeError::Moving {
+            node: spec.name.clone(),
+            queued: pos.queued,
+        });
+    }
+    if spec.actuators.is_empty() {
+        return Ok(Seen::NoPosition);
+    }
+    // A resumed run that stopped before it reconfigured this node: the
+    // node still holds the run before, at rest where this one started.
+    let before = r.continues.as_ref().is_some_and(|c| {
+        format!("{:08x}", pos.run) == c.after_run && pos.committed == c.after_window
+    });
+    let committed = if before { 0 } else { pos.committed };
+    if pos.run != run && !before {
+        let why = if pos.run == 0 {
+            let was = rn.map_or(String::new(), |n| n.firmware.clone());
+            if was != firmware.to_string() && !was.is_empty() {
+                format!(
+                    "node {} restarted with firmware {firmware} (the run had {was})",
+                    spec.name
+                )
+            } else {
+                format!("node {} restarted and holds no run", spec.name)
+            }
+        } else {
+            format!(
+                "node {} ran another job since (run {:08x})",
+                spec.name, pos.run
+            )
+        };
+        return Ok(Seen::Lost(why));
+    }
+    if committed > j.committed() {
+        return Err(ResumeError::NodeAhead {
+            node: spec.name.clone(),
+            committed,
+            journal: j.committed(),
+        });
+    }
+    let want = plan.rest_of(committed);
+    if (0..m.axes.len()).any(|i| axes & (1 << i) != 0 && want[i] != pos.at[i]) {
+        return Err(ResumeError::Elsewhere {
+            node: spec.name.clone(),
+            place: match committed {
+                0 => "where the run started".to_string(),
+                c => format!("the end of segment {}", c - 1),
+            },
+            at: show(m, &pos.at, axes),
+            want: show(m, &want, axes),
+        });
+    }
+    Ok(Seen::Kept(committed))
+}
+
+/// Each axis's value and the node that reported it.
+type Known = [Option<(usize, f64)>; MAX_AXES];
+
+/// Where the machine is, axis by axis, from the nodes kept (which must
+/// agree on the axes they share).
+fn machine_position(
+    m: &Machine,
+    subs: &[Subscription],
+    kept: &[(usize, u32)],
+    plan: &Replayed,
+    window_end: u32,
+) -> Result<(Point, Known), ResumeError> {
+    let mut from = plan.rest_of(window_end);
+    let mut known: Known = [None; MAX_AXES];
+    for &(k, end) in kept {
+        let p = plan.rest_of(end);
+        for (i, slot) in known.iter_mut().enumerate().take(m.axes.len()) {
+            if subs[k].axes & (1 << i) == 0 {
+                continue;
+            }
+            match *slot {
+                Some((other, v)) if v != p[i] => {
+                    return Err(ResumeError::Disagree {
+                        a: m.nodes[other].name.clone(),
+                        b: m.nodes[k].name.clone(),
+                        axis: m.axes[i].name.clone(),
+                        va: v,
+                        vb: p[i],
+                    })
+                }
+                _ => *slot = Some((k, p[i])),
+            }
+            from[i] = p[i];
+        }
+    }
+    Ok((from, known))
+}
+
+/// The axes of lost nodes (`needed`) from what the person says; returns the
+/// lost nodes' names. Refuses a position not needed, an axis missing, or
+/// one that contradicts a node that knows.
+fn apply_assumed(
+    m: &Machine,
+    assumed: Option<&[(usize, f64)]>,
+    lost: &[(usize, String)],
+    needed: u8,
+    known: &Known,
+    from: &mut Point,
+) -> Result<Vec<String>, ResumeError> {
+    let lost_why = || {
+        lost.iter()
+            .map(|l| l.1.clone())
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let given = match assumed {
+        None if needed != 0 => {
+            let axes: Vec<&str> = (0..m.axes.len())
+                .filter(|i| needed & (1 << i) != 0)
+                .map(|i| m.axes[i].name.as_str())
+                .collect();
+            return Err(ResumeError::Unknown {
+                nodes: lost_why(),
+                is: if axes.len() == 1 { "is" } else { "are" },
+                example: axes
+                    .iter()
+                    .map(|a| format!("{a}=…"))
+                    .collect::<Vec<_>>()
+                    .join(","),
+                axes: axes.join(", "),
+            });
+        }
+        None => return Ok(Vec::new()),
+        Some(_) if needed == 0 => {
+            return Err(ResumeError::AssumeNotNeeded {
+                at: show(m, from, u8::MAX),
+            })
+        }
+        Some(given) => given,
+    };
+    for i in (0..m.axes.len()).filter(|i| needed & (1 << i) != 0) {
+        let v = given
+            .iter()
+            .rev()
+            .find(|g| g.0 == i)
+            .map(|g| g.1)
+            .ok_or_else(|| ResumeError::Unknown {
+                nodes: lost_why(),
+                is: "is",
+                axes: m.axes[i].name.clone(),
+                example: format!("{}=…", m.axes[i].name),
+            })?;
+        from[i] = v;
+    }
+    for &(i, v) in given {
+        if i >= m.axes.len() {
+            return Err(ResumeError::AssumeAxis(i.to_string()));
+        }
+        if needed & (1 << i) != 0 {
+            continue;
+        }
+        if let Some((k, known)) = known[i] {
+            if (v - known).abs() > 1e-6 * (1.0 + known.abs()) {
+                return Err(ResumeError::AssumeConflict {
+                    axis: m.axes[i].name.clone(),
+                    given: v,
+                    node: m.nodes[k].name.clone(),
+                    known,
+                });
+            }
+        }
+    }
+    Ok(lost.iter().map(|&(k, _)| m.nodes[k].name.clone()).collect())
+}
+
+/// Where the job continues: the first segment a tail slowed down, or,
+/// with a node lost, the first one not every node had finished (with a
+/// note of what may run twice).
+fn continue_at(
+    plan: &Replayed,
+    kept: &[(usize, u32)],
+    any_lost: bool,
+    window_end: u32,
+) -> Result<(u32, Vec<String>), ResumeError> {
+    let mut segment = window_end;
+    for &(_, end) in kept {
+        segment = segment.min(plan.tail_of(end)?);
+    }
+    if kept.is_empty() {
+        segment = segment.min(plan.tail_of(window_end)?);
+    }
+    let mut notes = Vec::new();
+    if any_lost {
+        let done = plan.journal.done().min(window_end);
+        if done < segment {
+            let again = segment - done;
+            notes.push(format!(
+                "the job continues from segment {done}, the last that every node had reported finished: up to {again} segment{} may run twice",
+                if again == 1 { "" } else { "s" }
+            ));
+            segment = done;
+        }
+    }
+    Ok((segment, notes))
 }
 
 /// How a journaled segment differs from the planned one, if it does.

@@ -3,7 +3,7 @@
 //! checked against the machine before any motion is sent.
 
 use crate::admin::{Admin, AdminError};
-use crate::clock::Clock;
+use crate::clock::{Clock, SharedClock};
 use crate::pairing_file::{format_uid, parse_uid, PairingFile};
 use crate::peer::{Incoming, Peer};
 use crate::registry;
@@ -30,6 +30,11 @@ pub enum SessionError {
     Admin { node: String, source: AdminError },
     #[error("node {node}: {message}")]
     Node { node: String, message: String },
+    #[error("node {node}: {source}")]
+    Mismatch {
+        node: String,
+        source: registry::Mismatch,
+    },
 }
 
 /// Where a node of the run is.
@@ -50,7 +55,8 @@ pub struct Session {
 }
 
 fn isn(k: usize) -> u16 {
-    // Differs across host runs, so a node sees a new session.
+    // Differs across host runs, so a node sees a new session: the calendar
+    // time serves as a seed here, not as a clock.
     let t = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_micros() as u64)
@@ -58,19 +64,25 @@ fn isn(k: usize) -> u16 {
     (t as u16) ^ ((k as u16) << 12)
 }
 
-fn open(node: &str, link: &str) -> Result<Admin, SessionError> {
+fn open(node: &str, link: &str, clock: &SharedClock) -> Result<Admin, SessionError> {
     let t = motet_link::open(link).map_err(|e| SessionError::Open {
         node: node.into(),
         link: link.into(),
         message: e.to_string(),
     })?;
-    Ok(Admin::new(t, link))
+    Ok(Admin::with_clock(t, link, clock.clone()))
 }
 
 impl Session {
     /// Starts one simulated node process per machine node (`exe node --sim
-    /// …` plus `extra`) and pairs each (alone on its link).
-    pub fn spawn(machine: &Machine, exe: &Path, extra: &[String]) -> Result<Session, SessionError> {
+    /// …` plus `extra`) and pairs each (alone on its link). Requests wait
+    /// on `clock`.
+    pub fn spawn(
+        machine: &Machine,
+        exe: &Path,
+        extra: &[String],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
             nodes: Vec::new(),
@@ -84,16 +96,16 @@ impl Session {
                     source,
                 })?;
             let address = 2 + k as u16;
-            let mut a = open(&spec.name, &node.link)?;
+            let mut a = open(&spec.name, &node.link, clock)?;
             let admin_err = |source| SessionError::Admin {
                 node: spec.name.clone(),
                 source,
             };
             a.set_address(node.uid, address).map_err(admin_err)?;
             let info = a.info(address).map_err(admin_err)?;
-            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|source| SessionError::Mismatch {
                 node: spec.name.clone(),
-                message,
+                source,
             })?;
             s.nodes.push(NodeAddr {
                 name: spec.name.clone(),
@@ -113,6 +125,7 @@ impl Session {
         machine: &Machine,
         file: &PairingFile,
         path: &Path,
+        clock: &SharedClock,
     ) -> Result<Session, SessionError> {
         let mut nodes = Vec::new();
         let mut uids = Vec::new();
@@ -131,18 +144,23 @@ impl Session {
             });
             uids.push(parse_uid(&p.uid));
         }
-        Session::attach_checked(machine, &nodes, &uids)
+        Session::attach_checked(machine, &nodes, &uids, clock)
     }
 
     /// Nodes at known links and addresses.
-    pub fn attach(machine: &Machine, nodes: &[NodeAddr]) -> Result<Session, SessionError> {
-        Session::attach_checked(machine, nodes, &vec![None; nodes.len()])
+    pub fn attach(
+        machine: &Machine,
+        nodes: &[NodeAddr],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
+        Session::attach_checked(machine, nodes, &vec![None; nodes.len()], clock)
     }
 
     fn attach_checked(
         machine: &Machine,
         nodes: &[NodeAddr],
         uids: &[Option<u64>],
+        clock: &SharedClock,
     ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
@@ -151,7 +169,7 @@ impl Session {
             spawned: Vec::new(),
         };
         for (k, (spec, n)) in machine.nodes.iter().zip(nodes).enumerate() {
-            let mut a = open(&spec.name, &n.link)?;
+            let mut a = open(&spec.name, &n.link, clock)?;
             let info = a.info(n.address).map_err(|source| SessionError::Admin {
                 node: spec.name.clone(),
                 source,
@@ -170,9 +188,9 @@ impl Session {
                     });
                 }
             }
-            registry::check(machine, spec, &info).map_err(|message| SessionError::Node {
+            registry::check(machine, spec, &info).map_err(|source| SessionError::Mismatch {
                 node: spec.name.clone(),
-                message,
+                source,
             })?;
             s.infos.push(info);
             s.peers
@@ -212,7 +230,7 @@ pub fn locate(
         if got.iter().all(|g| g.is_some()) {
             break;
         }
-        std::thread::sleep(Duration::from_micros(500));
+        clock.sleep_us(500);
     }
     got
 }

@@ -32,7 +32,7 @@ pub enum DanceError {
         column: usize,
         message: String,
     },
-    #[error("the node refused {what}: {reason:?}")]
+    #[error("the node refused {what}: {reason}")]
     Refused {
         what: String,
         reason: motet_wire::Refusal,

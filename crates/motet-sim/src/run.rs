@@ -20,7 +20,7 @@ pub const NODE_QUEUE: usize = 64;
 pub enum SimError {
     #[error("{loc}: {error}")]
     Plan { loc: SourceLoc, error: PlanError },
-    #[error("node {node} refused a message: {reason:?}")]
+    #[error("node {node} refused a message: {reason}")]
     Refused { node: String, reason: Refusal },
     #[error("a segment could not be batched: {0}")]
     Stream(motet_wire::stream::StreamError),

@@ -12,6 +12,7 @@ pub mod frame;
 pub mod image;
 pub mod link;
 pub mod message;
+mod refusal;
 pub mod service;
 pub mod stream;
 pub mod sync;

@@ -135,7 +135,7 @@ pub fn run(a: NetArgs) -> Result<()> {
                 "60".to_string(),
                 "--quiet".to_string(),
             ];
-            Session::spawn(machine, &exe, &extra)?
+            Session::spawn(machine, &exe, &extra, &motet_net::clock::wall())?
         }
         NodesMode::Paired => {
             let path = pairing_path(a.machine_path);
@@ -146,7 +146,12 @@ pub fn run(a: NetArgs) -> Result<()> {
                     a.machine_path.display()
                 );
             }
-            Session::paired(machine, &PairingFile::load(&path)?, &path)?
+            Session::paired(
+                machine,
+                &PairingFile::load(&path)?,
+                &path,
+                &motet_net::clock::wall(),
+            )?
         }
         NodesMode::Sim => unreachable!("in-process runs do not come here"),
     };
@@ -435,7 +440,7 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
             address: n.address,
         })
         .collect();
-    let mut session = match Session::attach(machine, &nodes) {
+    let mut session = match Session::attach(machine, &nodes, &motet_net::clock::wall()) {
         Ok(s) => s,
         Err(SessionError::Admin {
             node,

@@ -42,12 +42,75 @@ pub enum JournalError {
         path: String,
         source: std::io::Error,
     },
-    #[error("{path}:{line}: {message}")]
+    #[error("{path}:{line}: {error}")]
     Parse {
         path: String,
         line: usize,
-        message: String,
+        error: BadRecord,
     },
+}
+
+/// What is wrong with one record of a journal (its file and line are in
+/// [`JournalError::Parse`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BadRecord {
+    #[error("record without a checksum (` *` and 8 hex digits)")]
+    NoChecksum,
+    #[error("checksum `{0}` is not 8 hex digits")]
+    ChecksumDigits(String),
+    #[error("checksum {want:08x} does not match the record ({got:08x}): this record or one before it was changed, removed or damaged")]
+    Checksum { want: u32, got: u32 },
+    #[error("not a motet journal (it must start with a `motet-journal` header)")]
+    NotAJournal,
+    #[error("a second header")]
+    SecondHeader,
+    #[error("record after the run's stop")]
+    AfterStop,
+    #[error("unknown record `{0}`")]
+    UnknownRecord(String),
+    #[error("unexpected `{word}` after the {what}")]
+    Trailing { word: String, what: &'static str },
+    #[error("journal format {0}; this motet reads format {JOURNAL_FORMAT}")]
+    Format(u32),
+    #[error("header without `{0}=`")]
+    NoField(&'static str),
+    #[error("`{word}` where the header has `{key}=`")]
+    WrongField { word: String, key: &'static str },
+    #[error("run `{0}` is not 8 hex digits")]
+    RunDigits(String),
+    /// A file digest that is not one (its own message).
+    #[error("{0}")]
+    Digest(String),
+    #[error("missing {0}")]
+    Missing(&'static str),
+    #[error("{what} `{word}` is not a number as motet writes it")]
+    Number { what: &'static str, word: String },
+    #[error("`{0}` is not a finite number as motet writes it")]
+    Finite(String),
+    #[error("{0} with too few coordinates")]
+    FewCoordinates(&'static str),
+    #[error("expected `|` between start and end")]
+    NoSeparator,
+    #[error("lost node `{0}` is not a node index")]
+    LostNode(String),
+    #[error("segment {got} where segment {want} was due")]
+    SegmentIndex { got: u32, want: u32 },
+    #[error("segment ends ({t1} µs) before it starts ({t0} µs)")]
+    EndsBeforeStart { t0: f64, t1: f64 },
+    #[error("segment {index} starts at {t0} µs, before segment {prev} ends")]
+    Overlap { index: u32, t0: f64, prev: u32 },
+    #[error("window end {end} beyond the {segments} segments recorded")]
+    EndBeyond { end: u32, segments: u32 },
+    #[error("tail start {tail} after window end {end}")]
+    TailAfterEnd { tail: u32, end: u32 },
+    #[error("{done} segments done, but the window ends at {end}")]
+    DoneAfterEnd { done: u32, end: u32 },
+    #[error("the run stopped on window end {end}, but the last seal ends at {last}")]
+    StopEnd { end: u32, last: u32 },
+    #[error("window end {end} does not follow {last}")]
+    EndBack { end: u32, last: u32 },
+    #[error("segments done or host time going back")]
+    GoingBack,
 }
 
 /// What identifies a run and what its plan depends on.
@@ -322,6 +385,15 @@ mod tests {
         for (text, want) in cases {
             let e = Journal::parse(&text, "j").unwrap_err().to_string();
             assert!(e.contains(want), "want {want:?}, got {e}");
+        }
+        // The reason is a value callers can match, not only text.
+        match Journal::parse(&with(4, &sign("seal 3 1 4 10")), "j") {
+            Err(JournalError::Parse {
+                line: 5,
+                error: BadRecord::DoneAfterEnd { done: 4, end: 3 },
+                ..
+            }) => {}
+            other => panic!("{other:?}"),
         }
         assert_eq!(Journal::parse("", "j").unwrap().header, None);
     }

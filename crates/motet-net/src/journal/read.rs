@@ -36,10 +36,10 @@ impl Journal {
 
     /// Parses journal text; `path` names it in errors.
     pub fn parse(text: &str, path: &str) -> Result<Journal, JournalError> {
-        let err = |line: usize, message: String| JournalError::Parse {
+        let err = |line: usize, error: BadRecord| JournalError::Parse {
             path: path.to_string(),
             line,
-            message,
+            error,
         };
         let mut lines: Vec<&str> = text.split('\n').collect();
         // The last element is what follows the last newline: empty for a
@@ -62,35 +62,30 @@ impl Journal {
             let first = words.next().unwrap_or("");
             if j.header.is_none() {
                 if first != "motet-journal" {
-                    return Err(err(
-                        n,
-                        "not a motet journal (it must start with a `motet-journal` header)".into(),
-                    ));
+                    return Err(err(n, BadRecord::NotAJournal));
                 }
                 j.header = Some(parse_header(&mut words).map_err(|m| err(n, m))?);
                 continue;
             }
             if j.stop.is_some() {
-                return Err(err(n, "record after the run's stop".into()));
+                return Err(err(n, BadRecord::AfterStop));
             }
             match first {
                 "seg" => {
                     let s = parse_segment(&mut words).map_err(|m| err(n, m))?;
                     let want = j.segments.len() as u32;
                     if s.index != want {
-                        return Err(err(
-                            n,
-                            format!("segment {} where segment {want} was due", s.index),
-                        ));
+                        return Err(err(n, BadRecord::SegmentIndex { got: s.index, want }));
                     }
                     if let Some(prev) = j.segments.last() {
                         if s.t0 < prev.t1 {
                             return Err(err(
                                 n,
-                                format!(
-                                    "segment {} starts at {} µs, before segment {} ends",
-                                    s.index, s.t0, prev.index
-                                ),
+                                BadRecord::Overlap {
+                                    index: s.index,
+                                    t0: s.t0,
+                                    prev: prev.index,
+                                },
                             ));
                         }
                     }
@@ -104,19 +99,19 @@ impl Journal {
                         .map_err(|m| err(n, m))?;
                     if first == "seal" {
                         if let Some(w) = words.next() {
-                            return Err(err(n, format!("unexpected `{w}` after the seal")));
+                            return Err(err(n, trailing(w, "seal")));
                         }
                         j.seals.push(seal);
                     } else {
                         let lost = parse_lost(words.next()).map_err(|m| err(n, m))?;
                         if let Some(w) = words.next() {
-                            return Err(err(n, format!("unexpected `{w}` after the stop")));
+                            return Err(err(n, trailing(w, "stop")));
                         }
                         j.stop = Some(JournalStop { seal, lost });
                     }
                 }
-                "motet-journal" => return Err(err(n, "a second header".into())),
-                w => return Err(err(n, format!("unknown record `{w}`"))),
+                "motet-journal" => return Err(err(n, BadRecord::SecondHeader)),
+                w => return Err(err(n, BadRecord::UnknownRecord(w.into()))),
             }
         }
         Ok(j)
@@ -180,50 +175,53 @@ impl Journal {
 
 /// The record's text with its checksum checked against the chain (then
 /// moved on to this record).
-fn checked<'a>(line: &'a str, chain: &mut u32) -> Result<&'a str, String> {
+fn checked<'a>(line: &'a str, chain: &mut u32) -> Result<&'a str, BadRecord> {
     let Some((text, crc)) = line.rsplit_once(" *") else {
-        return Err("record without a checksum (` *` and 8 hex digits)".into());
+        return Err(BadRecord::NoChecksum);
     };
-    let want = hex32(crc).ok_or_else(|| format!("checksum `{crc}` is not 8 hex digits"))?;
+    let want = hex32(crc).ok_or_else(|| BadRecord::ChecksumDigits(crc.into()))?;
     let got = record_checksum(*chain, text);
     if got != want {
-        return Err(format!(
-            "checksum {want:08x} does not match the record ({got:08x}): this record or one before it was changed, removed or damaged"
-        ));
+        return Err(BadRecord::Checksum { want, got });
     }
     *chain = got;
     Ok(text)
 }
 
-fn parse_header<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalHeader, String> {
+fn parse_header<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalHeader, BadRecord> {
     let format: u32 = num(words.next(), "journal format")?;
     if format != JOURNAL_FORMAT {
-        return Err(format!(
-            "journal format {format}; this motet reads format {JOURNAL_FORMAT}"
-        ));
+        return Err(BadRecord::Format(format));
     }
-    let mut field = |key: &str| -> Result<&'a str, String> {
-        let w = words
-            .next()
-            .ok_or_else(|| format!("header without `{key}=`"))?;
+    let mut field = |key: &'static str| -> Result<&'a str, BadRecord> {
+        let w = words.next().ok_or(BadRecord::NoField(key))?;
         w.strip_prefix(key)
             .and_then(|r| r.strip_prefix('='))
-            .ok_or_else(|| format!("`{w}` where the header has `{key}=`"))
+            .ok_or_else(|| BadRecord::WrongField {
+                word: w.into(),
+                key,
+            })
     };
     let run = field("run")?;
-    let run = hex32(run).ok_or_else(|| format!("run `{run}` is not 8 hex digits"))?;
-    let machine = field("machine")?.parse::<Digest>()?;
-    let job = field("job")?.parse::<Digest>()?;
+    let run = hex32(run).ok_or_else(|| BadRecord::RunDigits(run.into()))?;
+    let machine = field("machine")?
+        .parse::<Digest>()
+        .map_err(BadRecord::Digest)?;
+    let job = field("job")?.parse::<Digest>().map_err(BadRecord::Digest)?;
     let t0 = finite(field("t0")?)?;
     let min_move_s = finite(field("min_move_s")?)?;
     let first = field("start")?;
     let mut start = [0.0; MAX_AXES];
     start[0] = finite(first)?;
     for v in start.iter_mut().skip(1) {
-        *v = finite(words.next().ok_or("start point with too few coordinates")?)?;
+        *v = finite(
+            words
+                .next()
+                .ok_or(BadRecord::FewCoordinates("start point"))?,
+        )?;
     }
     if let Some(w) = words.next() {
-        return Err(format!("unexpected `{w}` after the header"));
+        return Err(trailing(w, "header"));
     }
     Ok(JournalHeader {
         run,
@@ -235,21 +233,23 @@ fn parse_header<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Journal
     })
 }
 
-fn parse_segment<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalSegment, String> {
+fn parse_segment<'a>(
+    words: &mut impl Iterator<Item = &'a str>,
+) -> Result<JournalSegment, BadRecord> {
     let index = num(words.next(), "segment index")?;
     let command = num(words.next(), "command index")?;
-    let t0 = finite(words.next().ok_or("missing start time")?)?;
-    let t1 = finite(words.next().ok_or("missing end time")?)?;
+    let t0 = finite(words.next().ok_or(BadRecord::Missing("start time"))?)?;
+    let t1 = finite(words.next().ok_or(BadRecord::Missing("end time"))?)?;
     if t1 < t0 {
-        return Err(format!("segment ends ({t1} µs) before it starts ({t0} µs)"));
+        return Err(BadRecord::EndsBeforeStart { t0, t1 });
     }
     let start = point(words)?;
     if words.next() != Some("|") {
-        return Err("expected `|` between start and end".into());
+        return Err(BadRecord::NoSeparator);
     }
     let end = point(words)?;
     if let Some(w) = words.next() {
-        return Err(format!("unexpected `{w}` after the end point"));
+        return Err(trailing(w, "end point"));
     }
     Ok(JournalSegment {
         index,
@@ -261,7 +261,7 @@ fn parse_segment<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Journa
     })
 }
 
-fn parse_seal<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalSeal, String> {
+fn parse_seal<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalSeal, BadRecord> {
     Ok(JournalSeal {
         end: num(words.next(), "window end")?,
         tail: num(words.next(), "tail start")?,
@@ -276,51 +276,61 @@ fn check_seal(
     prev: Option<JournalSeal>,
     segments: u32,
     stop: bool,
-) -> Result<(), String> {
+) -> Result<(), BadRecord> {
     if s.end > segments {
-        return Err(format!(
-            "window end {} beyond the {segments} segments recorded",
-            s.end
-        ));
+        return Err(BadRecord::EndBeyond {
+            end: s.end,
+            segments,
+        });
     }
     if s.tail > s.end {
-        return Err(format!("tail start {} after window end {}", s.tail, s.end));
+        return Err(BadRecord::TailAfterEnd {
+            tail: s.tail,
+            end: s.end,
+        });
     }
     if s.done > s.end {
-        return Err(format!(
-            "{} segments done, but the window ends at {}",
-            s.done, s.end
-        ));
+        return Err(BadRecord::DoneAfterEnd {
+            done: s.done,
+            end: s.end,
+        });
     }
     let (end, done, time) = prev.map_or((0, 0, 0), |p| (p.end, p.done, p.time));
     // A window may add only events: the same end again.
     let ok = if stop { s.end == end } else { s.end >= end };
     if !ok {
         return Err(if stop {
-            format!(
-                "the run stopped on window end {}, but the last seal ends at {end}",
-                s.end
-            )
+            BadRecord::StopEnd {
+                end: s.end,
+                last: end,
+            }
         } else {
-            format!("window end {} does not follow {end}", s.end)
+            BadRecord::EndBack {
+                end: s.end,
+                last: end,
+            }
         });
     }
     if s.done < done || s.time < time {
-        return Err("segments done or host time going back".into());
+        return Err(BadRecord::GoingBack);
     }
     Ok(())
 }
 
-fn parse_lost(w: Option<&str>) -> Result<Vec<usize>, String> {
-    match w.ok_or("missing lost nodes (`-` for none)")? {
+fn parse_lost(w: Option<&str>) -> Result<Vec<usize>, BadRecord> {
+    match w.ok_or(BadRecord::Missing("lost nodes (`-` for none)"))? {
         "-" => Ok(Vec::new()),
         list => list
             .split(',')
-            .map(|k| {
-                k.parse()
-                    .map_err(|_| format!("lost node `{k}` is not a node index"))
-            })
+            .map(|k| k.parse().map_err(|_| BadRecord::LostNode(k.into())))
             .collect(),
+    }
+}
+
+fn trailing(word: &str, what: &'static str) -> BadRecord {
+    BadRecord::Trailing {
+        word: word.into(),
+        what,
     }
 }
 
@@ -335,25 +345,31 @@ fn hex32(w: &str) -> Option<u32> {
     (format!("{v:08x}") == w).then_some(v)
 }
 
-fn num<T: std::str::FromStr + std::fmt::Display>(w: Option<&str>, what: &str) -> Result<T, String> {
-    let w = w.ok_or_else(|| format!("missing {what}"))?;
+fn num<T: std::str::FromStr + std::fmt::Display>(
+    w: Option<&str>,
+    what: &'static str,
+) -> Result<T, BadRecord> {
+    let w = w.ok_or(BadRecord::Missing(what))?;
     w.parse::<T>()
         .ok()
         .filter(|v| v.to_string() == w)
-        .ok_or_else(|| format!("{what} `{w}` is not a number as motet writes it"))
+        .ok_or_else(|| BadRecord::Number {
+            what,
+            word: w.into(),
+        })
 }
 
-fn finite(w: &str) -> Result<f64, String> {
+fn finite(w: &str) -> Result<f64, BadRecord> {
     w.parse::<f64>()
         .ok()
         .filter(|v| v.is_finite() && format!("{v:?}") == w)
-        .ok_or_else(|| format!("`{w}` is not a finite number as motet writes it"))
+        .ok_or_else(|| BadRecord::Finite(w.into()))
 }
 
-fn point<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Point, String> {
+fn point<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<Point, BadRecord> {
     let mut p = [0.0; MAX_AXES];
     for v in p.iter_mut() {
-        *v = finite(words.next().ok_or("point with too few coordinates")?)?;
+        *v = finite(words.next().ok_or(BadRecord::FewCoordinates("point"))?)?;
     }
     Ok(p)
 }

@@ -1,0 +1,112 @@
+//! What a run reports: each node's figures, what its outputs did, and
+//! where the machine was on the committed trajectory.
+
+use super::{NetRun, Phase};
+use motet_trajectory::{Point, Segment};
+use motet_wire::{HostMessage, NodeMessage};
+
+/// What a node's outputs did in a run (`NodeMessage::Tally`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tally {
+    pub steps: [u32; 8],
+    pub tool_changes: u32,
+    pub hash: u64,
+}
+
+impl From<&motet_node::StepTally> for Tally {
+    fn from(t: &motet_node::StepTally) -> Tally {
+        Tally {
+            steps: t.steps,
+            tool_changes: t.tool_changes,
+            hash: t.hash,
+        }
+    }
+}
+
+/// Per-node figures for the report.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PeerFigures {
+    pub name: String,
+    pub rtt_us: u64,
+    pub retransmits: u64,
+    pub crc_errors: u64,
+    pub bytes_out: u64,
+    pub bytes_in: u64,
+    pub frames_out: u64,
+    pub frames_in: u64,
+    pub sync_error_us: f64,
+    pub skew_ppm: f64,
+    pub underruns: u32,
+}
+
+impl NetRun {
+    /// What each node's outputs did in the run, if it said (after `Done`).
+    pub fn tallies(&self) -> Vec<Option<Tally>> {
+        self.tallies.iter().map(|t| t.flatten()).collect()
+    }
+
+    /// At the end: what each node's outputs did, for the report; done once
+    /// every node answered (or after the node timeout: a report without it).
+    pub(super) fn collect_tallies(&mut self, now: u64) {
+        let asked = *self.tally_asked.get_or_insert_with(|| {
+            for p in self.peers.iter_mut() {
+                p.send_motion(&HostMessage::TallyGet);
+            }
+            now
+        });
+        if self.tallies.iter().all(Option::is_some) || now > asked + self.cfg.node_timeout_us {
+            self.phase = Phase::Done;
+        }
+    }
+
+    /// Figures for the report.
+    pub fn figures(&self, now: u64) -> Vec<PeerFigures> {
+        self.peers
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let t = p.transport().stats();
+                let l = p.link().stats();
+                let underruns = match self.status[k] {
+                    Some(NodeMessage::Status { underruns, .. }) => underruns,
+                    _ => 0,
+                };
+                PeerFigures {
+                    name: p.name.clone(),
+                    rtt_us: l.srtt_us,
+                    retransmits: l.retransmits,
+                    crc_errors: l.crc_errors,
+                    bytes_out: t.bytes_out,
+                    bytes_in: t.bytes_in,
+                    frames_out: t.frames_out,
+                    frames_in: t.frames_in,
+                    sync_error_us: p.sync.error_estimate(now as f64),
+                    skew_ppm: p.sync.model().skew * 1e6,
+                    underruns,
+                }
+            })
+            .collect()
+    }
+
+    /// Where the machine was (or will be, within the committed window) at
+    /// host time `t`, µs: on the committed trajectory, with the tail after a
+    /// stop, at rest between segments and after the last.
+    pub fn position_at(&self, t: f64) -> Point {
+        let i = self.history.partition_point(|s| s.t0 <= t);
+        match i.checked_sub(1).map(|i| &self.history[i]) {
+            None => self.start_point,
+            Some(s) if t < s.t1() => s.position_at(t),
+            Some(s) => s.end,
+        }
+    }
+
+    /// The committed segments the host still keeps, with their indices.
+    pub fn committed(&self) -> impl Iterator<Item = (u32, &Segment)> {
+        self.committed.iter().map(|c| (c.index, &c.seg))
+    }
+
+    /// The last status each node sent.
+    pub fn node_status(&self, k: usize) -> Option<&NodeMessage> {
+        self.status[k].as_ref()
+    }
+}

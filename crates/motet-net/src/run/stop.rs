@@ -1,0 +1,214 @@
+//! The stop protocol: when sealing stops (a request, a lost node, a
+//! refusal), every node runs its contingency tail from the same boundary;
+//! the host asks each where it came to rest, and journals the stop.
+
+use super::{NetError, NetRun, Phase};
+use crate::journal::{JournalSeal, JournalStop};
+use motet_trajectory::Point;
+use motet_wire::link::State;
+use motet_wire::{HostMessage, NodeMessage};
+
+/// Stopping nodes are asked where they are µs apart.
+const WHERE_INTERVAL_US: u64 = 100_000;
+
+/// A coordinated stop.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StopInfo {
+    pub reason: String,
+    /// Segments before this index were committed; every node that kept
+    /// running rests at the end of the one before it.
+    pub window_end: u32,
+    /// First segment the contingency tail slowed down.
+    pub tail_start: u32,
+    /// Segments every node had reported finished.
+    pub done: u32,
+    /// Where the nodes that kept running come to rest.
+    pub point: Point,
+    /// Host time at which the machine is at rest, µs.
+    pub rest_time: f64,
+    /// Machine nodes (indices) that stopped answering: where they are is
+    /// not known, only that they got no further than the committed window.
+    pub lost: Vec<LostNode>,
+    /// Machine nodes that reported themselves at rest, each with the end
+    /// of its committed window (`window_end`, unless it missed the last seal).
+    pub confirmed: Vec<(usize, u32)>,
+}
+
+/// A node the host lost during a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LostNode {
+    pub node: usize,
+    pub name: String,
+    pub why: String,
+}
+
+impl StopInfo {
+    /// Whether every node is known to rest at `point`.
+    pub fn all_at_rest(&self) -> bool {
+        self.lost.is_empty() && self.confirmed.iter().all(|&(_, e)| e == self.window_end)
+    }
+}
+
+impl NetRun {
+    /// Stops sealing: the nodes run their tails. Safe to call at any time.
+    pub fn stop(&mut self, reason: &str, now: u64) {
+        if matches!(
+            self.phase,
+            Phase::Stopping(_) | Phase::Stopped(_) | Phase::Done
+        ) {
+            return;
+        }
+        for p in self.peers.iter_mut() {
+            p.drop_unsealed();
+        }
+        self.pending.clear();
+        self.pending_events = 0;
+        let point = self
+            .committed
+            .back()
+            .map(|c| c.seg.end)
+            .unwrap_or(self.start_point);
+        // From here the nodes run the tail: so does the record.
+        let n = self.committed.len().min(self.history.len());
+        let from = self.history.len() - n;
+        if let Ok(c) = motet_trajectory::contingency::Contingency::of(self.history[from..].iter()) {
+            let mut walk = c.walk();
+            for s in self.history[from + c.start..].iter_mut() {
+                *s = walk.next(s);
+            }
+        }
+        let rest_time = crate::tail::rest_time(self.committed.iter().map(|c| &c.seg), now as f64)
+            .max(self.committed_end.min(now as f64));
+        self.update_done();
+        self.phase = Phase::Stopping(StopInfo {
+            reason: reason.to_string(),
+            window_end: self.next_index_committed(),
+            tail_start: self.tail_start,
+            done: self.done,
+            point,
+            rest_time,
+            lost: self.lost.clone(),
+            confirmed: Vec::new(),
+        });
+        self.next_where = now;
+    }
+
+    /// Node `k` stopped answering or its link failed: the run stops, and
+    /// where that node is, nobody knows.
+    pub(super) fn lose(&mut self, k: usize, why: String, now: u64) {
+        if self.lost.iter().any(|l| l.node == k) {
+            return;
+        }
+        let name = self.peers[k].name.clone();
+        self.lost.push(LostNode {
+            node: k,
+            name: name.clone(),
+            why: why.clone(),
+        });
+        self.stop(&format!("node {name}: {why}"), now);
+        if let Phase::Stopping(info) = &mut self.phase {
+            info.lost = self.lost.clone();
+            info.confirmed.retain(|&(c, _)| c != k);
+        }
+    }
+
+    /// Node loss: silence longer than the timeout, or a failed link.
+    pub(super) fn watch(&mut self, now: u64) {
+        let mut lost = None;
+        for (k, p) in self.peers.iter().enumerate() {
+            if self.lost.iter().any(|l| l.node == k) {
+                continue;
+            }
+            if let State::Failed(e) = p.link_state() {
+                lost = Some((k, format!("link failed ({e:?})")));
+                break;
+            }
+            let silent = now.saturating_sub(p.last_heard.unwrap_or(now));
+            if silent > self.cfg.node_timeout_us {
+                lost = Some((
+                    k,
+                    format!("stopped answering ({} ms without a frame)", silent / 1000),
+                ));
+                break;
+            }
+        }
+        if let Some((k, why)) = lost {
+            self.lose(k, why, now);
+        }
+        self.ask_status(now);
+    }
+
+    /// While the nodes run their tails: ask each where it is until it says
+    /// it is at rest on this run; one that does not say so in time is lost.
+    pub(super) fn settle(&mut self, now: u64) -> Result<(), NetError> {
+        self.watch(now);
+        let Phase::Stopping(info) = self.phase.clone() else {
+            return Ok(());
+        };
+        let open: Vec<usize> = (0..self.peers.len())
+            .filter(|k| {
+                !info.confirmed.iter().any(|c| c.0 == *k) && !info.lost.iter().any(|l| l.node == *k)
+            })
+            .collect();
+        if open.is_empty() {
+            return self.stopped(info, now);
+        }
+        if now as f64 > info.rest_time + self.cfg.node_timeout_us as f64 {
+            for k in open {
+                self.lose(k, "did not report itself at rest".into(), now);
+            }
+            let Phase::Stopping(info) = self.phase.clone() else {
+                return Ok(());
+            };
+            return self.stopped(info, now);
+        }
+        // Asked from the start: the answers also show the node is alive.
+        if now >= self.next_where {
+            for k in open {
+                if matches!(self.peers[k].link_state(), State::Established { .. }) {
+                    self.peers[k].send_motion(&HostMessage::Where);
+                }
+            }
+            self.next_where = now + WHERE_INTERVAL_US;
+        }
+        Ok(())
+    }
+
+    pub(super) fn stopped(&mut self, info: StopInfo, now: u64) -> Result<(), NetError> {
+        if let Some(j) = self.journal.as_mut() {
+            j.stop(&JournalStop {
+                seal: JournalSeal {
+                    end: info.window_end,
+                    tail: info.tail_start,
+                    done: info.done,
+                    time: now,
+                },
+                lost: info.lost.iter().map(|l| l.node).collect(),
+            })?;
+        }
+        self.phase = Phase::Stopped(info);
+        Ok(())
+    }
+
+    /// Segments every node that takes segments has reported finished, as
+    /// far as their last statuses tell (never less than before).
+    pub(super) fn update_done(&mut self) {
+        let reported = (0..self.peers.len())
+            .filter(|&k| self.dist.next_seq(k).is_some())
+            .map(|k| match self.status[k] {
+                Some(NodeMessage::Status {
+                    segment_space,
+                    next_seq,
+                    ..
+                }) => {
+                    let held =
+                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
+                    next_seq.saturating_sub(held)
+                }
+                _ => 0,
+            })
+            .min()
+            .unwrap_or(0);
+        self.done = self.done.max(reported.min(self.next_index_committed()));
+    }
+}

@@ -1,0 +1,240 @@
+//! Windows and seals: planned segments routed to the nodes as a pending
+//! window, committed by a seal once the window reaches far enough ahead,
+//! never more than the nodes' queues hold.
+
+use super::{NetError, NetRun, Phase};
+use crate::journal::{JournalSeal, JournalSegment};
+use crate::source::Sourced;
+use motet_planner::Planned;
+use motet_trajectory::Segment;
+use motet_wire::{HostMessage, NodeMessage};
+
+/// How long after a segment's end a node may still hold it, µs.
+const RETIRE_SLACK_US: f64 = 50_000.0;
+
+/// A sealed segment the host keeps until the machine is past it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Committed {
+    pub(super) index: u32,
+    pub(super) seg: Segment,
+}
+
+impl NetRun {
+    /// Asks every node that takes segments for its status, at most once per
+    /// round trip.
+    pub(super) fn ask_room(&mut self, now: u64) {
+        let rtt = self
+            .peers
+            .iter()
+            .map(|p| p.link().stats().srtt_us)
+            .max()
+            .unwrap_or(0);
+        if self.room_asked_at.is_some_and(|t| now < t + rtt.max(1_000)) {
+            return;
+        }
+        self.room_asked_at = Some(now);
+        for k in 0..self.peers.len() {
+            if self.dist.next_seq(k).is_some() {
+                self.peers[k].send_motion(&HostMessage::Status);
+            }
+        }
+    }
+
+    /// Segments a node holds (committed and not yet run, and pending).
+    pub(super) fn queued_on_nodes(&self, now: u64) -> usize {
+        // A place frees when the node retires a segment, a little after its
+        // end on the host's clock (the node's clock and polling lag). The
+        // node's own count (its status, sent with every seal's
+        // acknowledgement) is exact but dated; the host's clock is current
+        // but a guess. A segment is taken as retired when either says so,
+        // the clock only well after the segment's end.
+        let t = now as f64 - RETIRE_SLACK_US;
+        let sent = self.next_index;
+        let by_time = self
+            .committed
+            .iter()
+            .find(|c| c.seg.t1() > t)
+            .map_or(sent - self.pending.len() as u32, |c| c.index);
+        let by_status = (0..self.peers.len())
+            .filter(|&k| self.dist.next_seq(k).is_some())
+            .filter_map(|k| match self.status[k] {
+                Some(NodeMessage::Status {
+                    segment_space,
+                    next_seq,
+                    ..
+                }) => {
+                    let held =
+                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
+                    Some(next_seq.saturating_sub(held))
+                }
+                _ => None,
+            })
+            .min();
+        let retired = by_status.map_or(by_time, |s| s.max(by_time)).min(sent);
+        (sent - retired) as usize
+    }
+
+    pub(super) fn capacity(&self) -> usize {
+        self.machine
+            .nodes
+            .iter()
+            .map(|n| n.queue)
+            .min()
+            .unwrap_or(64)
+            .saturating_sub(2)
+            .max(2)
+    }
+
+    /// Seals windows until the committed trajectory reaches far enough ahead.
+    pub(super) fn fill(&mut self, now: u64) -> Result<(), NetError> {
+        let lead = self.lead_us() as f64;
+        let t = now as f64;
+        // Forget what the machine is well past.
+        while self.committed.len() > 1 && self.committed[0].seg.t1() < t - 1e6 {
+            self.committed.pop_front();
+        }
+        while self.deadline < t + lead {
+            // One seal in flight at a time: a node that missed a seal can then
+            // differ from the others by at most that one window.
+            if self.peers.iter().any(|p| p.seal_in_flight()) {
+                break;
+            }
+            let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
+            if self.pending.is_empty() && self.pending_events == 0 {
+                if !grew && self.feed.as_ref().is_some_and(|f| f.exhausted()) {
+                    self.phase = Phase::Draining;
+                }
+                break;
+            }
+            self.seal(now)?;
+        }
+        Ok(())
+    }
+
+    /// Routes planned items into the pending window until its tail would start
+    /// at or after `target`, the queue is full, or the job is planned out.
+    pub(super) fn grow(&mut self, target: f64, now: u64) -> Result<bool, NetError> {
+        let mut grew = false;
+        loop {
+            if self.queued_on_nodes(now) >= self.capacity() {
+                // Full as far as the host knows: ask the nodes how full.
+                self.ask_room(now);
+                break;
+            }
+            let Some(item) = self.next_item()? else {
+                break;
+            };
+            grew = true;
+            match item.item {
+                Planned::Segment(seg) => {
+                    let c = Committed {
+                        index: self.next_index,
+                        seg,
+                    };
+                    self.next_index += 1;
+                    self.route(&item.item)?;
+                    self.pending.push((c, item.command));
+                    self.segments_sent += 1;
+                    let (start, _) = crate::tail::deadline(
+                        self.committed
+                            .iter()
+                            .map(|c| &c.seg)
+                            .chain(self.pending.iter().map(|(c, _)| &c.seg)),
+                    );
+                    if start >= target && self.pending.len() >= 2 {
+                        break;
+                    }
+                }
+                Planned::Event(_) => {
+                    self.route(&item.item)?;
+                    // Held on the nodes like segments until the seal.
+                    self.pending_events += 1;
+                }
+                Planned::Pause { .. } => {
+                    self.route(&item.item)?;
+                    self.pauses += 1;
+                }
+                Planned::Aux(_) => self.route(&item.item)?,
+            }
+        }
+        Ok(grew)
+    }
+
+    /// Sends `item` (quantized) to every node that reads it; segments go out
+    /// in batches.
+    pub(super) fn route(&mut self, item: &Planned) -> Result<(), NetError> {
+        for k in 0..self.peers.len() {
+            let out = self
+                .dist
+                .route_batched(k, item)
+                .map_err(|e| NetError::Node {
+                    node: self.peers[k].name.clone(),
+                    message: format!("segment stream: {e:?}"),
+                })?;
+            for o in out {
+                self.peers[k].send_motion(&o.message);
+            }
+        }
+        Ok(())
+    }
+
+    /// The next planned item, planning more commands as needed.
+    pub(super) fn next_item(&mut self) -> Result<Option<Sourced>, NetError> {
+        let Some(feed) = self.feed.as_mut() else {
+            return Ok(None);
+        };
+        feed.next(&mut self.dist)
+            .map_err(|(loc, error)| NetError::Plan { loc, error })
+    }
+
+    /// Commits the pending window on every node.
+    pub(super) fn seal(&mut self, now: u64) -> Result<(), NetError> {
+        let pending = std::mem::take(&mut self.pending);
+        self.pending_events = 0;
+        if let Some(j) = self.journal.as_mut() {
+            for (c, command) in &pending {
+                j.segment(&JournalSegment {
+                    index: c.index,
+                    command: *command,
+                    t0: c.seg.t0,
+                    t1: c.seg.t1(),
+                    start: c.seg.start,
+                    end: c.seg.end,
+                })?;
+            }
+        }
+        for (c, _) in &pending {
+            self.committed.push_back(*c);
+            self.history.push(c.seg);
+            self.committed_end = c.seg.t1();
+        }
+        let segs: Vec<&Segment> = self.committed.iter().map(|c| &c.seg).collect();
+        let (deadline, tail_pos) = crate::tail::deadline(segs.iter().copied());
+        self.deadline = deadline;
+        self.tail_start = self.committed.front().map_or(0, |c| c.index) + tail_pos as u32;
+        let end = self.next_index_committed();
+        self.update_done();
+        if let Some(j) = self.journal.as_mut() {
+            j.seal(JournalSeal {
+                end,
+                tail: self.tail_start,
+                done: self.done,
+                time: now,
+            })?;
+        }
+        for k in 0..self.peers.len() {
+            if let Some(o) = self.dist.flush(k) {
+                self.peers[k].send_motion(&o.message);
+            }
+            if let Some(next_seq) = self.dist.next_seq(k) {
+                self.peers[k].send_motion(&HostMessage::Seal { next_seq });
+            }
+        }
+        self.windows += 1;
+        Ok(())
+    }
+
+    pub(super) fn next_index_committed(&self) -> u32 {
+        self.committed.back().map_or(0, |c| c.index + 1)
+    }
+}
