@@ -3,6 +3,7 @@
 use crate::machine::Machine;
 use motet_planner::ranges::rounded;
 use motet_planner::{Command, Located, SourceError};
+use motet_trajectory::kinematics::Unreachable;
 use motet_trajectory::{KinematicsKind, Point};
 
 /// Coordinates a job check brought back onto the travel's ends: beyond it,
@@ -95,6 +96,13 @@ pub enum MoveError {
     },
     #[error("move passes {distance:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {min_radius} mm")]
     PolarCentre { distance: f64, min_radius: f64 },
+    #[error("move passes ({}, {}), {why} of the {kinematics} kinematics", rounded(*.x), rounded(*.y))]
+    Unreachable {
+        x: f64,
+        y: f64,
+        why: Unreachable,
+        kinematics: &'static str,
+    },
 }
 
 /// [`check_move`] after clamping `to` onto the travel where it is beyond it
@@ -171,7 +179,7 @@ const REACH_MAX_POINTS: usize = 4096;
 /// Whether every point of the straight move from `a` to `b` in the plane is
 /// within the arms' reach, clear of singularities (kinematics whose joints
 /// are not linear and have no closed form: arms and linkages).
-fn check_reach(kin: KinematicsKind, a: (f64, f64), b: (f64, f64)) -> Result<(), String> {
+fn check_reach(kin: KinematicsKind, a: (f64, f64), b: (f64, f64)) -> Result<(), MoveError> {
     if kin.joints().is_empty()
         || kin.linear(0).is_some()
         || kin.closed_form(0, a, (0.0, 0.0), 0.0).is_some()
@@ -184,12 +192,12 @@ fn check_reach(kin: KinematicsKind, a: (f64, f64), b: (f64, f64)) -> Result<(), 
         let t = k as f64 / n as f64;
         let (px, py) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
         if let Err(why) = kin.reach(px, py) {
-            return Err(format!(
-                "move passes ({}, {}), {why} of the {} kinematics",
-                rounded(px),
-                rounded(py),
-                kin.name()
-            ));
+            return Err(MoveError::Unreachable {
+                x: px,
+                y: py,
+                why,
+                kinematics: kin.name(),
+            });
         }
     }
     Ok(())
