@@ -80,12 +80,18 @@
 //! amplitude, frequency, damping, phase) and `[render]` (pen_channel,
 //! pen_down_below).
 
+mod emit;
 pub mod file;
 pub mod kinds;
+mod ports;
+mod raw;
+mod resolve;
+mod simulation;
+mod source;
 pub mod stage;
 
 pub use file::{
     ChannelDef, ComponentDef, FileError, GraphFile, InputDef, LiveError, Loc, Pendulum, RenderDef,
 };
-pub use kinds::{KindInfo, KINDS};
+pub use kinds::{markdown_table, KINDS};
 pub use stage::{finished, Stage, StageMachine, StageView, Until};
