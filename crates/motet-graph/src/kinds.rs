@@ -50,35 +50,68 @@ fn number(v: f64) -> String {
     }
 }
 
-/// `name default unit` (or `name (required)`), with the choices of a choice.
+/// `name default unit (range)`, or `name (required, range)`.
 fn param(p: &Param) -> String {
+    let mut notes = Vec::new();
     let value = match (p.default, p.domain) {
-        (None, _) => "(required)".to_string(),
-        (Some(d), Domain::Flag) => (d != 0.0).to_string(),
-        (Some(d), Domain::Choice(names)) => format!("\"{}\"", names[d as usize]),
-        (Some(d), _) => number(d),
+        (None, _) => {
+            notes.push("required".to_string());
+            if !p.unit.is_empty() {
+                notes.push(p.unit.to_string());
+            }
+            String::new()
+        }
+        (Some(d), Domain::Flag) => format!(" {}", d != 0.0),
+        (Some(d), Domain::Choice(names)) => format!(" \"{}\"", names[d as usize]),
+        (Some(d), _) if p.unit.is_empty() => format!(" {}", number(d)),
+        (Some(d), _) => format!(" {} {}", number(d), p.unit),
     };
-    let unit = match (p.default, p.unit) {
-        (_, "") | (None, _) => String::new(),
-        (Some(_), u) => format!(" {u}"),
-    };
-    let range = match p.domain {
-        Domain::Choice(names) if names.len() > 2 => format!(
-            " ({})",
+    match p.domain {
+        Domain::Choice(names) => notes.push(format!(
+            "one of {}",
             names
                 .iter()
                 .map(|n| format!("\"{n}\""))
                 .collect::<Vec<_>>()
                 .join(" ")
-        ),
-        Domain::Choice(names) => format!(" (or \"{}\")", names[1..].join("\", \"")),
-        Domain::Positive => " (> 0)".into(),
-        Domain::Number { min, max } if min.is_finite() || max.is_finite() => {
-            format!(" ({}..{})", number(min), number(max))
+        )),
+        Domain::Positive => notes.push("> 0".into()),
+        Domain::Index(n) => notes.push(format!("0..{}", n.saturating_sub(1))),
+        Domain::Number { min, max } if max.is_finite() => {
+            notes.push(format!("{}..{}", number(min), number(max)))
         }
-        _ => String::new(),
+        Domain::Number { min, .. } if min.is_finite() => notes.push(format!("≥ {}", number(min))),
+        _ => {}
+    }
+    if notes.is_empty() {
+        format!("{}{value}", p.name)
+    } else {
+        format!("{}{value} ({})", p.name, notes.join(", "))
+    }
+}
+
+/// `in: a b; out: c (level)`.
+fn ports(d: &Declaration) -> String {
+    let side = |dir: Dir, label: &str| {
+        let names: Vec<String> = d
+            .ports
+            .iter()
+            .filter(|p| p.dir == dir)
+            .map(|p| {
+                if p.level {
+                    format!("{} (level)", p.name)
+                } else {
+                    p.name.to_string()
+                }
+            })
+            .collect();
+        (!names.is_empty()).then(|| format!("{label}: {}", names.join(" ")))
     };
-    format!("{} {value}{unit}{range}", p.name)
+    [side(Dir::In, "in"), side(Dir::Out, "out")]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// One row of the table.
@@ -106,20 +139,7 @@ fn row(d: &Declaration) -> String {
     } else {
         live.join(", ")
     };
-    let ports: Vec<String> = d
-        .ports
-        .iter()
-        .map(|p| {
-            let dir = if p.dir == Dir::In { "in" } else { "out" };
-            let level = if p.level { ", level" } else { "" };
-            format!("{} ({dir}{level})", p.name)
-        })
-        .collect();
-    let ports = if ports.is_empty() {
-        "—".to_string()
-    } else {
-        ports.join(", ")
-    };
+    let ports = ports(d);
     format!(
         "| `{}` | {reads} | {params} | {live} | {ports} | {} |",
         d.name, d.doc

@@ -146,15 +146,15 @@ impl Kind for GraphChannel {
         host_keys: &[
             HostKey {
                 name: "units",
-                doc: "world units that are `steps` steps (default 1)",
+                doc: "world units that are `steps` steps; default 1",
             },
             HostKey {
                 name: "steps",
-                doc: "steps in `units` world units (default 1)",
+                doc: "steps in `units` world units; default 1",
             },
             HostKey {
                 name: "actuator",
-                doc: "the machine actuator it drives (simulation)",
+                doc: "the machine actuator it drives, in simulation",
             },
         ],
         in_ports: &[],
