@@ -146,77 +146,7 @@ pub(crate) fn compile(
                 format!("a stage `{}` comes before", r.name.get_ref()),
             ));
         }
-        let until = match &r.until {
-            None => Until::Never,
-            Some(u) => {
-                let ur = u.get_ref();
-                let n = [
-                    ur.pressed.is_some(),
-                    ur.released.is_some(),
-                    ur.seconds.is_some(),
-                    ur.finished.is_some(),
-                ]
-                .iter()
-                .filter(|b| **b)
-                .count();
-                if n != 1 {
-                    return Err(src.err(
-                        u.span(),
-                        format!("{key}.until"),
-                        "give exactly one of pressed, released, seconds, finished",
-                    ));
-                }
-                let input = |s: &Spanned<String>, what: &str| {
-                    if gf.input(s.get_ref()).is_some() {
-                        Ok(s.get_ref().clone())
-                    } else {
-                        Err(src.err(
-                            s.span(),
-                            format!("{key}.until.{what}"),
-                            format!(
-                                "no input `{}`; inputs: {}",
-                                s.get_ref(),
-                                names(gf.inputs.iter().map(|i| i.name.as_str()))
-                            ),
-                        ))
-                    }
-                };
-                if let Some(p) = &ur.pressed {
-                    Until::Pressed(input(p, "pressed")?)
-                } else if let Some(p) = &ur.released {
-                    Until::Released(input(p, "released")?)
-                } else if let Some(t) = &ur.seconds {
-                    if !(t.get_ref().is_finite() && *t.get_ref() >= 0.0) {
-                        return Err(src.err(
-                            t.span(),
-                            format!("{key}.until.seconds"),
-                            "expected a time ≥ 0",
-                        ));
-                    }
-                    Until::Seconds(*t.get_ref())
-                } else {
-                    let f = ur.finished.as_ref().expect("counted");
-                    let c = gf.component(f.get_ref());
-                    let ok = c.is_some_and(|c| {
-                        matches!(c.info.name, "player" | "position" | "homing" | "recorder")
-                    });
-                    if !ok {
-                        return Err(src.err(
-                            f.span(),
-                            format!("{key}.until.finished"),
-                            format!(
-                                "`{}` is not a player, position generator, homing or recorder of the graph",
-                                f.get_ref()
-                            ),
-                        ));
-                    }
-                    Until::Finished {
-                        component: f.get_ref().clone(),
-                        index: c.expect("checked").index,
-                    }
-                }
-            }
-        };
+        let until = until(src, gf, &key, r.until.as_ref())?;
         let repeat = match &r.repeat {
             None => 1,
             Some(n) if *n.get_ref() >= 1 && *n.get_ref() <= u32::MAX as i64 => *n.get_ref() as u32,
@@ -254,6 +184,86 @@ pub(crate) fn compile(
         });
     }
     Ok(out)
+}
+
+/// A stage's `until`.
+fn until(
+    src: &Source,
+    gf: &GraphFile,
+    key: &str,
+    until: Option<&Spanned<RawUntil>>,
+) -> Result<Until, FileError> {
+    Ok(match until {
+        None => Until::Never,
+        Some(u) => {
+            let ur = u.get_ref();
+            let n = [
+                ur.pressed.is_some(),
+                ur.released.is_some(),
+                ur.seconds.is_some(),
+                ur.finished.is_some(),
+            ]
+            .iter()
+            .filter(|b| **b)
+            .count();
+            if n != 1 {
+                return Err(src.err(
+                    u.span(),
+                    format!("{key}.until"),
+                    "give exactly one of pressed, released, seconds, finished",
+                ));
+            }
+            let input = |s: &Spanned<String>, what: &str| {
+                if gf.input(s.get_ref()).is_some() {
+                    Ok(s.get_ref().clone())
+                } else {
+                    Err(src.err(
+                        s.span(),
+                        format!("{key}.until.{what}"),
+                        format!(
+                            "no input `{}`; inputs: {}",
+                            s.get_ref(),
+                            names(gf.inputs.iter().map(|i| i.name.as_str()))
+                        ),
+                    ))
+                }
+            };
+            if let Some(p) = &ur.pressed {
+                Until::Pressed(input(p, "pressed")?)
+            } else if let Some(p) = &ur.released {
+                Until::Released(input(p, "released")?)
+            } else if let Some(t) = &ur.seconds {
+                if !(t.get_ref().is_finite() && *t.get_ref() >= 0.0) {
+                    return Err(src.err(
+                        t.span(),
+                        format!("{key}.until.seconds"),
+                        "expected a time ≥ 0",
+                    ));
+                }
+                Until::Seconds(*t.get_ref())
+            } else {
+                let f = ur.finished.as_ref().expect("counted");
+                let c = gf.component(f.get_ref());
+                let ok = c.is_some_and(|c| {
+                    matches!(c.info.name, "player" | "position" | "homing" | "recorder")
+                });
+                if !ok {
+                    return Err(src.err(
+                        f.span(),
+                        format!("{key}.until.finished"),
+                        format!(
+                            "`{}` is not a player, position generator, homing or recorder of the graph",
+                            f.get_ref()
+                        ),
+                    ));
+                }
+                Until::Finished {
+                    component: f.get_ref().clone(),
+                    index: c.expect("checked").index,
+                }
+            }
+        }
+    })
 }
 
 /// What the stage machine looks at.

@@ -2,6 +2,7 @@
 
 use crate::board::Board;
 use crate::channel::{Channel, Step};
+use crate::graph::spec::BuildError;
 use crate::graph::{
     self, Component, FrameOut, Graph, GraphBuilder, Inputs, Mode, PortRef, Tape, MAX_HW,
     SLOW_FRAME_US,
@@ -41,8 +42,8 @@ struct Hosted {
 /// A graph being described, between `GraphBegin` and `GraphCommit`.
 struct Building {
     builder: NodeGraphBuilder,
-    /// A step was refused: the commit will be.
-    failed: bool,
+    /// Why a step was refused (the first): the commit will be.
+    failed: Option<BuildError>,
 }
 
 /// Segment queue capacity (MAXL's maximum buffer).
@@ -106,6 +107,9 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     starved: bool,
     hosted: Option<Hosted>,
     building: Option<Building>,
+    /// Why the last graph description was refused, until the next
+    /// `GraphBegin` or commit.
+    graph_error: Option<BuildError>,
     inputs: Inputs,
     frame_out: FrameOut,
     tape: [u8; T],
@@ -149,6 +153,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             starved: false,
             hosted: None,
             building: None,
+            graph_error: None,
             inputs: Inputs {
                 encoders: [0; MAX_HW],
                 analog: [0.0; MAX_HW],
@@ -239,17 +244,18 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                     builder.frame_us(frame_us);
                     self.building = Some(Building {
                         builder,
-                        failed: false,
+                        failed: None,
                     });
+                    self.graph_error = None;
                     Ok(())
                 }
             }
             HostMessage::GraphAdd { kind, params } => {
-                self.build_step(|b| graph::spec::add(b, kind, &params).map(|_| ()).ok_or(()))
+                self.build_step(|b| graph::spec::add(b, kind, &params).map(|_| ()))
             }
             HostMessage::GraphRatio { port, world, block } => self.build_step(|b| {
                 b.set_ratio(PortRef::new(port.comp, port.port), world, block)
-                    .map_err(|_| ())
+                    .map_err(BuildError::from)
             }),
             HostMessage::GraphMap {
                 from,
@@ -270,7 +276,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 } else {
                     b.map(from, to, mode)
                 }
-                .map_err(|_| ())
+                .map_err(BuildError::from)
             }),
             HostMessage::GraphCommit => self.commit_graph(),
             HostMessage::GraphParam {
@@ -315,24 +321,36 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// commit.
     fn build_step(
         &mut self,
-        f: impl FnOnce(&mut NodeGraphBuilder) -> Result<(), ()>,
+        f: impl FnOnce(&mut NodeGraphBuilder) -> Result<(), BuildError>,
     ) -> Result<(), Refusal> {
         let b = self.building.as_mut().ok_or(Refusal::BadGraph)?;
-        if b.failed {
+        if b.failed.is_some() {
             return Err(Refusal::BadGraph);
         }
-        f(&mut b.builder).map_err(|_| {
-            b.failed = true;
+        f(&mut b.builder).map_err(|e| {
+            b.failed = Some(e);
+            self.graph_error = Some(e);
             Refusal::BadGraph
         })
     }
 
+    /// Why the last graph description was refused (a `GraphAdd`, `GraphRatio`
+    /// or `GraphMap` step, or the commit's validation of the whole), until
+    /// the next `GraphBegin` or a successful commit.
+    pub fn graph_error(&self) -> Option<BuildError> {
+        self.graph_error
+    }
+
     fn commit_graph(&mut self) -> Result<(), Refusal> {
         let b = self.building.take().ok_or(Refusal::BadGraph)?;
-        if b.failed {
+        if b.failed.is_some() {
             return Err(Refusal::BadGraph);
         }
-        let graph = b.builder.build().map_err(|_| Refusal::BadGraph)?;
+        let graph = b.builder.build().map_err(|e| {
+            self.graph_error = Some(e.into());
+            Refusal::BadGraph
+        })?;
+        self.graph_error = None;
         let mut channel_of = [u8::MAX; GRAPH_COMPONENTS];
         let mut n = 0u8;
         for (i, slot) in channel_of.iter_mut().enumerate().take(graph.len()) {

@@ -591,7 +591,11 @@ fn send(node: &mut Node<8, DANCE_TAPE>, m: &HostMessage) -> Result<(), DanceErro
     let bytes = encode(m, &mut buf).map_err(|e| DanceError::Setup(e.to_string()))?;
     match node.handle(bytes) {
         Some(NodeMessage::Refused { reason }) => Err(DanceError::Refused {
-            what: format!("{m:?}"),
+            // The node keeps why it refused a graph step.
+            what: match node.graph_error() {
+                Some(e) => format!("{m:?} ({e})"),
+                None => format!("{m:?}"),
+            },
             reason,
         }),
         _ => Ok(()),

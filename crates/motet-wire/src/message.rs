@@ -206,56 +206,56 @@ pub enum GraphInputKind {
     Stream,
 }
 
-/// Component kinds, with the construction values of [`HostMessage::GraphAdd`]
-/// in order (missing trailing values take the defaults in brackets; a flag is
-/// nonzero for true; `hw` is the hardware input index):
+/// Component kinds, in wire order. The construction values of
+/// [`HostMessage::GraphAdd`] each takes (names, defaults for trailing ones
+/// left out, ranges) are declared with the kind in `motet-node`
+/// (`graph::declare`; `examples/dance/README.md` renders them): a flag is
+/// nonzero for true, an input kind's first value is its hardware index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum GraphKind {
-    /// hw, floor_value [0], floor_raw [0], ceiling_value [1], ceiling_raw
-    /// [1023], deadband_center [0], deadband_width [0], average [1].
+    /// `analog` in graph files.
     AnalogInput,
-    /// hw, toggle [0], debounce_ms [5].
+    /// `button` in graph files.
     Button,
-    /// hw, invert [0].
+    /// `encoder` in graph files.
     Encoder,
-    /// hw.
+    /// `stream_input` in graph files.
     StreamInput,
-    /// ratio [1], absolute [0].
+    /// `scale` in graph files.
     ScalingFilter1D,
-    /// ratio [1], absolute [0].
+    /// `scale2d` in graph files.
     ScalingFilter2D,
-    /// lower, upper.
+    /// `threshold` in graph files.
     ThresholdGenerator,
-    /// (none).
+    /// `corexy` in graph files.
     CoreXY,
-    /// (none).
+    /// `polar` in graph files.
     PolarToCartesian,
-    /// s, l1, l2, l3, l4, ext [0].
+    /// `fivebar` in graph files.
     FiveBarForward,
-    /// speed [0].
+    /// `velocity` in graph files.
     VelocityGenerator,
-    /// speed [0].
+    /// `position` in graph files.
     PositionGenerator,
-    /// amplitude, frequency [0], phase [0], per_input [0].
+    /// `wave` in graph files.
     WaveGenerator1D,
-    /// amplitude, frequency [0], phase [0], per_distance [0].
+    /// `wave2d` in graph files.
     WaveGenerator2D,
-    /// radius, rev_per_s.
+    /// `circle` in graph files.
     CircleGenerator,
-    /// ratio [1].
+    /// `path_length` in graph files.
     PathLength2D,
-    /// ratio [1].
+    /// `path_length3d` in graph files.
     PathLength3D,
-    /// (none).
+    /// `recorder` in graph files.
     FourTrackRecorder,
-    /// loop [0].
+    /// `player` in graph files.
     FourTrackPlayer,
-    /// speed, backoff [0], home [0].
+    /// `homing` in graph files.
     Homing,
-    /// axis [0].
+    /// `trajectory_reader` in graph files.
     TrajectoryReader,
-    /// filter [0], invert [0], max_pulse_rate [0], lower [-inf], upper [+inf],
-    /// wire output port [-1: none], signal code [0].
+    /// `channel` in graph files.
     Channel,
 }
 

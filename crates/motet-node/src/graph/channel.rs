@@ -11,9 +11,11 @@
 //! the motor was actually driven to.
 
 use super::component::{non_negative, Kind, ParamError, Phase};
-use super::io::{Ctx, StepOut};
+use super::declare::{live, Declaration, Domain, HostKey, Param, ParamFault};
+use super::io::{Ctx, StepOut, MAX_HW};
 use super::math::round;
 use super::port::{Port, PortSpec, Unit};
+use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GraphChannel {
@@ -104,6 +106,81 @@ impl GraphChannel {
 }
 
 impl Kind for GraphChannel {
+    const DECL: Declaration = Declaration {
+        name: "channel",
+        kind: GraphKind::Channel,
+        input: None,
+        params: &[
+            Param::new("filter", "frames", 0.0, Domain::NON_NEGATIVE)
+                .doc("filter length (≤ 1: none)"),
+            Param::new("invert", "", 0.0, Domain::Flag),
+            Param::new("max_pulse_rate", "steps/s", 0.0, Domain::NON_NEGATIVE)
+                .doc("0: the frame rate only"),
+            Param::new("lower", "units", f64::NEG_INFINITY, Domain::Bound),
+            Param::new("upper", "units", f64::INFINITY, Domain::Bound),
+            Param::new(
+                "output",
+                "",
+                -1.0,
+                Domain::Number {
+                    min: -1.0,
+                    max: (MAX_HW - 1) as f64,
+                },
+            )
+            .doc("wire output port; −1: none"),
+            Param::new(
+                "signal",
+                "",
+                0.0,
+                Domain::Choice(&["x", "y", "r", "t", "z", "e"]),
+            )
+            .doc("signal code on the wire output"),
+        ],
+        live: &[
+            live("filter", Self::FILTER),
+            live("invert", Self::INVERT),
+            live("max_pulse_rate", Self::MAX_PULSE_RATE),
+            live("lower", Self::LOWER),
+            live("upper", Self::UPPER),
+        ],
+        host_keys: &[
+            HostKey {
+                name: "units",
+                doc: "world units that are `steps` steps; default 1",
+            },
+            HostKey {
+                name: "steps",
+                doc: "steps in `units` world units; default 1",
+            },
+            HostKey {
+                name: "actuator",
+                doc: "the machine actuator it drives, in simulation",
+            },
+        ],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "step channel driving one actuator",
+        build: |a| {
+            let mut c = GraphChannel::new().filtering(a.get(0)).pulse_rate(a.get(2));
+            if a.flag(1) {
+                c = c.inverted();
+            }
+            let (lower, upper) = (a.get(3), a.get(4));
+            if lower > upper {
+                return Err(ParamFault::Inconsistent("`lower` is above `upper`"));
+            }
+            c = c.limits(lower, upper);
+            let output = a.get(5);
+            if output >= 0.0 {
+                if output != libm::floor(output) {
+                    return Err(ParamFault::OutOfRange { param: "output" });
+                }
+                c = c.output(output as u8, a.get(6) as u8);
+            }
+            Ok(c.into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("target", Unit::Any),
         PortSpec::input("target_b", Unit::Any),

@@ -1,11 +1,14 @@
 //! Components: an enum over every kind (no trait objects, no allocation), each
 //! kind in its own file. The [`Kind`] trait is only used for static dispatch.
+//! The `components!` table at the end lists every kind once, in wire order;
+//! each kind's [`Declaration`] (see [`super::declare`]) says the rest.
 //!
 //! Every kind declares its ports ([`PortSpec`]); a port is addressed by its
 //! index in that list. Parameters are set live by `(parameter id, value)`; the
 //! ids are associated constants of each kind.
 
 use super::channel::GraphChannel;
+use super::declare::Declaration;
 use super::filters::{ScalingFilter1D, ScalingFilter2D, ThresholdGenerator};
 use super::generators::{
     CircleGenerator, PathLength2D, PathLength3D, PositionGenerator, VelocityGenerator,
@@ -69,6 +72,8 @@ pub(crate) fn non_negative(v: f64) -> Result<f64, ParamError> {
 /// Behaviour of one component kind. All values are in the ports' block units.
 pub trait Kind {
     const PORTS: &'static [PortSpec];
+    /// Everything the host and the wire know of the kind.
+    const DECL: Declaration;
     const PHASE: Phase = Phase::Pre;
 
     /// One core frame: read the inputs, set the outputs' absolute values.
@@ -121,6 +126,10 @@ macro_rules! components {
             $($name($ty),)*
         }
 
+        /// Every kind's declaration, in wire order (that of
+        /// [`motet_wire::message::GraphKind`]).
+        pub static COMPONENTS: &[&Declaration] = &[$(&<$ty as Kind>::DECL,)*];
+
         $(impl From<$ty> for Component {
             fn from(c: $ty) -> Component {
                 Component::$name(c)
@@ -130,6 +139,9 @@ macro_rules! components {
         impl Component {
             pub fn ports(&self) -> &'static [PortSpec] {
                 match self { $(Component::$name(_) => <$ty as Kind>::PORTS,)* }
+            }
+            pub fn declaration(&self) -> &'static Declaration {
+                match self { $(Component::$name(_) => &<$ty as Kind>::DECL,)* }
             }
             pub fn phase(&self) -> Phase {
                 match self { $(Component::$name(_) => <$ty as Kind>::PHASE,)* }

@@ -1,5 +1,7 @@
 //! Typed errors from building and updating a graph.
 
+use core::fmt;
+
 use super::port::PortRef;
 
 /// Which fixed capacity ran out.
@@ -47,4 +49,79 @@ pub enum GraphError {
     CapacityExceeded(Capacity),
     /// A reset or read walked further than the graph has components (a cycle).
     TooDeep,
+}
+
+impl fmt::Display for Capacity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Capacity::Components => "components",
+            Capacity::Mappings => "mappings",
+            Capacity::Channels => "channels",
+        })
+    }
+}
+
+/// Ports and components by index (`#component.port`); the graph file
+/// compiler names them instead.
+impl fmt::Display for GraphError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GraphError::UnknownComponent(c) => write!(f, "no component #{c}"),
+            GraphError::UnknownPort(r) => write!(f, "no port #{}.{}", r.comp, r.port),
+            GraphError::NotAnOutput(r) => {
+                write!(
+                    f,
+                    "#{}.{} is an input: a mapping goes from an output",
+                    r.comp, r.port
+                )
+            }
+            GraphError::NotAnInput(r) => {
+                write!(
+                    f,
+                    "#{}.{} is an output: a mapping goes to an input",
+                    r.comp, r.port
+                )
+            }
+            GraphError::UnitMismatch { from, to } => write!(
+                f,
+                "#{}.{} and #{}.{} carry different quantities",
+                from.comp, from.port, to.comp, to.port
+            ),
+            GraphError::ModeMismatch { from, to } => write!(
+                f,
+                "#{}.{} → #{}.{}: a level port needs an absolute mapping",
+                from.comp, from.port, to.comp, to.port
+            ),
+            GraphError::AbsoluteFanIn(r) => write!(
+                f,
+                "#{}.{} receives an absolute mapping and another mapping",
+                r.comp, r.port
+            ),
+            GraphError::DuplicateMapping { from, to } => write!(
+                f,
+                "#{}.{} is already mapped onto #{}.{}",
+                from.comp, from.port, to.comp, to.port
+            ),
+            GraphError::BackwardAbsolute { from, to } => write!(
+                f,
+                "#{}.{} → #{}.{}: an absolute mapping backward in the frame closes a cycle",
+                from.comp, from.port, to.comp, to.port
+            ),
+            GraphError::BadRatio(r) => {
+                write!(
+                    f,
+                    "bad ratio for #{}.{}: zero, infinite or NaN",
+                    r.comp, r.port
+                )
+            }
+            GraphError::UnknownParam { comp, param } => {
+                write!(f, "no parameter {param} of #{comp}")
+            }
+            GraphError::BadValue { comp, param } => {
+                write!(f, "bad value for parameter {param} of #{comp}")
+            }
+            GraphError::CapacityExceeded(c) => write!(f, "too many {c} for the graph"),
+            GraphError::TooDeep => f.write_str("the graph is too deep (a cycle)"),
+        }
+    }
 }

@@ -1,8 +1,10 @@
 //! Filters: scaling (1D, 2D) and thresholds.
 
 use super::component::{finite, Kind, ParamError};
+use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::port::{Mode, Port, PortSpec, Unit};
+use motet_wire::message::GraphKind;
 
 /// `out = in × ratio`. In INCREMENTAL mode each frame's change of the input is
 /// scaled (a live ratio change affects only later motion); in ABSOLUTE mode the
@@ -25,6 +27,35 @@ impl ScalingFilter1D {
 }
 
 impl Kind for ScalingFilter1D {
+    const DECL: Declaration = Declaration {
+        name: "scale",
+        kind: GraphKind::ScalingFilter1D,
+        input: None,
+        params: &[
+            Param::new("ratio", "", 1.0, Domain::REAL),
+            Param::new(
+                "mode",
+                "",
+                0.0,
+                Domain::Choice(&["incremental", "absolute"]),
+            )
+            .doc("incremental: changes scaled; absolute: values"),
+        ],
+        live: &[live("ratio", Self::RATIO)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "out = in × ratio",
+        build: |a| {
+            let mode = if a.flag(1) {
+                Mode::Absolute
+            } else {
+                Mode::Incremental
+            };
+            Ok(ScalingFilter1D::new(a.get(0), mode).into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in", Unit::Any),
         PortSpec::output("out", Unit::Any),
@@ -85,6 +116,35 @@ impl ScalingFilter2D {
 }
 
 impl Kind for ScalingFilter2D {
+    const DECL: Declaration = Declaration {
+        name: "scale2d",
+        kind: GraphKind::ScalingFilter2D,
+        input: None,
+        params: &[
+            Param::new("ratio", "", 1.0, Domain::REAL),
+            Param::new(
+                "mode",
+                "",
+                0.0,
+                Domain::Choice(&["incremental", "absolute"]),
+            )
+            .doc("incremental: changes scaled; absolute: values"),
+        ],
+        live: &[live("ratio", Self::RATIO)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "two inputs scaled alike",
+        build: |a| {
+            let mode = if a.flag(1) {
+                Mode::Absolute
+            } else {
+                Mode::Incremental
+            };
+            Ok(ScalingFilter2D::new(a.get(0), mode).into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in_x", Unit::Any),
         PortSpec::input("in_y", Unit::Any),
@@ -160,6 +220,28 @@ impl ThresholdGenerator {
 }
 
 impl Kind for ThresholdGenerator {
+    const DECL: Declaration = Declaration {
+        name: "threshold",
+        kind: GraphKind::ThresholdGenerator,
+        input: None,
+        params: &[
+            Param::required("lower", "", Domain::Bound),
+            Param::required("upper", "", Domain::Bound),
+        ],
+        live: &[live("lower", Self::LOWER), live("upper", Self::UPPER)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "clamps between lower and upper; flag −1/0/+1 below/inside/above",
+        build: |a| {
+            let (lower, upper) = (a.get(0), a.get(1));
+            if lower > upper {
+                return Err(ParamFault::Inconsistent("`lower` is above `upper`"));
+            }
+            Ok(ThresholdGenerator::new(lower, upper).into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in", Unit::Any),
         PortSpec::output("out", Unit::Any),

@@ -1,9 +1,11 @@
 //! Generators: velocity, position, waves, circles and path length.
 
 use super::component::{finite, non_negative, Kind, ParamError};
+use super::declare::{live, Declaration, Domain, Param};
 use super::io::Ctx;
 use super::math::{cos, floor, hypot, sin, sqrt, TAU};
 use super::port::{Port, PortSpec, Unit};
+use motet_wire::message::GraphKind;
 
 /// Integrates a speed: each frame the output moves by `speed × dt`. The speed
 /// is its level input (units/s, e.g. from an analog input in ABSOLUTE mode) or
@@ -19,6 +21,19 @@ impl VelocityGenerator {
 }
 
 impl Kind for VelocityGenerator {
+    const DECL: Declaration = Declaration {
+        name: "velocity",
+        kind: GraphKind::VelocityGenerator,
+        input: None,
+        params: &[Param::new("speed", "units/s", 0.0, Domain::REAL)],
+        live: &[live("speed", Self::SPEED_PARAM)],
+        host_keys: &[],
+        in_ports: &[(0, Self::SPEED_PARAM)],
+        ports: Self::PORTS,
+        doc: "integrates a speed",
+        build: |_| Ok(VelocityGenerator.into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::level_in("speed", Unit::Any),
         PortSpec::output("out", Unit::Any),
@@ -77,6 +92,24 @@ impl PositionGenerator {
 }
 
 impl Kind for PositionGenerator {
+    const DECL: Declaration = Declaration {
+        name: "position",
+        kind: GraphKind::PositionGenerator,
+        input: None,
+        params: &[Param::new("speed", "units/s", 0.0, Domain::NON_NEGATIVE)],
+        live: &[
+            live("speed", Self::SPEED),
+            live("go", Self::GO_ABSOLUTE),
+            live("go_relative", Self::GO_RELATIVE),
+            live("stop", Self::STOP),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "moves to a target at constant speed (`go` absolute, `go_relative`)",
+        build: |a| Ok(PositionGenerator::new(a.get(0)).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[PortSpec::output("out", Unit::Any)];
 
     #[inline]
@@ -191,6 +224,34 @@ fn wave_params(
 }
 
 impl Kind for WaveGenerator1D {
+    const DECL: Declaration = Declaration {
+        name: "wave",
+        kind: GraphKind::WaveGenerator1D,
+        input: None,
+        params: &[
+            Param::required("amplitude", "units", Domain::REAL),
+            Param::new("frequency", "Hz", 0.0, Domain::REAL),
+            Param::new("phase", "rad", 0.0, Domain::REAL),
+            Param::new("per_input", "cycles/unit", 0.0, Domain::REAL)
+                .doc("cycles per unit of drive change"),
+        ],
+        live: &[
+            live("amplitude", Self::AMPLITUDE),
+            live("frequency", Self::FREQUENCY),
+            live("phase", Self::PHASE),
+            live("per_input", Self::PER_INPUT),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "amplitude × sin(2π·cycles + phase); cycles advance with time and with the drive",
+        build: |a| {
+            Ok(WaveGenerator1D::new(a.get(0), a.get(1), a.get(2))
+                .driven(a.get(3))
+                .into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("drive", Unit::Any),
         PortSpec::output("out", Unit::Any),
@@ -252,6 +313,30 @@ impl WaveGenerator2D {
 }
 
 impl Kind for WaveGenerator2D {
+    const DECL: Declaration = Declaration {
+        name: "wave2d",
+        kind: GraphKind::WaveGenerator2D,
+        input: None,
+        params: &[
+            Param::required("amplitude", "units", Domain::REAL),
+            Param::new("frequency", "Hz", 0.0, Domain::REAL),
+            Param::new("phase", "rad", 0.0, Domain::REAL),
+            Param::new("per_distance", "cycles/unit", 0.0, Domain::REAL)
+                .doc("cycles per unit travelled"),
+        ],
+        live: &[
+            live("amplitude", Self::AMPLITUDE),
+            live("frequency", Self::FREQUENCY),
+            live("phase", Self::PHASE),
+            live("per_distance", Self::PER_DISTANCE),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "adds a sine across the direction of travel",
+        build: |a| Ok(WaveGenerator2D::new(a.get(0), a.get(1), a.get(2), a.get(3)).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in_x", Unit::Any),
         PortSpec::input("in_y", Unit::Any),
@@ -314,6 +399,25 @@ impl CircleGenerator {
 }
 
 impl Kind for CircleGenerator {
+    const DECL: Declaration = Declaration {
+        name: "circle",
+        kind: GraphKind::CircleGenerator,
+        input: None,
+        params: &[
+            Param::required("radius", "units", Domain::REAL),
+            Param::required("rev_per_s", "rev/s", Domain::REAL),
+        ],
+        live: &[
+            live("radius", Self::RADIUS),
+            live("rev_per_s", Self::REV_PER_S),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "a circle from where it starts",
+        build: |a| Ok(CircleGenerator::new(a.get(0), a.get(1)).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::output("x", Unit::Any),
         PortSpec::output("y", Unit::Any),
@@ -356,6 +460,19 @@ impl PathLength2D {
 }
 
 impl Kind for PathLength2D {
+    const DECL: Declaration = Declaration {
+        name: "path_length",
+        kind: GraphKind::PathLength2D,
+        input: None,
+        params: &[Param::new("ratio", "", 1.0, Domain::REAL)],
+        live: &[live("ratio", Self::RATIO)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "out grows by ratio × the distance (in_x, in_y) travels",
+        build: |a| Ok(PathLength2D::new(a.get(0)).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in_x", Unit::Any),
         PortSpec::input("in_y", Unit::Any),
@@ -403,6 +520,19 @@ impl PathLength3D {
 }
 
 impl Kind for PathLength3D {
+    const DECL: Declaration = Declaration {
+        name: "path_length3d",
+        kind: GraphKind::PathLength3D,
+        input: None,
+        params: &[Param::new("ratio", "", 1.0, Domain::REAL)],
+        live: &[live("ratio", Self::RATIO)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "path length in 3D",
+        build: |a| Ok(PathLength3D::new(a.get(0)).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("in_x", Unit::Any),
         PortSpec::input("in_y", Unit::Any),

@@ -2,8 +2,10 @@
 //! to the home position without generating steps.
 
 use super::component::{finite, non_negative, positive, Kind, ParamError};
+use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::port::{Port, PortSpec, Unit};
+use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum HomingState {
@@ -54,6 +56,35 @@ impl Homing {
 }
 
 impl Kind for Homing {
+    const DECL: Declaration = Declaration {
+        name: "homing",
+        kind: GraphKind::Homing,
+        input: None,
+        params: &[
+            Param::required("speed", "units/s", Domain::REAL)
+                .doc("signed: the direction of the seek"),
+            Param::new("backoff", "units", 0.0, Domain::NON_NEGATIVE),
+            Param::new("home", "units", 0.0, Domain::REAL)
+                .doc("the position the chain is reset to"),
+        ],
+        live: &[
+            live("start", Self::START),
+            live("speed", Self::SPEED),
+            live("backoff", Self::BACKOFF),
+            live("home", Self::HOME),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "seeks until the limit, backs off, resets the chain to home",
+        build: |a| {
+            if a.get(0) == 0.0 {
+                return Err(ParamFault::Inconsistent("`speed` must not be zero"));
+            }
+            Ok(Homing::new(a.get(0), a.get(1), a.get(2)).into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::level_in("limit", Unit::Scalar),
         PortSpec::output("out", Unit::Any),

@@ -2,9 +2,11 @@
 //! quadrature encoders and motion-stream input ports.
 
 use super::component::{finite, non_negative, Kind, ParamError, Phase};
+use super::declare::{live, Declaration, Domain, HostKey, Param};
 use super::io::{Ctx, Inputs, MAX_HW};
 use super::port::{Port, PortSpec, Unit};
 use super::wire::CODES;
+use motet_wire::message::{GraphInputKind, GraphKind};
 
 fn hw_index(hw: u8) -> usize {
     (hw as usize).min(MAX_HW - 1)
@@ -99,6 +101,50 @@ impl AnalogInput {
 }
 
 impl Kind for AnalogInput {
+    const DECL: Declaration = Declaration {
+        name: "analog",
+        kind: GraphKind::AnalogInput,
+        input: Some(GraphInputKind::Analog),
+        params: &[
+            Param::new("floor_value", "", 0.0, Domain::REAL).doc("value at `floor_raw`"),
+            Param::new("floor_raw", "raw", 0.0, Domain::REAL),
+            Param::new("ceiling_value", "", 1.0, Domain::REAL).doc("value at `ceiling_raw`"),
+            Param::new("ceiling_raw", "raw", 1023.0, Domain::REAL),
+            Param::new("deadband_center", "raw", 0.0, Domain::REAL),
+            Param::new("deadband_width", "raw", 0.0, Domain::NON_NEGATIVE),
+            Param::new(
+                "average",
+                "samples",
+                1.0,
+                Domain::Number {
+                    min: 1.0,
+                    max: f64::INFINITY,
+                },
+            ),
+        ],
+        live: &[
+            live("floor_value", Self::FLOOR_VALUE),
+            live("floor_raw", Self::FLOOR_RAW),
+            live("ceiling_value", Self::CEILING_VALUE),
+            live("ceiling_raw", Self::CEILING_RAW),
+            live("deadband_center", Self::DEADBAND_CENTER),
+            live("deadband_width", Self::DEADBAND_WIDTH),
+            live("average", Self::AVERAGE),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "analog reading mapped from raw floor..ceiling to values, deadband, averaging",
+        build: |a| {
+            Ok(AnalogInput::new(a.hw())
+                .floor(a.get(0), a.get(1))
+                .ceiling(a.get(2), a.get(3))
+                .deadband(a.get(4), a.get(5))
+                .averaging(a.get(6))
+                .into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[PortSpec::level_out("value", Unit::Any)];
     const PHASE: Phase = Phase::Input;
 
@@ -197,6 +243,37 @@ impl Button {
 }
 
 impl Kind for Button {
+    const DECL: Declaration = Declaration {
+        name: "button",
+        kind: GraphKind::Button,
+        input: Some(GraphInputKind::Digital),
+        params: &[
+            Param::new("toggle", "", 0.0, Domain::Flag).doc("each press flips the state"),
+            Param::new(
+                "debounce_ms",
+                "ms",
+                5.0,
+                Domain::Number {
+                    min: 0.0,
+                    max: u16::MAX as f64,
+                },
+            ),
+        ],
+        live: &[live("debounce_ms", Self::DEBOUNCE_MS)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "debounced digital input (1 kHz), standard or toggle; state 0/1",
+        build: |a| {
+            let mode = if a.flag(0) {
+                ButtonMode::Toggle
+            } else {
+                ButtonMode::Standard
+            };
+            Ok(Button::new(a.hw(), mode).debounce(a.get(1) as u16).into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[PortSpec::level_out("state", Unit::Scalar)];
     const PHASE: Phase = Phase::Slow;
 
@@ -279,6 +356,25 @@ impl Encoder {
 }
 
 impl Kind for Encoder {
+    const DECL: Declaration = Declaration {
+        name: "encoder",
+        kind: GraphKind::Encoder,
+        input: Some(GraphInputKind::Encoder),
+        params: &[Param::new("invert", "", 0.0, Domain::Flag)],
+        live: &[live("invert", Self::INVERT)],
+        host_keys: &[HostKey {
+            name: "ratio",
+            doc: "world units per count",
+        }],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "quadrature count (`count`, alias `out`)",
+        build: |a| {
+            let e = Encoder::new(a.hw());
+            Ok(if a.flag(0) { e.inverted() } else { e }.into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[PortSpec::output("count", Unit::Any)];
     const PHASE: Phase = Phase::Input;
 
@@ -319,6 +415,19 @@ impl StreamInput {
 }
 
 impl Kind for StreamInput {
+    const DECL: Declaration = Declaration {
+        name: "stream_input",
+        kind: GraphKind::StreamInput,
+        input: Some(GraphInputKind::Stream),
+        params: &[],
+        live: &[],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "motion-stream input port: one step each frame per signal",
+        build: |a| Ok(StreamInput::new(a.hw()).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::output("x", Unit::Any),
         PortSpec::output("y", Unit::Any),

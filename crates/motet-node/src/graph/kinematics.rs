@@ -3,10 +3,12 @@
 //! inverse for `read_deep` and `reset_deep`.
 
 use super::component::{positive, Kind, ParamError};
+use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::math::{atan2, cos, hypot, sin, unwrap_near};
 use super::port::{Port, PortSpec, Unit};
 use motet_trajectory::kinematics::FiveBar;
+use motet_wire::message::GraphKind;
 
 /// CoreXY: `a = x + y`, `b = x − y`; inverse `x = (a + b)/2`, `y = (a − b)/2`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -28,6 +30,19 @@ impl CoreXY {
 }
 
 impl Kind for CoreXY {
+    const DECL: Declaration = Declaration {
+        name: "corexy",
+        kind: GraphKind::CoreXY,
+        input: None,
+        params: &[],
+        live: &[],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "a = x + y, b = x − y",
+        build: |_| Ok(CoreXY.into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("x", Unit::Length),
         PortSpec::input("y", Unit::Length),
@@ -81,6 +96,19 @@ impl PolarToCartesian {
 }
 
 impl Kind for PolarToCartesian {
+    const DECL: Declaration = Declaration {
+        name: "polar",
+        kind: GraphKind::PolarToCartesian,
+        input: None,
+        params: &[],
+        live: &[],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "x = r cos θ, y = r sin θ (θ in radians; also the Lever)",
+        build: |_| Ok(PolarToCartesian.into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("r", Unit::Length),
         PortSpec::input("theta", Unit::Angle),
@@ -183,6 +211,41 @@ impl FiveBarForward {
 }
 
 impl Kind for FiveBarForward {
+    const DECL: Declaration = Declaration {
+        name: "fivebar",
+        kind: GraphKind::FiveBarForward,
+        input: None,
+        params: &[
+            Param::required("s", "length", Domain::REAL).doc("distance between the pivots"),
+            Param::required("l1", "length", Domain::Positive).doc("left proximal link"),
+            Param::required("l2", "length", Domain::Positive).doc("right proximal link"),
+            Param::required("l3", "length", Domain::Positive).doc("left distal link"),
+            Param::required("l4", "length", Domain::Positive).doc("right distal link"),
+            Param::new("ext", "length", 0.0, Domain::REAL)
+                .doc("stylus beyond the joint, along the left distal link"),
+        ],
+        live: &[
+            live("s", Self::S),
+            live("l1", Self::L1),
+            live("l2", Self::L2),
+            live("l3", Self::L3),
+            live("l4", Self::L4),
+            live("ext", Self::EXT),
+        ],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "five-bar linkage, joint angles (radians) to the stylus",
+        build: |a| {
+            let mut f = FiveBarForward::new(a.get(0), a.get(1), a.get(2), a.get(3), a.get(4));
+            f.ext = a.get(5);
+            if f.l3 + f.ext <= 0.0 {
+                return Err(ParamFault::Inconsistent("`l3` + `ext` must be positive"));
+            }
+            Ok(f.into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("theta1", Unit::Angle),
         PortSpec::input("theta2", Unit::Angle),

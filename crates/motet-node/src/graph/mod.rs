@@ -8,12 +8,16 @@
 //! * [`component`]: the [`Component`] enum; one file per family:
 //!   [`inputs`], [`filters`], [`kinematics`], [`generators`], [`homing`],
 //!   [`reader`], [`recorder`], [`channel`].
+//! * [`declare`]: each kind's declaration (name, parameters, defaults,
+//!   ports), read by the node, the graph file compiler and the docs; how to
+//!   add a component.
 //! * [`graph`](mod@graph) and [`builder`]: the runtime and its validation.
 //! * [`wire`]: the motion-stream wire encoding; [`record`]: the recording format.
 
 pub mod builder;
 pub mod channel;
 pub mod component;
+pub mod declare;
 pub mod error;
 pub mod filters;
 pub mod generators;
@@ -33,7 +37,8 @@ pub mod wire;
 
 pub use builder::GraphBuilder;
 pub use channel::GraphChannel;
-pub use component::{Component, Phase};
+pub use component::{Component, Phase, COMPONENTS};
+pub use declare::{Declaration, Domain, Param, ParamFault};
 pub use error::{Capacity, GraphError};
 pub use filters::{ScalingFilter1D, ScalingFilter2D, ThresholdGenerator};
 pub use generators::{
@@ -49,3 +54,4 @@ pub use port::{port, Mode, Port, PortRef, Unit};
 pub use reader::TrajectoryReader;
 pub use record::{Quantiser, Tape, DEFAULT_RESOLUTION};
 pub use recorder::{FourTrackPlayer, FourTrackRecorder};
+pub use spec::BuildError;

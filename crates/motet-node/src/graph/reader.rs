@@ -1,7 +1,9 @@
 //! TrajectoryReader: the node's planned trajectory as a motion stream.
 
+use super::declare::{live, Declaration, Domain, Param};
 use heapless::Deque;
 use motet_trajectory::{Segment, MAX_AXES};
+use motet_wire::message::GraphKind;
 
 use super::component::{Kind, ParamError};
 use super::io::Ctx;
@@ -49,6 +51,25 @@ impl TrajectoryReader {
 }
 
 impl Kind for TrajectoryReader {
+    const DECL: Declaration = Declaration {
+        name: "trajectory_reader",
+        kind: GraphKind::TrajectoryReader,
+        input: None,
+        params: &[Param::new(
+            "axis",
+            "",
+            0.0,
+            Domain::Index(motet_trajectory::MAX_AXES as u8),
+        )
+        .doc("machine axis index")],
+        live: &[live("axis", Self::AXIS)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "the node's planned trajectory, one machine axis",
+        build: |a| Ok(TrajectoryReader::new(a.get(0) as u8).into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[PortSpec::output("position", Unit::Any)];
     const PHASE: super::component::Phase = super::component::Phase::Input;
 

@@ -3,9 +3,11 @@
 //! the ports default to 0.01 world units per step (`set_ratio(0.01, 1)`).
 
 use super::component::{Kind, ParamError, Phase};
+use super::declare::{live, Declaration, Domain, Param};
 use super::io::Ctx;
 use super::port::{Port, PortSpec, Unit};
 use super::record::{pack, unpack, Quantiser, TRACKS};
+use motet_wire::message::GraphKind;
 
 /// Records four streams, one byte per frame, after the channels ran. Parameter
 /// `RECORD`: nonzero starts a new recording (clearing the tape), zero stops.
@@ -36,6 +38,19 @@ impl FourTrackRecorder {
 }
 
 impl Kind for FourTrackRecorder {
+    const DECL: Declaration = Declaration {
+        name: "recorder",
+        kind: GraphKind::FourTrackRecorder,
+        input: None,
+        params: &[],
+        live: &[live("record", Self::RECORD)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "four-track recorder (0.01 units per recorded step)",
+        build: |_| Ok(FourTrackRecorder::new().into()),
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::input("track0", Unit::Any),
         PortSpec::input("track1", Unit::Any),
@@ -113,6 +128,23 @@ impl FourTrackPlayer {
 }
 
 impl Kind for FourTrackPlayer {
+    const DECL: Declaration = Declaration {
+        name: "player",
+        kind: GraphKind::FourTrackPlayer,
+        input: None,
+        params: &[Param::new("loop", "", 0.0, Domain::Flag)],
+        live: &[live("play", Self::PLAY), live("loop", Self::LOOP)],
+        host_keys: &[],
+        in_ports: &[],
+        ports: Self::PORTS,
+        doc: "four-track player of the recorder's tape",
+        build: |a| {
+            let mut player = FourTrackPlayer::new();
+            player.looping = a.flag(0);
+            Ok(player.into())
+        },
+    };
+
     const PORTS: &'static [PortSpec] = &[
         PortSpec::output("track0", Unit::Any),
         PortSpec::output("track1", Unit::Any),
