@@ -3,7 +3,7 @@
 use crate::machine::Machine;
 use motet_planner::ranges::rounded;
 use motet_planner::{Command, Located, SourceError};
-use motet_trajectory::kinematics::Unreachable;
+use motet_trajectory::kinematics::{tool_point, Unreachable, Xyz};
 use motet_trajectory::{KinematicsKind, Point};
 
 /// Coordinates a job check brought back onto the travel's ends: beyond it,
@@ -96,10 +96,12 @@ pub enum MoveError {
     },
     #[error("move passes {distance:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {min_radius} mm")]
     PolarCentre { distance: f64, min_radius: f64 },
-    #[error("move passes ({}, {}), {why} of the {kinematics} kinematics", rounded(*.x), rounded(*.y))]
+    #[error("move passes {}, {why} of the {kinematics} kinematics", show_point(&.at[..*.dims]))]
     Unreachable {
-        x: f64,
-        y: f64,
+        /// The first point checked that is out of reach: x, y, z.
+        at: Xyz,
+        /// How many of its coordinates the kinematics replaces (2 or 3).
+        dims: usize,
         why: Unreachable,
         kinematics: &'static str,
     },
@@ -137,7 +139,8 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Mov
         }
         let beyond = if v < lo { lo - v } else { v - hi };
         let half = machine.half_step(i);
-        if beyond >= half {
+        // At the travel's end exactly is within it, whatever the half step.
+        if beyond > 0.0 && beyond >= half {
             return Err(MoveError::BeyondTravel {
                 axis: a.name.clone(),
                 value: v,
@@ -147,10 +150,17 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Mov
             });
         }
     }
-    if let Some((x, y)) = machine.xy {
-        check_reach(machine.kinematics, (from[x], from[y]), (to[x], to[y]))?;
+    if let Some(axes) = machine.kinematic_axes {
+        let axes = axes.map(|a| a as u8);
+        check_reach(
+            machine.kinematics,
+            tool_point(axes, from),
+            tool_point(axes, to),
+        )?;
     }
-    if let (KinematicsKind::Polar(_), Some((x, y))) = (machine.kinematics, machine.xy) {
+    if let (KinematicsKind::Polar(_), Some([x, y, _])) =
+        (machine.kinematics, machine.kinematic_axes)
+    {
         let (px, py) = (from[x], from[y]);
         let (wx, wy) = (to[x] - px, to[y] - py);
         let ww = wx * wx + wy * wy;
@@ -176,29 +186,32 @@ pub fn check_move(machine: &Machine, from: &Point, to: &Point) -> Result<(), Mov
 const REACH_PER_MM: f64 = 1.0;
 const REACH_MAX_POINTS: usize = 4096;
 
-/// Whether every point of the straight move from `a` to `b` in the plane is
-/// within the arms' reach, clear of singularities (kinematics whose joints
-/// are not linear and have no closed form: arms and linkages).
-fn check_reach(kin: KinematicsKind, a: (f64, f64), b: (f64, f64)) -> Result<(), MoveError> {
-    if kin.joints().is_empty()
-        || kin.linear(0).is_some()
-        || kin.closed_form(0, a, (0.0, 0.0), 0.0).is_some()
-    {
+/// Whether every point of the straight move from `a` to `b` is within the
+/// kinematics' reach, clear of singularities (every kinematics whose joints
+/// are not linear: arms, linkages, deltas).
+fn check_reach(kin: KinematicsKind, a: Xyz, b: Xyz) -> Result<(), MoveError> {
+    if kin.joints().is_empty() || kin.linear(0).is_some() {
         return Ok(());
     }
-    let length = (b.0 - a.0).hypot(b.1 - a.1);
+    let length = (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt();
     let n = ((length * REACH_PER_MM).ceil() as usize).clamp(1, REACH_MAX_POINTS);
     for k in 0..=n {
         let t = k as f64 / n as f64;
-        let (px, py) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-        if let Err(why) = kin.reach(px, py) {
+        let p = [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t);
+        if let Err(why) = kin.reach(p) {
             return Err(MoveError::Unreachable {
-                x: px,
-                y: py,
+                at: p,
+                dims: kin.joints().len().clamp(2, 3),
                 why,
                 kinematics: kin.name(),
             });
         }
     }
     Ok(())
+}
+
+/// `(x, y)` or `(x, y, z)`, rounded for messages.
+fn show_point(p: &[f64]) -> String {
+    let parts: Vec<String> = p.iter().map(|v| rounded(*v).to_string()).collect();
+    format!("({})", parts.join(", "))
 }

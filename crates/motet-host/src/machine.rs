@@ -88,8 +88,11 @@ pub struct Machine {
     pub file: PathBuf,
     pub axes: Vec<Axis>,
     pub kinematics: KinematicsKind,
-    /// Indices of the x and y axes when the kinematics couples them.
-    pub xy: Option<(usize, usize)>,
+    /// Indices of the x, y and z axes when the kinematics has joints of
+    /// its own; its joints replace the first
+    /// [`KinematicsKind::joints`]`.len()` of them (z is `NO_AXIS` unless
+    /// they replace it too).
+    pub kinematic_axes: Option<[usize; 3]>,
     pub joints: Vec<Joint>,
     pub actuators: Vec<Actuator>,
     pub tools: Vec<Tool>,
@@ -228,23 +231,19 @@ impl Machine {
             let spu = a.steps_per_unit.abs();
             let per_unit = match self.joints[a.joint].map {
                 JointMap::Linear { coeffs } => coeffs.get(axis).map_or(0.0, |c| c.abs()),
-                JointMap::Plane {
-                    kinematics: KinematicsKind::Polar(_),
-                    joint: 0,
-                    x,
-                    y,
-                } if [x, y].contains(&(axis as u8)) => 1.0,
-                // Degrees per mm of x or y at the closest allowed radius.
-                JointMap::Plane {
-                    kinematics: KinematicsKind::Polar(_),
-                    x,
-                    y,
-                    ..
-                } if [x, y].contains(&(axis as u8)) => {
-                    if self.min_radius > 0.0 {
-                        1.0f64.to_degrees() / self.min_radius
-                    } else {
-                        f64::INFINITY
+                JointMap::Kinematic {
+                    kinematics,
+                    joint,
+                    axes,
+                } if axes[..kinematics.joints().len()].contains(&(axis as u8)) => {
+                    match (kinematics.gradient_bound(joint as usize), kinematics) {
+                        (Some(g), _) => g,
+                        // Degrees per mm of x or y at the closest allowed radius.
+                        (None, KinematicsKind::Polar(_)) if self.min_radius > 0.0 => {
+                            1.0f64.to_degrees() / self.min_radius
+                        }
+                        (None, KinematicsKind::Polar(_)) => f64::INFINITY,
+                        (None, _) => 0.0,
                     }
                 }
                 _ => 0.0,

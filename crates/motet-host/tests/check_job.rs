@@ -237,6 +237,44 @@ const CASES: &[Case] = &[
         steps: &[M(&[("x", -151.0)])],
         outcome: Refused(0, "x=-151 is 1 beyond"),
     },
+    // ---- arms' reach (scara: l1 150, l2 120, starts at (150, 80)) -------------------
+    Case {
+        what: "scara: across the reach, around the shoulder",
+        machine: "scara.toml",
+        steps: &[M(&[("x", 100.0), ("y", 200.0)]), M(&[("x", -150.0), ("y", 80.0)])],
+        outcome: Accepted,
+    },
+    Case {
+        what: "scara: a line through the shoulder folds the arm first",
+        machine: "scara.toml",
+        steps: &[M(&[("x", -150.0), ("y", -80.0)])],
+        outcome: Refused(0, "move passes (26.4706, 14.1176), too near a singularity (arms stretched or folded) of the scara kinematics"),
+    },
+    Case {
+        what: "scara: the arm stretched straight",
+        machine: "scara.toml",
+        steps: &[M(&[("x", 100.0)]), M(&[("x", 270.0), ("y", 0.0)])],
+        outcome: Refused(1, "too near a singularity (arms stretched or folded) of the scara kinematics"),
+    },
+    // ---- delta (radius 105, rods 215, starts at the centre) ---------------------------
+    Case {
+        what: "delta: a circle of 80 mm radius and up",
+        machine: "delta.toml",
+        steps: &[M(&[("x", 80.0)]), M(&[("x", 0.0), ("y", 80.0)]), M(&[("x", -80.0), ("y", 0.0), ("z", 150.0)]), M(&[("x", 0.0), ("y", -80.0)])],
+        outcome: Accepted,
+    },
+    Case {
+        what: "delta: toward a corner of the travel box, beyond what the rods reach",
+        machine: "delta.toml",
+        steps: &[M(&[("z", 5.0)]), M(&[("x", 85.0), ("y", 85.0)])],
+        outcome: Refused(1, "move passes (70.2479, 70.2479, 5), too near a singularity (arms stretched or folded) of the delta kinematics"),
+    },
+    Case {
+        what: "delta: a rod almost flat",
+        machine: "delta.toml",
+        steps: &[M(&[("x", 80.0), ("y", 60.0)])],
+        outcome: Refused(0, "too near a singularity (arms stretched or folded) of the delta kinematics"),
+    },
 ];
 
 /// Builds the job of a case: step i is on line 10 + i, column i + 1.

@@ -3,7 +3,7 @@
 
 use motet_host::Machine;
 use motet_planner::ToolKind;
-use motet_trajectory::kinematics::{FiveBar, Scara};
+use motet_trajectory::kinematics::{Delta, FiveBar, Scara, NO_AXIS};
 use motet_trajectory::{JointMap, KinematicsKind, ProfileKind, MAX_AXES};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -48,6 +48,40 @@ struct Expect {
 
 const GT2_20: f64 = 3200.0 / 40.0; // 20 teeth × 2 mm, 1.8°, 1/16
 const EXAMPLES: &[Expect] = &[
+    Expect {
+        file: "delta.toml",
+        kinematics: KinematicsKind::Delta(Delta {
+            radius: 105.0,
+            arm: 215.0,
+        }),
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [-85.0, 85.0], true, None),
+            ("y", [-85.0, 85.0], true, None),
+            ("z", [0.0, 200.0], true, None),
+            ("e", [-INF, INF], false, None),
+        ],
+        joints: &["a", "b", "c", "e"],
+        actuators: &[
+            ("e_motor", "e", -3200.0 / (PI * 11.0)),
+            ("tower_a", "a", GT2_20),
+            ("tower_b", "b", GT2_20),
+            ("tower_c", "c", GT2_20),
+        ],
+        tools: &[],
+        nodes: &[("board", &["tower_a", "tower_b", "tower_c", "e_motor"], &[])],
+        start: &[0.0, 0.0, 0.0, 0.0],
+        joint_limits: &[
+            ("a", 300.0, 4000.0),
+            ("b", 300.0, 4000.0),
+            ("c", 300.0, 4000.0),
+        ],
+        // Half the slowest path axis (z, 50 mm/s).
+        draw_feed: 25.0,
+        tolerance: 0.01,
+        junction_deviation: 0.05,
+        min_radius: 1.0,
+    },
     Expect {
         file: "scara.toml",
         kinematics: KinematicsKind::Scara(Scara {
@@ -288,7 +322,7 @@ fn check(e: &Expect) -> Vec<String> {
     // Joints, and how they map machine axes.
     let joints: Vec<&str> = m.joints.iter().map(|j| j.name.as_str()).collect();
     want(joints == e.joints, format!("joints {joints:?}"));
-    match (m.kinematics, m.xy) {
+    match (m.kinematics, m.kinematic_axes.map(|[x, y, _]| (x, y))) {
         (KinematicsKind::Cartesian(_), xy) => {
             want(xy.is_none(), format!("cartesian xy {xy:?}"));
             for (i, j) in m.joints.iter().enumerate() {
@@ -326,10 +360,19 @@ fn check(e: &Expect) -> Vec<String> {
         (k @ (KinematicsKind::Scara(_) | KinematicsKind::FiveBar(_)), Some((0, 1))) => {
             for j in 0..2 {
                 want(
-                    m.joints[j].map == k.joint_map(j, 0, 1),
+                    m.joints[j].map == k.joint_map(j, [0, 1, NO_AXIS.into()]),
                     format!("{} joint {j}: {:?}", k.name(), m.joints[j].map),
                 );
             }
+        }
+        (k @ KinematicsKind::Delta(_), Some((0, 1))) => {
+            for j in 0..3 {
+                want(
+                    m.joints[j].map == k.joint_map(j, [0, 1, 2]),
+                    format!("delta joint {j}: {:?}", m.joints[j].map),
+                );
+            }
+            want(m.joints[3].map == JointMap::axis(3), "delta e".into());
         }
         (k, xy) => want(false, format!("{k:?} with xy {xy:?}")),
     }

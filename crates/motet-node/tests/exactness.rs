@@ -109,8 +109,8 @@ fn all_kinds(spu: [f64; 7]) -> Vec<ChannelConfig> {
     vec![
         channel(0, JointMap::axis(0), spu[0]),
         channel(1, JointMap::axis(1), spu[1]),
-        channel(2, k.joint_map(0, 0, 1), spu[2]),
-        channel(3, k.joint_map(1, 0, 1), spu[3]),
+        channel(2, k.joint_map(0, [0, 1, 2]), spu[2]),
+        channel(3, k.joint_map(1, [0, 1, 2]), spu[3]),
         channel(4, JointMap::polar_radius(0, 1), spu[4]),
         channel(5, JointMap::polar_angle(0, 1), spu[5]),
         channel(6, JointMap::axis(2), spu[6]),
@@ -244,8 +244,8 @@ fn linear_maps_through_the_origin() {
     let configs = vec![
         channel(0, JointMap::axis(0), spu[0]),
         channel(1, JointMap::axis(1), spu[1]),
-        channel(2, k.joint_map(0, 0, 1), spu[2]),
-        channel(3, k.joint_map(1, 0, 1), spu[3]),
+        channel(2, k.joint_map(0, [0, 1, 2]), spu[2]),
+        channel(3, k.joint_map(1, [0, 1, 2]), spu[3]),
     ];
     let cmds: Vec<Command> = vec![
         feed(-60.0, 0.0, 1.0, 100.0),

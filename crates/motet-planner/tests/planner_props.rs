@@ -224,7 +224,7 @@ proptest! {
     #[test]
     fn corexy_motor_limits_hold(moves in arb_moves()) {
         let kin = KinematicsKind::COREXY;
-        let joints = (0..2).map(|j| JointLimits { map: kin.joint_map(j, 0, 1), max_velocity: 150.0, max_acceleration: 1500.0 }).collect();
+        let joints = (0..2).map(|j| JointLimits { map: kin.joint_map(j, [0, 1, 2]), max_velocity: 150.0, max_acceleration: 1500.0 }).collect();
         let l = limits(ProfileKind::Trapezoid, joints);
         let (cmds, targets) = absolute(&moves);
         let segs = segments(&plan(&l, &cmds, false));

@@ -751,7 +751,13 @@ pub fn run_dance_with(
     let xy = |joints: &[f64]| -> [f64; 2] {
         match xy_idx {
             Some((a, b)) => {
-                let (x, y) = kin.forward_xy(joints[a], joints[b]);
+                // A delta's third joint: the tool's plane point depends on it.
+                let c = kin
+                    .joints()
+                    .get(2)
+                    .and_then(|c| machine.joints.iter().position(|j| j.name == c.name));
+                let [x, y, _] =
+                    kin.forward_or_nan([joints[a], joints[b], c.map_or(0.0, |c| joints[c])]);
                 [x, y]
             }
             None => [0.0, 0.0],

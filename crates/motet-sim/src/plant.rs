@@ -50,7 +50,9 @@ struct ActuatorModel {
 pub struct Plant {
     actuators: Vec<ActuatorModel>,
     kinematics: KinematicsKind,
-    xy: Option<(usize, usize)>,
+    /// The axes the kinematics' joints replace (x, y, and z for a delta):
+    /// joints `0..len` come first and move them together.
+    replaced: Vec<usize>,
     /// For each joint, the actuators driving it (averaged for the executed path).
     joint_actuators: Vec<Vec<usize>>,
     joint_axis: Vec<Option<usize>>,
@@ -115,9 +117,12 @@ impl Plant {
             })
             .collect::<Vec<Option<usize>>>();
         let (x, y) = (recorder.x(), recorder.y());
+        let replaced: Vec<usize> = machine.kinematic_axes.map_or(Vec::new(), |axes| {
+            axes[..machine.kinematics.joints().len()].to_vec()
+        });
         let mut actuators: Vec<ActuatorModel> = actuators;
         for a in actuators.iter_mut() {
-            let in_xy_pair = machine.xy.is_some() && a.joint < 2;
+            let in_xy_pair = a.joint < replaced.len();
             let axis = joint_axis.get(a.joint).copied().flatten();
             a.moves_xy = in_xy_pair || axis.is_some_and(|i| i == x || i == y);
             let sole = joint_actuators[a.joint].len() == 1;
@@ -131,7 +136,7 @@ impl Plant {
         let mut plant = Plant {
             actuators,
             kinematics: machine.kinematics,
-            xy: machine.xy,
+            replaced,
             joint_actuators,
             joint_axis,
             tools: vec![0.0; machine.tools.len()],
@@ -306,17 +311,19 @@ impl Plant {
             [i] => value(*i),
             _ => acts.iter().map(|&i| value(i)).sum::<f64>() / acts.len().max(1) as f64,
         };
-        match self.xy {
-            Some((x, y)) if j < 2 => {
-                let (px, py) = self.kinematics.forward_xy(self.joints[0], self.joints[1]);
-                self.executed[x] = px;
-                self.executed[y] = py;
+        if j < self.replaced.len() {
+            // The kinematics' joints, then what they leave alone (unused
+            // by planar kinematics, whose forward passes it through).
+            let mut input = [self.joints[0], self.joints[1], 0.0];
+            if let Some(v) = self.joints.get(2).filter(|_| self.replaced.len() > 2) {
+                input[2] = *v;
             }
-            _ => {
-                if let Some(Some(i)) = self.joint_axis.get(j) {
-                    self.executed[*i] = self.joints[j];
-                }
+            let p = self.kinematics.forward_or_nan(input);
+            for (axis, v) in self.replaced.iter().zip(p) {
+                self.executed[*axis] = v;
             }
+        } else if let Some(Some(i)) = self.joint_axis.get(j) {
+            self.executed[*i] = self.joints[j];
         }
     }
 

@@ -1,27 +1,31 @@
 //! Every kinematics in the table against the same properties: forward
 //! undoes inverse, each joint's path along a line is solved back to the
 //! distance that gave it, and the rate bound the planner uses holds along
-//! lines that run close to a singularity.
+//! lines that run close to a singularity. Points are drawn in three
+//! dimensions: planar kinematics leave z alone, a delta's joints follow it.
 
-use motet_trajectory::kinematics::{FiveBar, Scara};
+use motet_trajectory::kinematics::{Delta, FiveBar, Scara, Xyz};
 use motet_trajectory::{JointMap, JointPath, KinematicsKind, MAX_AXES};
 use proptest::prelude::*;
 
 /// Each kind with a geometry a machine might have, and the box of points
-/// sampled for it.
-fn machines() -> Vec<(KinematicsKind, [f64; 4])> {
+/// sampled for it: x, y and z ranges.
+type Box3 = [f64; 6];
+
+fn machines() -> Vec<(KinematicsKind, Box3)> {
+    const PLANE: Box3 = [-200.0, 200.0, -200.0, 200.0, -50.0, 50.0];
     vec![
-        (KinematicsKind::CARTESIAN, [-200.0, 200.0, -200.0, 200.0]),
-        (KinematicsKind::COREXY, [-200.0, 200.0, -200.0, 200.0]),
-        (KinematicsKind::HBOT, [-200.0, 200.0, -200.0, 200.0]),
-        (KinematicsKind::POLAR, [-200.0, 200.0, -200.0, 200.0]),
+        (KinematicsKind::CARTESIAN, PLANE),
+        (KinematicsKind::COREXY, PLANE),
+        (KinematicsKind::HBOT, PLANE),
+        (KinematicsKind::POLAR, PLANE),
         (
             KinematicsKind::Scara(Scara {
                 l1: 150.0,
                 l2: 120.0,
                 elbow: 1.0,
             }),
-            [-270.0, 270.0, -270.0, 270.0],
+            [-270.0, 270.0, -270.0, 270.0, 0.0, 0.0],
         ),
         (
             KinematicsKind::Scara(Scara {
@@ -29,21 +33,38 @@ fn machines() -> Vec<(KinematicsKind, [f64; 4])> {
                 l2: 100.0,
                 elbow: -1.0,
             }),
-            [-200.0, 200.0, -200.0, 200.0],
+            PLANE,
         ),
         (
             KinematicsKind::FiveBar(FiveBar::new(60.0, 80.0, 80.0, 120.0, 120.0)),
-            [-100.0, 160.0, 0.0, 220.0],
+            [-100.0, 160.0, 0.0, 220.0, 0.0, 10.0],
         ),
         (
             KinematicsKind::FiveBar(FiveBar {
                 ext: 20.0,
                 ..FiveBar::new(40.0, 70.0, 90.0, 110.0, 100.0)
             }),
-            [-120.0, 160.0, 0.0, 240.0],
+            [-120.0, 160.0, 0.0, 240.0, 0.0, 0.0],
+        ),
+        (
+            KinematicsKind::Delta(Delta {
+                radius: 105.0,
+                arm: 250.0,
+            }),
+            [-180.0, 180.0, -180.0, 180.0, 0.0, 300.0],
+        ),
+        (
+            KinematicsKind::Delta(Delta {
+                radius: 140.0,
+                arm: 180.0,
+            }),
+            [-150.0, 150.0, -150.0, 150.0, -20.0, 20.0],
         ),
     ]
 }
+
+/// How many machines [`machines`] lists.
+const KINDS: usize = 10;
 
 #[test]
 fn the_table_names_every_kind_once() {
@@ -59,7 +80,7 @@ fn the_table_names_every_kind_once() {
         assert_eq!(back, Ok(kin));
         assert!(kin.is_valid());
         let joints: Vec<&str> = kin.joints().iter().map(|j| j.name).collect();
-        assert!(joints.is_empty() || joints.len() == 2, "{joints:?}");
+        assert!(matches!(joints.len(), 0 | 2 | 3), "{joints:?}");
     }
 }
 
@@ -80,6 +101,10 @@ fn bad_geometry_is_refused_with_its_key() {
             vec![60.0, 80.0, 80.0, 120.0, 120.0, -130.0],
             "ext",
         ),
+        ("delta", vec![-1.0, 250.0], "radius"),
+        ("delta", vec![100.0, f64::NAN], "arm"),
+        // Rods nearly flat at the centre: no point would be in reach.
+        ("delta", vec![200.0, 210.0], "arm"),
     ] {
         let e = KinematicsKind::from_name(name, &values)
             .unwrap()
@@ -89,70 +114,108 @@ fn bad_geometry_is_refused_with_its_key() {
     assert!(KinematicsKind::from_name("hexapod", &[]).is_none());
 }
 
-fn point(x: f64, y: f64) -> [f64; MAX_AXES] {
-    let mut p = [0.0; MAX_AXES];
-    p[0] = x;
-    p[1] = y;
-    p
+fn point(p: Xyz) -> [f64; MAX_AXES] {
+    let mut q = [0.0; MAX_AXES];
+    q[..3].copy_from_slice(&p);
+    q
+}
+
+fn lerp(p: Xyz, q: Xyz, t: f64) -> Xyz {
+    [0, 1, 2].map(|i| p[i] + (q[i] - p[i]) * t)
+}
+
+fn distance(p: Xyz, q: Xyz) -> f64 {
+    (0..3).map(|i| (q[i] - p[i]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// Draws a point in the box `b` that the kinematics reaches clear of
 /// singularities (`None` if the draw missed).
-fn reachable(kin: KinematicsKind, b: [f64; 4], u: f64, v: f64) -> Option<(f64, f64)> {
-    let (x, y) = (b[0] + (b[1] - b[0]) * u, b[2] + (b[3] - b[2]) * v);
-    kin.reach(x, y).ok().map(|_| (x, y))
+fn reachable(kin: KinematicsKind, b: Box3, u: (f64, f64, f64)) -> Option<Xyz> {
+    let p = [
+        b[0] + (b[1] - b[0]) * u.0,
+        b[2] + (b[3] - b[2]) * u.1,
+        b[4] + (b[5] - b[4]) * u.2,
+    ];
+    kin.reach(p).ok().map(|_| p)
+}
+
+/// Whether the straight line from `p` to `q` stays within reach all along
+/// (the host refuses the others), and for polar machines clear of the
+/// centre by `polar_clearance`.
+fn line_in_reach(kin: KinematicsKind, p: Xyz, q: Xyz, polar_clearance: f64) -> bool {
+    (0..=200).all(|i| {
+        let x = lerp(p, q, i as f64 / 200.0);
+        kin.reach(x).is_ok()
+            && !(kin == KinematicsKind::POLAR && x[0].hypot(x[1]) < polar_clearance)
+    })
+}
+
+fn unit() -> impl Strategy<Value = (f64, f64, f64)> {
+    (0.0f64..1.0, 0.0f64..1.0, 0.0f64..1.0)
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
 
     #[test]
-    fn forward_undoes_inverse(k in 0usize..8, u in 0.0f64..1.0, v in 0.0f64..1.0) {
+    fn forward_undoes_inverse(k in 0usize..KINDS, u in unit()) {
         let (kin, b) = machines()[k];
-        if kin.joints().is_empty() {
+        let Some(p) = reachable(kin, b, u) else { return Ok(()) };
+        if kin == KinematicsKind::POLAR && p[0].hypot(p[1]) < 1e-6 {
             return Ok(());
         }
-        let Some((x, y)) = reachable(kin, b, u, v) else { return Ok(()) };
-        if kin == KinematicsKind::POLAR && x.hypot(y) < 1e-6 {
-            return Ok(());
+        // The kinematics' joints, then the coordinates they leave alone.
+        let n = kin.joints().len();
+        let mut joints = p;
+        for (j, slot) in joints.iter_mut().enumerate().take(n) {
+            *slot = kin.inverse(j, p, 0.0).unwrap();
         }
-        let j0 = kin.inverse(0, x, y, 0.0).unwrap();
-        let j1 = kin.inverse(1, x, y, 0.0).unwrap();
-        let (fx, fy) = kin.forward([j0, j1]).unwrap();
-        prop_assert!((fx - x).abs() < 1e-9 && (fy - y).abs() < 1e-9,
-            "{:?} ({}, {}) -> ({}, {}) -> ({}, {})", kin, x, y, j0, j1, fx, fy);
+        let f = kin.forward(joints).unwrap();
+        prop_assert!(distance(f, p) < 1e-8,
+            "{:?} {:?} -> {:?} -> {:?}", kin, p, joints, f);
+    }
+
+    /// No joint changes faster than its gradient bound says, wherever the
+    /// kinematics reaches (a finite difference in each direction).
+    #[test]
+    fn gradient_bounds_hold(k in 0usize..KINDS, u in unit()) {
+        let (kin, b) = machines()[k];
+        let Some(p) = reachable(kin, b, u) else { return Ok(()) };
+        for j in 0..kin.joints().len() {
+            let Some(bound) = kin.gradient_bound(j) else { continue };
+            let h = 1e-6;
+            let g: f64 = (0..3)
+                .map(|i| {
+                    let mut q = p;
+                    q[i] += h;
+                    let d = (kin.inverse(j, q, 0.0).unwrap() - kin.inverse(j, p, 0.0).unwrap()) / h;
+                    d * d
+                })
+                .sum::<f64>()
+                .sqrt();
+            prop_assert!(g <= bound * (1.0 + 1e-4), "{:?} joint {} at {:?}: |∇| {} > {}", kin, j, p, g, bound);
+        }
     }
 
     /// Along a line within reach, every joint value is solved back to its
     /// distance, leg by leg between turns, as a node steps it.
     #[test]
-    fn paths_solve_back(
-        k in 0usize..8,
-        a in (0.0f64..1.0, 0.0f64..1.0),
-        b in (0.0f64..1.0, 0.0f64..1.0),
-    ) {
+    fn paths_solve_back(k in 0usize..KINDS, a in unit(), b in unit()) {
         let (kin, bx) = machines()[k];
-        if kin.joints().is_empty() {
-            return Ok(());
-        }
-        let (Some(p), Some(q)) = (reachable(kin, bx, a.0, a.1), reachable(kin, bx, b.0, b.1)) else {
+        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
             return Ok(());
         };
-        // Only lines that stay within reach all along (the host refuses the others).
-        if (0..=200).any(|i| {
-            let t = i as f64 / 200.0;
-            kin.reach(p.0 + (q.0 - p.0) * t, p.1 + (q.1 - p.1) * t).is_err()
-        }) {
+        if !line_in_reach(kin, p, q, 0.0) {
             return Ok(());
         }
-        let length = (q.0 - p.0).hypot(q.1 - p.1);
+        let length = distance(p, q);
         if length < 1e-3 {
             return Ok(());
         }
-        for j in 0..2 {
-            let map = kin.joint_map(j, 0, 1);
-            let start = map.value(&point(p.0, p.1), 0.0);
-            let path = JointPath::between(&map, &point(p.0, p.1), &point(q.0, q.1), length, start);
+        for j in 0..kin.joints().len() {
+            let map = kin.joint_map(j, [0, 1, 2]);
+            let start = map.value(&point(p), 0.0);
+            let path = JointPath::between(&map, &point(p), &point(q), length, start);
             let mut lo = 0.0;
             while lo < length {
                 let hi = path.next_turn(lo).unwrap_or(length);
@@ -173,30 +236,22 @@ proptest! {
     /// The planner's bound on a joint's rate holds along a line, sampled
     /// far more finely than the bound itself was.
     #[test]
-    fn rate_bounds_hold(
-        k in 0usize..8,
-        a in (0.0f64..1.0, 0.0f64..1.0),
-        b in (0.0f64..1.0, 0.0f64..1.0),
-    ) {
+    fn rate_bounds_hold(k in 0usize..KINDS, a in unit(), b in unit()) {
         let (kin, bx) = machines()[k];
-        let (Some(p), Some(q)) = (reachable(kin, bx, a.0, a.1), reachable(kin, bx, b.0, b.1)) else {
+        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
             return Ok(());
         };
-        if (0..=200).any(|i| {
-            let t = i as f64 / 200.0;
-            let (x, y) = (p.0 + (q.0 - p.0) * t, p.1 + (q.1 - p.1) * t);
-            kin.reach(x, y).is_err() || (kin == KinematicsKind::POLAR && x.hypot(y) < 1.0)
-        }) {
+        if !line_in_reach(kin, p, q, 1.0) {
             return Ok(());
         }
-        let length = (q.0 - p.0).hypot(q.1 - p.1);
+        let length = distance(p, q);
         if length < 1e-3 {
             return Ok(());
         }
         for j in 0..kin.joints().len() {
-            let map: JointMap = kin.joint_map(j, 0, 1);
-            let start = map.value(&point(p.0, p.1), 0.0);
-            let path = JointPath::between(&map, &point(p.0, p.1), &point(q.0, q.1), length, start);
+            let map: JointMap = kin.joint_map(j, [0, 1, 2]);
+            let start = map.value(&point(p), 0.0);
+            let path = JointPath::between(&map, &point(p), &point(q), length, start);
             let bound = path.max_rate(0.0, length);
             let n = 4000;
             let h = length / n as f64;

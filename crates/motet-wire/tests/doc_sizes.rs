@@ -40,7 +40,21 @@ fn documented_sizes() {
                 pulse_us: 2.0,
                 dir_setup_us: 1.0,
             }),
-            23,
+            24,
+        ),
+        (
+            HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
+                channel: 0,
+                map: motet_trajectory::KinematicsKind::Delta(motet_trajectory::kinematics::Delta {
+                    radius: 100.0,
+                    arm: 250.0,
+                })
+                .joint_map(0, [0, 1, 2]),
+                steps_per_unit: 80.0,
+                pulse_us: 2.0,
+                dir_setup_us: 1.0,
+            }),
+            40,
         ),
         (
             HostMessage::ConfigureChannel(motet_wire::ChannelConfig {
@@ -48,12 +62,12 @@ fn documented_sizes() {
                 map: motet_trajectory::KinematicsKind::FiveBar(
                     motet_trajectory::kinematics::FiveBar::new(60.0, 80.0, 80.0, 120.0, 120.0),
                 )
-                .joint_map(0, 0, 1),
+                .joint_map(0, [0, 1, 2]),
                 steps_per_unit: 80.0,
                 pulse_us: 2.0,
                 dir_setup_us: 1.0,
             }),
-            71,
+            72,
         ),
         (
             HostMessage::ConfigureChannel(motet_wire::ChannelConfig {

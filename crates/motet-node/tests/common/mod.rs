@@ -228,8 +228,8 @@ pub fn corexy() -> Machine {
     Machine {
         name: "corexy",
         channels: vec![
-            channel(0, k.joint_map(0, 0, 1), 40.0),
-            channel(1, k.joint_map(1, 0, 1), -40.0),
+            channel(0, k.joint_map(0, [0, 1, 2]), 40.0),
+            channel(1, k.joint_map(1, [0, 1, 2]), -40.0),
             channel(2, JointMap::axis(2), -200.0),
         ],
         tools: default_tools(),

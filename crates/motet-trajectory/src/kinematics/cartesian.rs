@@ -1,6 +1,6 @@
 //! Cartesian: x and y are joints of their own.
 
-use super::{GeometryError, JointSpec, Kinematics, Param, MAX_PARAMS};
+use super::{GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -19,15 +19,17 @@ impl Kinematics for Cartesian {
         [0.0; MAX_PARAMS]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, _: f64) -> Option<f64> {
-        Some(if j == 0 { x } else { y })
+    fn inverse(&self, j: usize, p: Xyz, _: f64) -> Option<f64> {
+        p.get(j).copied()
     }
 
-    fn forward(&self, [x, y]: [f64; 2]) -> Option<(f64, f64)> {
-        Some((x, y))
+    fn forward(&self, joints: Xyz) -> Option<Xyz> {
+        Some(joints)
     }
 
-    fn linear(&self, j: usize) -> Option<[f64; 2]> {
-        Some(if j == 0 { [1.0, 0.0] } else { [0.0, 1.0] })
+    fn linear(&self, j: usize) -> Option<Xyz> {
+        let mut c = [0.0; 3];
+        *c.get_mut(j)? = 1.0;
+        Some(c)
     }
 }

@@ -1,6 +1,6 @@
 //! CoreXY: two motors on crossed belts, a = x + y, b = x − y.
 
-use super::{GeometryError, JointSpec, Kinematics, Param, MAX_PARAMS};
+use super::{GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -19,15 +19,19 @@ impl Kinematics for CoreXY {
         [0.0; MAX_PARAMS]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, _: f64) -> Option<f64> {
+    fn inverse(&self, j: usize, [x, y, _]: Xyz, _: f64) -> Option<f64> {
         Some(if j == 0 { x + y } else { x - y })
     }
 
-    fn forward(&self, [a, b]: [f64; 2]) -> Option<(f64, f64)> {
-        Some((0.5 * (a + b), 0.5 * (a - b)))
+    fn forward(&self, [a, b, z]: Xyz) -> Option<Xyz> {
+        Some([0.5 * (a + b), 0.5 * (a - b), z])
     }
 
-    fn linear(&self, j: usize) -> Option<[f64; 2]> {
-        Some(if j == 0 { [1.0, 1.0] } else { [1.0, -1.0] })
+    fn linear(&self, j: usize) -> Option<Xyz> {
+        Some(if j == 0 {
+            [1.0, 1.0, 0.0]
+        } else {
+            [1.0, -1.0, 0.0]
+        })
     }
 }

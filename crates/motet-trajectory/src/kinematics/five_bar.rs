@@ -8,7 +8,7 @@
 //! geometry.
 
 use super::{
-    nearest_turn, GeometryError, JointSpec, Kinematics, Param, Unreachable, DEG, MAX_PARAMS,
+    nearest_turn, GeometryError, JointSpec, Kinematics, Param, Unreachable, Xyz, DEG, MAX_PARAMS,
 };
 use crate::math::{acos, atan2, cos, hypot, sin, sqrt};
 use serde::{Deserialize, Serialize};
@@ -190,16 +190,17 @@ impl Kinematics for FiveBar {
         [self.s, self.l1, self.l2, self.l3, self.l4, self.ext]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, reference: f64) -> Option<f64> {
+    fn inverse(&self, j: usize, [x, y, _]: Xyz, reference: f64) -> Option<f64> {
         let (t1, t2) = self.angles(x, y)?;
         Some(nearest_turn(if j == 0 { t1 } else { t2 } * DEG, reference))
     }
 
-    fn forward(&self, [t1, t2]: [f64; 2]) -> Option<(f64, f64)> {
-        self.point(t1 / DEG, t2 / DEG)
+    fn forward(&self, [t1, t2, z]: Xyz) -> Option<Xyz> {
+        let (x, y) = self.point(t1 / DEG, t2 / DEG)?;
+        Some([x, y, z])
     }
 
-    fn reach(&self, x: f64, y: f64) -> Result<(), Unreachable> {
+    fn reach(&self, [x, y, _]: Xyz) -> Result<(), Unreachable> {
         let p = self.pose(x, y).ok_or(Unreachable::OutOfReach)?;
         if p.c1.abs() > 1.0 - MARGIN || p.c2.abs() > 1.0 - MARGIN || p.parallel < PARALLEL {
             Err(Unreachable::NearSingularity)

@@ -2,7 +2,7 @@
 //! ΔX = ½(ΔA+ΔB), ΔY = ½(ΔA−ΔB)); the difference is mechanical (racking),
 //! not kinematic, so it is CoreXY's under its own name.
 
-use super::{CoreXY, GeometryError, JointSpec, Kinematics, Param, MAX_PARAMS};
+use super::{CoreXY, GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -21,15 +21,15 @@ impl Kinematics for HBot {
         [0.0; MAX_PARAMS]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, r: f64) -> Option<f64> {
-        CoreXY.inverse(j, x, y, r)
+    fn inverse(&self, j: usize, p: Xyz, r: f64) -> Option<f64> {
+        CoreXY.inverse(j, p, r)
     }
 
-    fn forward(&self, joints: [f64; 2]) -> Option<(f64, f64)> {
+    fn forward(&self, joints: Xyz) -> Option<Xyz> {
         CoreXY.forward(joints)
     }
 
-    fn linear(&self, j: usize) -> Option<[f64; 2]> {
+    fn linear(&self, j: usize) -> Option<Xyz> {
         CoreXY.linear(j)
     }
 }

@@ -12,7 +12,7 @@
 //! 1. Write `kinematics/<name>.rs`: a `Copy` type holding the geometry, and
 //!    its [`Kinematics`] impl (names, joints, the geometry keys it reads
 //!    from the machine file's `[geometry]` table, inverse and forward maps,
-//!    and the workspace it can reach). A joint linear in x and y says so in
+//!    and the workspace it can reach). A joint linear in x, y and z says so in
 //!    [`Kinematics::linear`] and is stepped in closed form; any other joint
 //!    is stepped by bracketing its crossing along the segment, exact to the
 //!    nanosecond, unless the kinematics gives a closed form
@@ -24,11 +24,15 @@
 //! rates, the simulator checks its steps. `tests/kinematics_props.rs` runs
 //! its round trip and rate bounds with the others.
 //!
-//! Kinematics here are planar: their joints replace the machine's x and y
-//! axes; every other axis stays a joint of its own. Angles are in degrees.
+//! A kinematics works on the tool point `[x, y, z]` ([`Xyz`]). Its joints
+//! replace the first of the machine's x, y and z axes: planar kinds (two
+//! joints) replace x and y and ignore z, a delta's three carriages replace
+//! all three; every other axis stays a joint of its own. Angles are in
+//! degrees.
 
 mod cartesian;
 mod corexy;
+mod delta;
 mod five_bar;
 mod hbot;
 mod path;
@@ -38,6 +42,7 @@ mod table;
 
 pub use cartesian::Cartesian;
 pub use corexy::CoreXY;
+pub use delta::Delta;
 pub use five_bar::FiveBar;
 pub use hbot::HBot;
 pub use path::{ClosedForm, JointPath};
@@ -109,12 +114,17 @@ impl fmt::Display for Unreachable {
     }
 }
 
-/// A machine's planar kinematics: see the module documentation for how to
-/// add one.
+/// A tool point `[x, y, z]` in machine space (mm).
+pub type Xyz = [f64; 3];
+
+/// A machine's kinematics: see the module documentation for how to add
+/// one.
 pub trait Kinematics: Copy + fmt::Debug + PartialEq {
     /// Its name in machine files (`kinematics = "…"`).
     const NAME: &'static str;
-    /// The joints that replace x and y, in order (none: x and y are joints).
+    /// The joints that replace the first of x, y and z, in order: two
+    /// replace x and y (planar kinematics), three replace x, y and z (a
+    /// delta); none: every axis is its own joint.
     const JOINTS: &'static [JointSpec];
     /// The geometry it reads from `[geometry]`, in the order
     /// [`Kinematics::from_params`] takes it.
@@ -126,36 +136,37 @@ pub trait Kinematics: Copy + fmt::Debug + PartialEq {
     /// Its geometry, in [`Kinematics::PARAMS`]' order.
     fn params(&self) -> [f64; MAX_PARAMS];
 
-    /// Joint `j` at the plane point `(x, y)`; an angle on the branch
-    /// nearest `reference`. `None` where the point is out of reach.
-    fn inverse(&self, j: usize, x: f64, y: f64, reference: f64) -> Option<f64>;
+    /// Joint `j` at the tool point `p`; an angle on the branch nearest
+    /// `reference`. `None` where the point is out of reach.
+    fn inverse(&self, j: usize, p: Xyz, reference: f64) -> Option<f64>;
 
-    /// The plane point the joints put the tool at; `None` where they
-    /// cannot meet.
-    fn forward(&self, joints: [f64; 2]) -> Option<(f64, f64)>;
+    /// The tool point from the joints: the kinematics' joints in order,
+    /// then the tool coordinates they leave alone (a planar kinematics
+    /// takes `[j0, j1, z]`). `None` where the joints cannot meet.
+    fn forward(&self, joints: Xyz) -> Option<Xyz>;
 
-    /// `(coefficient of x, coefficient of y)` when joint `j` is linear in
-    /// them: such a joint is a row of coefficients, stepped in closed form.
-    fn linear(&self, _j: usize) -> Option<[f64; 2]> {
+    /// The coefficients of x, y and z when joint `j` is linear in them:
+    /// such a joint is a row of coefficients, stepped in closed form.
+    fn linear(&self, _j: usize) -> Option<Xyz> {
         None
     }
 
     /// Joint `j` along the line `p0 + w·s` in closed form, when there is
     /// one; otherwise nodes bracket each step's crossing.
-    fn closed_form(
-        &self,
-        _j: usize,
-        _p0: (f64, f64),
-        _w: (f64, f64),
-        _reference: f64,
-    ) -> Option<ClosedForm> {
+    fn closed_form(&self, _j: usize, _p0: Xyz, _w: Xyz, _reference: f64) -> Option<ClosedForm> {
         None
     }
 
-    /// Whether `(x, y)` can be reached with a margin from every
-    /// singularity.
-    fn reach(&self, x: f64, y: f64) -> Result<(), Unreachable> {
-        match (0..Self::JOINTS.len()).all(|j| self.inverse(j, x, y, 0.0).is_some()) {
+    /// The most joint `j` can change per mm of tool travel anywhere in the
+    /// reach, when that is bounded: what bounds its speed from the axes'
+    /// and the smallest move that steps it.
+    fn gradient_bound(&self, _j: usize) -> Option<f64> {
+        None
+    }
+
+    /// Whether `p` can be reached with a margin from every singularity.
+    fn reach(&self, p: Xyz) -> Result<(), Unreachable> {
+        match (0..Self::JOINTS.len()).all(|j| self.inverse(j, p, 0.0).is_some()) {
             true => Ok(()),
             false => Err(Unreachable::OutOfReach),
         }
@@ -170,14 +181,18 @@ pub const MAX_PARAMS: usize = 6;
 pub enum JointMap {
     /// joint = Σ coeffs[i] · p[i]: cartesian, CoreXY, any kinematic matrix.
     Linear { coeffs: [f64; MAX_AXES] },
-    /// Joint `joint` of a planar kinematics, of the point's axes `x` and `y`.
-    Plane {
+    /// Joint `joint` of a kinematics, of the point's axes `axes` (x, y and
+    /// z; z is [`NO_AXIS`] on a machine without one).
+    Kinematic {
         kinematics: KinematicsKind,
         joint: u8,
-        x: u8,
-        y: u8,
+        axes: [u8; 3],
     },
 }
+
+/// In [`JointMap::Kinematic`]'s axes: the machine has no such axis (its
+/// coordinate reads as 0).
+pub const NO_AXIS: u8 = u8::MAX;
 
 impl JointMap {
     /// A joint that is exactly machine axis `axis`.
@@ -189,21 +204,19 @@ impl JointMap {
 
     /// A polar machine's radius joint, of axes `x` and `y`.
     pub fn polar_radius(x: u8, y: u8) -> JointMap {
-        JointMap::Plane {
+        JointMap::Kinematic {
             kinematics: KinematicsKind::POLAR,
             joint: 0,
-            x,
-            y,
+            axes: [x, y, NO_AXIS],
         }
     }
 
     /// A polar machine's angle joint, of axes `x` and `y`.
     pub fn polar_angle(x: u8, y: u8) -> JointMap {
-        JointMap::Plane {
+        JointMap::Kinematic {
             kinematics: KinematicsKind::POLAR,
             joint: 1,
-            x,
-            y,
+            axes: [x, y, NO_AXIS],
         }
     }
 
@@ -218,13 +231,12 @@ impl JointMap {
                 }
                 v
             }
-            JointMap::Plane {
+            JointMap::Kinematic {
                 kinematics,
                 joint,
-                x,
-                y,
+                axes,
             } => kinematics
-                .inverse(joint as usize, p[x as usize], p[y as usize], reference)
+                .inverse(joint as usize, tool_point(axes, p), reference)
                 .unwrap_or(f64::NAN),
         }
     }
@@ -241,7 +253,12 @@ impl JointMap {
                 }
                 m
             }
-            JointMap::Plane { x, y, .. } => (1 << x) | (1 << y),
+            JointMap::Kinematic {
+                kinematics, axes, ..
+            } => axes[..kinematics.joints().len().max(2)]
+                .iter()
+                .filter(|a| (**a as usize) < MAX_AXES)
+                .fold(0, |m, a| m | (1 << a)),
         }
     }
 
@@ -252,15 +269,20 @@ impl JointMap {
     pub fn is_valid(&self) -> bool {
         match *self {
             JointMap::Linear { coeffs } => coeffs.iter().all(|c| c.is_finite()),
-            JointMap::Plane {
+            JointMap::Kinematic {
                 kinematics,
                 joint,
-                x,
-                y,
+                axes: [x, y, z],
             } => {
-                (x as usize) < MAX_AXES
-                    && (y as usize) < MAX_AXES
+                let named = |a: u8| (a as usize) < MAX_AXES;
+                let z_ok = match kinematics.joints().len() > 2 {
+                    true => named(z) && z != x && z != y,
+                    false => z == NO_AXIS || (named(z) && z != x && z != y),
+                };
+                named(x)
+                    && named(y)
                     && x != y
+                    && z_ok
                     && (joint as usize) < kinematics.joints().len()
                     && kinematics.is_valid()
             }
@@ -272,7 +294,7 @@ impl JointMap {
     pub fn is_angle(&self) -> bool {
         match *self {
             JointMap::Linear { .. } => false,
-            JointMap::Plane {
+            JointMap::Kinematic {
                 kinematics, joint, ..
             } => kinematics
                 .joints()
@@ -280,6 +302,14 @@ impl JointMap {
                 .is_some_and(|j| j.angle),
         }
     }
+}
+
+/// The tool point `[x, y, z]` of `p`, given the indices of its x, y and z
+/// axes (z reads 0 where it is [`NO_AXIS`]).
+#[inline]
+pub fn tool_point(axes: [u8; 3], p: &Point) -> Xyz {
+    let at = |a: u8| p.get(a as usize).copied().unwrap_or(0.0);
+    [at(axes[0]), at(axes[1]), at(axes[2])]
 }
 
 /// `angle + 360·k` nearest to `reference` (degrees).

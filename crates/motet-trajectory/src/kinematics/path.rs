@@ -1,7 +1,7 @@
 //! One joint along one segment, as a function of path distance `s`: what a
 //! node steps and the planner bounds.
 
-use super::{JointMap, KinematicsKind, DEG};
+use super::{tool_point, JointMap, KinematicsKind, Xyz, DEG};
 use crate::math::{atan2, cos, sin, sqrt};
 use crate::point::Point;
 use crate::segment::Segment;
@@ -42,8 +42,8 @@ enum Shape {
     Bracketed {
         kinematics: KinematicsKind,
         joint: u8,
-        p0: (f64, f64),
-        w: (f64, f64),
+        p0: Xyz,
+        w: Xyz,
         v0: f64,
         v1: f64,
     },
@@ -83,15 +83,14 @@ impl JointPath {
                     k: (a1 - a0) * inv,
                 }
             }
-            JointMap::Plane {
+            JointMap::Kinematic {
                 kinematics,
                 joint,
-                x,
-                y,
+                axes,
             } => {
-                let (x, y) = (x as usize, y as usize);
-                let p0 = (start[x], start[y]);
-                let w = ((end[x] - p0.0) * inv, (end[y] - p0.1) * inv);
+                let p0 = tool_point(axes, start);
+                let p1 = tool_point(axes, end);
+                let w = [0, 1, 2].map(|i| (p1[i] - p0[i]) * inv);
                 match kinematics.closed_form(joint as usize, p0, w, reference) {
                     Some(c) => Shape::Closed(c),
                     None => {
@@ -100,8 +99,9 @@ impl JointPath {
                         let mut v1 = v0;
                         for i in 1..=SAMPLES {
                             let s = length * i as f64 / SAMPLES as f64;
-                            let (x, y) = (p0.0 + w.0 * s, p0.1 + w.1 * s);
-                            v1 = kinematics.inverse(joint as usize, x, y, v1).unwrap_or(v1);
+                            v1 = kinematics
+                                .inverse(joint as usize, along(p0, w, s), v1)
+                                .unwrap_or(v1);
                         }
                         Shape::Bracketed {
                             kinematics,
@@ -161,14 +161,14 @@ impl JointPath {
                 v0,
                 v1,
             } => {
-                let along = if self.length > 0.0 {
+                let fraction = if self.length > 0.0 {
                     s / self.length
                 } else {
                     0.0
                 };
-                let reference = v0 + (v1 - v0) * along;
+                let reference = v0 + (v1 - v0) * fraction;
                 kinematics
-                    .inverse(joint as usize, p0.0 + w.0 * s, p0.1 + w.1 * s, reference)
+                    .inverse(joint as usize, along(p0, w, s), reference)
                     .unwrap_or(f64::NAN)
             }
         }
@@ -457,6 +457,12 @@ impl JointPath {
         }
         c
     }
+}
+
+/// The point `p0 + w·s`.
+#[inline]
+fn along(p0: Xyz, w: Xyz, s: f64) -> Xyz {
+    [p0[0] + w[0] * s, p0[1] + w[1] * s, p0[2] + w[2] * s]
 }
 
 /// The smallest |p0 + w·s|² over `[s_lo, s_hi]`.

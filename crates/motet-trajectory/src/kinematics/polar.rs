@@ -3,7 +3,7 @@
 //! closed form along a line, so nodes solve their steps directly.
 
 use super::{
-    nearest_turn, ClosedForm, GeometryError, JointSpec, Kinematics, Param, DEG, MAX_PARAMS,
+    nearest_turn, ClosedForm, GeometryError, JointSpec, Kinematics, Param, Xyz, DEG, MAX_PARAMS,
 };
 use crate::math::{atan2, cos, hypot, sin};
 use serde::{Deserialize, Serialize};
@@ -24,7 +24,7 @@ impl Kinematics for Polar {
         [0.0; MAX_PARAMS]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, reference: f64) -> Option<f64> {
+    fn inverse(&self, j: usize, [x, y, _]: Xyz, reference: f64) -> Option<f64> {
         Some(if j == 0 {
             hypot(x, y)
         } else {
@@ -32,32 +32,32 @@ impl Kinematics for Polar {
         })
     }
 
-    fn forward(&self, [r, theta]: [f64; 2]) -> Option<(f64, f64)> {
+    fn forward(&self, [r, theta, z]: Xyz) -> Option<Xyz> {
         let t = theta / DEG;
-        Some((r * cos(t), r * sin(t)))
+        Some([r * cos(t), r * sin(t), z])
     }
 
-    fn closed_form(
-        &self,
-        j: usize,
-        p0: (f64, f64),
-        w: (f64, f64),
-        reference: f64,
-    ) -> Option<ClosedForm> {
+    fn closed_form(&self, j: usize, p0: Xyz, w: Xyz, reference: f64) -> Option<ClosedForm> {
+        let (p0, w) = ((p0[0], p0[1]), (w[0], w[1]));
         Some(if j == 0 {
             ClosedForm::Radius { p0, w }
         } else {
             ClosedForm::Angle {
                 p0,
                 w,
-                theta0: self.inverse(1, p0.0, p0.1, reference)?,
+                theta0: self.inverse(1, [p0.0, p0.1, 0.0], reference)?,
             }
         })
     }
 
     /// The centre is reachable; how close a path may pass is the machine's
     /// `min_radius`, checked by the host.
-    fn reach(&self, _: f64, _: f64) -> Result<(), super::Unreachable> {
+    fn gradient_bound(&self, j: usize) -> Option<f64> {
+        // |∇r| = 1 everywhere; the angle's grows without bound at the centre.
+        (j == 0).then_some(1.0)
+    }
+
+    fn reach(&self, _: Xyz) -> Result<(), super::Unreachable> {
         Ok(())
     }
 }

@@ -4,7 +4,7 @@
 //! machine (`elbow`), so every point has one pose.
 
 use super::{
-    nearest_turn, GeometryError, JointSpec, Kinematics, Param, Unreachable, DEG, MAX_PARAMS,
+    nearest_turn, GeometryError, JointSpec, Kinematics, Param, Unreachable, Xyz, DEG, MAX_PARAMS,
 };
 use crate::math::{acos, atan2, cos, sin};
 use serde::{Deserialize, Serialize};
@@ -94,20 +94,21 @@ impl Kinematics for Scara {
         [self.l1, self.l2, self.elbow, 0.0, 0.0, 0.0]
     }
 
-    fn inverse(&self, j: usize, x: f64, y: f64, reference: f64) -> Option<f64> {
+    fn inverse(&self, j: usize, [x, y, _]: Xyz, reference: f64) -> Option<f64> {
         let (t1, t2) = self.angles(x, y)?;
         Some(nearest_turn(if j == 0 { t1 } else { t2 } * DEG, reference))
     }
 
-    fn forward(&self, [t1, t2]: [f64; 2]) -> Option<(f64, f64)> {
+    fn forward(&self, [t1, t2, z]: Xyz) -> Option<Xyz> {
         let (a, b) = (t1 / DEG, (t1 + t2) / DEG);
-        Some((
+        Some([
             self.l1 * cos(a) + self.l2 * cos(b),
             self.l1 * sin(a) + self.l2 * sin(b),
-        ))
+            z,
+        ])
     }
 
-    fn reach(&self, x: f64, y: f64) -> Result<(), Unreachable> {
+    fn reach(&self, [x, y, _]: Xyz) -> Result<(), Unreachable> {
         let c2 = self.elbow_cos(x, y);
         if !(-1.0..=1.0).contains(&c2) {
             Err(Unreachable::OutOfReach)

@@ -3,8 +3,8 @@
 //! kind, and the dispatch every layer goes through.
 
 use super::{
-    Cartesian, ClosedForm, CoreXY, FiveBar, GeometryError, HBot, JointMap, JointSpec, Kinematics,
-    Param, Polar, Scara, Unreachable, MAX_PARAMS,
+    Cartesian, ClosedForm, CoreXY, Delta, FiveBar, GeometryError, HBot, JointMap, JointSpec,
+    Kinematics, Param, Polar, Scara, Unreachable, Xyz, MAX_PARAMS, NO_AXIS,
 };
 use crate::point::MAX_AXES;
 use serde::{Deserialize, Serialize};
@@ -44,7 +44,8 @@ macro_rules! kinematics {
                 match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::NAME),* }
             }
 
-            /// The joints that replace x and y (none: x and y are joints).
+            /// The joints that replace x and y, or x, y and z (none: the
+            /// axes are the joints).
             pub fn joints(&self) -> &'static [JointSpec] {
                 match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::JOINTS),* }
             }
@@ -57,36 +58,40 @@ macro_rules! kinematics {
                 match self { $(KinematicsKind::$kind(k) => k.params()),* }
             }
 
-            pub fn inverse(&self, j: usize, x: f64, y: f64, reference: f64) -> Option<f64> {
-                match self { $(KinematicsKind::$kind(k) => k.inverse(j, x, y, reference)),* }
+            /// [`Kinematics::inverse`].
+            pub fn inverse(&self, j: usize, p: Xyz, reference: f64) -> Option<f64> {
+                match self { $(KinematicsKind::$kind(k) => k.inverse(j, p, reference)),* }
             }
 
-            pub fn forward(&self, joints: [f64; 2]) -> Option<(f64, f64)> {
+            /// [`Kinematics::forward`].
+            pub fn forward(&self, joints: Xyz) -> Option<Xyz> {
                 match self { $(KinematicsKind::$kind(k) => k.forward(joints)),* }
             }
 
-            pub fn linear(&self, j: usize) -> Option<[f64; 2]> {
+            /// [`Kinematics::linear`].
+            pub fn linear(&self, j: usize) -> Option<Xyz> {
                 match self { $(KinematicsKind::$kind(k) => k.linear(j)),* }
             }
 
-            pub fn closed_form(
-                &self,
-                j: usize,
-                p0: (f64, f64),
-                w: (f64, f64),
-                reference: f64,
-            ) -> Option<ClosedForm> {
+            /// [`Kinematics::closed_form`].
+            pub fn closed_form(&self, j: usize, p0: Xyz, w: Xyz, reference: f64) -> Option<ClosedForm> {
                 match self { $(KinematicsKind::$kind(k) => k.closed_form(j, p0, w, reference)),* }
             }
 
-            pub fn reach(&self, x: f64, y: f64) -> Result<(), Unreachable> {
-                match self { $(KinematicsKind::$kind(k) => k.reach(x, y)),* }
+            /// [`Kinematics::gradient_bound`].
+            pub fn gradient_bound(&self, j: usize) -> Option<f64> {
+                match self { $(KinematicsKind::$kind(k) => k.gradient_bound(j)),* }
+            }
+
+            /// [`Kinematics::reach`].
+            pub fn reach(&self, p: Xyz) -> Result<(), Unreachable> {
+                match self { $(KinematicsKind::$kind(k) => k.reach(p)),* }
             }
         }
     };
 }
 
-kinematics!(Cartesian, CoreXY, HBot, Polar, FiveBar, Scara);
+kinematics!(Cartesian, CoreXY, HBot, Polar, FiveBar, Scara, Delta);
 
 impl KinematicsKind {
     /// The kinds that have no geometry.
@@ -107,27 +112,32 @@ impl KinematicsKind {
         self.joints().get(j).is_some_and(|s| s.angle)
     }
 
-    /// The map of joint `j` given the indices of the x and y axes: a row of
-    /// coefficients where the joint is linear.
-    pub fn joint_map(&self, j: usize, x: usize, y: usize) -> JointMap {
+    /// The map of joint `j` given the indices of the machine's x, y and z
+    /// axes (z [`NO_AXIS`] where it has none): a row of coefficients where
+    /// the joint is linear.
+    pub fn joint_map(&self, j: usize, axes: [usize; 3]) -> JointMap {
+        let index = |a: usize| u8::try_from(a).unwrap_or(NO_AXIS);
         match self.linear(j) {
-            Some([cx, cy]) => {
+            Some(c) => {
                 let mut coeffs = [0.0; MAX_AXES];
-                coeffs[x] = cx;
-                coeffs[y] = cy;
+                for (a, c) in axes.iter().zip(c) {
+                    if let Some(slot) = coeffs.get_mut(*a) {
+                        *slot += c;
+                    }
+                }
                 JointMap::Linear { coeffs }
             }
-            None => JointMap::Plane {
+            None => JointMap::Kinematic {
                 kinematics: *self,
                 joint: j as u8,
-                x: x as u8,
-                y: y as u8,
+                axes: axes.map(index),
             },
         }
     }
 
-    /// Machine (x, y) from the two joints; NaN where they cannot meet.
-    pub fn forward_xy(&self, j0: f64, j1: f64) -> (f64, f64) {
-        self.forward([j0, j1]).unwrap_or((f64::NAN, f64::NAN))
+    /// The tool point from the joints (see [`Kinematics::forward`]); NaN
+    /// where they cannot meet.
+    pub fn forward_or_nan(&self, joints: Xyz) -> Xyz {
+        self.forward(joints).unwrap_or([f64::NAN; 3])
     }
 }

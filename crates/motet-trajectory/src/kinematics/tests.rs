@@ -36,9 +36,9 @@ fn forward_inverts_inverse() {
                 continue;
             }
             let p = pt(x, y);
-            let j0 = kind.joint_map(0, 0, 1).value(&p, 0.0);
-            let j1 = kind.joint_map(1, 0, 1).value(&p, 0.0);
-            let (fx, fy) = kind.forward_xy(j0, j1);
+            let j0 = kind.joint_map(0, [0, 1, 2]).value(&p, 0.0);
+            let j1 = kind.joint_map(1, [0, 1, 2]).value(&p, 0.0);
+            let [fx, fy, _] = kind.forward_or_nan([j0, j1, 0.0]);
             assert!(
                 (fx - x).abs() < 1e-9 && (fy - y).abs() < 1e-9,
                 "{kind:?} ({x},{y}) -> ({fx},{fy})"
@@ -52,13 +52,13 @@ fn corexy_rows() {
     let p = pt(3.0, 2.0);
     assert_eq!(
         KinematicsKind::CoreXY(CoreXY)
-            .joint_map(0, 0, 1)
+            .joint_map(0, [0, 1, 2])
             .value(&p, 0.0),
         5.0
     );
     assert_eq!(
         KinematicsKind::CoreXY(CoreXY)
-            .joint_map(1, 0, 1)
+            .joint_map(1, [0, 1, 2])
             .value(&p, 0.0),
         1.0
     );
@@ -66,7 +66,7 @@ fn corexy_rows() {
 
 #[test]
 fn angle_unwraps_to_reference() {
-    let m = POLAR.joint_map(1, 0, 1);
+    let m = POLAR.joint_map(1, [0, 1, 2]);
     let v = m.value(&pt(-1.0, -1e-9), 179.0);
     assert!((v - 180.0).abs() < 1e-6, "{v}");
     let v = m.value(&pt(1.0, 0.0), 720.0);
@@ -82,10 +82,10 @@ fn solve_inverts_value_for_every_shape() {
         seg(pt(-5.0, 20.0), pt(-80.0, -3.0)), // crosses the ±180° cut
     ];
     let maps = [
-        KinematicsKind::CoreXY(CoreXY).joint_map(0, 0, 1),
-        KinematicsKind::CoreXY(CoreXY).joint_map(1, 0, 1),
-        POLAR.joint_map(0, 0, 1),
-        POLAR.joint_map(1, 0, 1),
+        KinematicsKind::CoreXY(CoreXY).joint_map(0, [0, 1, 2]),
+        KinematicsKind::CoreXY(CoreXY).joint_map(1, [0, 1, 2]),
+        POLAR.joint_map(0, [0, 1, 2]),
+        POLAR.joint_map(1, [0, 1, 2]),
     ];
     for s in &segments {
         for m in &maps {
@@ -119,7 +119,7 @@ fn solve_inverts_value_for_every_shape() {
 #[test]
 fn angle_path_is_continuous_across_the_cut() {
     let s = seg(pt(-5.0, 20.0), pt(-80.0, -3.0));
-    let m = POLAR.joint_map(1, 0, 1);
+    let m = POLAR.joint_map(1, [0, 1, 2]);
     let start = m.value(&s.start, 0.0);
     let path = JointPath::new(&m, &s, start);
     let mut last = path.value_at(0.0);

@@ -1,0 +1,120 @@
+//! `[nodes.*]`: which node drives which actuators and tools; one node for
+//! everything when the file names none.
+
+use super::Source;
+use crate::machine::{Actuator, MachineError, NodeSpec, Tool};
+use crate::machine_file::MachineFile;
+use motet_planner::ranges;
+
+/// The machine's nodes: each actuator on exactly one, each tool on at most
+/// one.
+pub(super) fn nodes(
+    src: &Source,
+    raw: &MachineFile,
+    actuators: &[Actuator],
+    tools: &[Tool],
+) -> Result<Vec<NodeSpec>, MachineError> {
+    let mut nodes = Vec::new();
+    let mut owner: Vec<Option<String>> = vec![None; actuators.len()];
+    let mut tool_owner: Vec<Option<String>> = vec![None; tools.len()];
+    for (name, n) in &raw.nodes {
+        let node_span = n.span();
+        let n = n.get_ref();
+        let queue = match &n.queue {
+            Some(q) => ranges::NODE_QUEUE
+                .check_count(format_args!("node {name}: queue"), *q.get_ref())
+                .map_err(|e| src.err(q.span(), e.to_string()))?,
+            None => 64,
+        };
+        let frame_us = match &n.frame_us {
+            Some(f) => src.in_range(
+                f.span(),
+                ranges::FRAME_US,
+                format_args!("node {name}: frame_us"),
+                *f.get_ref(),
+            )?,
+            None => 40.0,
+        };
+        let mut spec = NodeSpec {
+            name: name.clone(),
+            actuators: vec![],
+            tools: vec![],
+            queue,
+            frame_us,
+        };
+        for a in &n.actuators {
+            let i = actuators
+                .iter()
+                .position(|x| x.name == *a.get_ref())
+                .ok_or_else(|| {
+                    src.err(
+                        a.span(),
+                        format!("node {name}: unknown actuator `{}`", a.get_ref()),
+                    )
+                })?;
+            if let Some(other) = &owner[i] {
+                return Err(src.err(
+                    a.span(),
+                    format!("actuator `{}` is already on node {other}", a.get_ref()),
+                ));
+            }
+            owner[i] = Some(name.clone());
+            spec.actuators.push(i);
+        }
+        for t in &n.tools {
+            let i = tools
+                .iter()
+                .position(|x| x.name == *t.get_ref())
+                .ok_or_else(|| {
+                    src.err(
+                        t.span(),
+                        format!("node {name}: unknown tool `{}`", t.get_ref()),
+                    )
+                })?;
+            if let Some(other) = &tool_owner[i] {
+                return Err(src.err(
+                    t.span(),
+                    format!("tool `{}` is already on node {other}", t.get_ref()),
+                ));
+            }
+            tool_owner[i] = Some(name.clone());
+            spec.tools.push(i);
+        }
+        if spec.actuators.len() > 8 || spec.tools.len() > 4 {
+            return Err(src.err(
+                node_span,
+                format!("node {name}: at most 8 actuators and 4 tools per node"),
+            ));
+        }
+        nodes.push(spec);
+    }
+    if raw.nodes.is_empty() {
+        // One node drives everything: the default that works.
+        nodes.push(NodeSpec {
+            name: "main".into(),
+            actuators: (0..actuators.len()).collect(),
+            tools: (0..tools.len()).collect(),
+            queue: 64,
+            frame_us: 40.0,
+        });
+        if actuators.len() > 8 || tools.len() > 4 {
+            // Point at the first actuator or tool that does not fit.
+            let span = match raw.actuators.values().nth(8) {
+                Some(a) => a.span(),
+                None => raw.tools.values().nth(4).map_or(0..0, |t| t.span()),
+            };
+            return Err(src.err(
+                span,
+                "more than 8 actuators or 4 tools: split them over [nodes.NAME] tables",
+            ));
+        }
+    } else if let Some(i) = owner.iter().position(|o| o.is_none()) {
+        let span = raw.actuators[&actuators[i].name].span();
+        return Err(src.err(
+            span,
+            format!("actuator `{}` is on no node", actuators[i].name),
+        ));
+    }
+
+    Ok(nodes)
+}
