@@ -233,6 +233,55 @@ proptest! {
         }
     }
 
+    /// A joint's path is the kinematics' inverse at every point of the
+    /// line (closed forms included), and it turns where sampling finds it
+    /// turning: each sampled extremum has a turn within a sample of it.
+    #[test]
+    fn paths_follow_the_inverse_and_turn_where_it_turns(k in 0usize..KINDS, a in unit(), b in unit()) {
+        let (kin, bx) = machines()[k];
+        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
+            return Ok(());
+        };
+        if !line_in_reach(kin, p, q, 1.0) {
+            return Ok(());
+        }
+        let length = distance(p, q);
+        if length < 1e-3 {
+            return Ok(());
+        }
+        for j in 0..kin.joints().len() {
+            let map = kin.joint_map(j, [0, 1, 2]);
+            let start = map.value(&point(p), 0.0);
+            let path = JointPath::between(&map, &point(p), &point(q), length, start);
+            let n = 2000;
+            let h = length / n as f64;
+            let values: Vec<f64> = (0..=n).map(|i| path.value_at(h * i as f64)).collect();
+            let mut reference = start;
+            for (i, v) in values.iter().enumerate() {
+                let want = map.value(&point(lerp(p, q, i as f64 / n as f64)), reference);
+                prop_assert!((v - want).abs() < 1e-7 * (1.0 + want.abs()),
+                    "{:?} joint {}: {} at sample {}, the inverse gives {}", kin, j, v, i, want);
+                reference = want;
+            }
+            let mut turns = vec![];
+            let mut after = 0.0;
+            while let Some(t) = path.next_turn(after) {
+                turns.push(t);
+                after = t;
+            }
+            for i in 1..n {
+                let (l, m, r) = (values[i - 1], values[i], values[i + 1]);
+                // A clear extremum (not flat noise) between samples i-1 and i+1.
+                let tol = 1e-9 * (1.0 + m.abs());
+                if (m > l + tol && m > r + tol) || (m < l - tol && m < r - tol) {
+                    let s = h * i as f64;
+                    prop_assert!(turns.iter().any(|t| (t - s).abs() <= h * 1.01),
+                        "{:?} joint {}: an extremum near s = {} but turns at {:?}", kin, j, s, turns);
+                }
+            }
+        }
+    }
+
     /// The planner's bound on a joint's rate holds along a line, sampled
     /// far more finely than the bound itself was.
     #[test]

@@ -3,9 +3,16 @@
 //! and 90° (towers a, b and c); each pulls the effector by a rod `arm` long.
 //! A carriage's height is `z + √(arm² − d²)`, with `d` the horizontal
 //! distance from the tool to its tower. The three joints replace x, y and z.
+//!
+//! Along a straight line a carriage has a closed form ([`Carriage`]): it
+//! rises and falls at most once (z is linear and the rod's rise concave),
+//! and its crossing of a height is a root of a quadratic, so nodes solve
+//! each step directly.
 
-use super::{GeometryError, JointSpec, Kinematics, Param, Unreachable, Xyz, MAX_PARAMS};
-use crate::math::{cos, sin, sqrt};
+use super::{
+    ClosedForm, GeometryError, JointSpec, Kinematics, Param, Unreachable, Xyz, MAX_PARAMS,
+};
+use crate::math::sqrt;
 use serde::{Deserialize, Serialize};
 
 /// A delta's geometry: the towers' distance from the centre and the rods'
@@ -19,8 +26,13 @@ pub struct Delta {
     pub arm: f64,
 }
 
-/// The towers' angles from +x, degrees, in joint order.
-const TOWERS: [f64; 3] = [210.0, 330.0, 90.0];
+/// The towers' directions from the centre, in joint order: 210°, 330° and
+/// 90° from +x.
+const TOWERS: [(f64, f64); 3] = [
+    (-0.866_025_403_784_438_6, -0.5),
+    (0.866_025_403_784_438_6, -0.5),
+    (0.0, 1.0),
+];
 
 /// The flattest a rod may lie, as the sine of its angle above the
 /// horizontal: flat, a carriage's rate per mm of tool travel is unbounded;
@@ -30,8 +42,8 @@ const MIN_ROD_SINE: f64 = 0.342;
 impl Delta {
     /// Tower `j`'s position in the plane.
     fn tower(&self, j: usize) -> (f64, f64) {
-        let a = TOWERS[j].to_radians();
-        (self.radius * cos(a), self.radius * sin(a))
+        let (cx, cy) = TOWERS[j];
+        (self.radius * cx, self.radius * cy)
     }
 
     /// `arm² − d²` for tower `j` at `(x, y)`: the rod's vertical extent,
@@ -140,6 +152,16 @@ impl Kinematics for Delta {
         Some([0, 1, 2].map(|k| base[k] + sign * w * ez[k]))
     }
 
+    fn closed_form(&self, j: usize, p0: Xyz, w: Xyz, _: f64) -> Option<ClosedForm> {
+        let (tx, ty) = self.tower(j);
+        Some(ClosedForm::Carriage(Carriage {
+            a: [p0[0] - tx, p0[1] - ty],
+            z0: p0[2],
+            w,
+            arm2: self.arm * self.arm,
+        }))
+    }
+
     fn gradient_bound(&self, _: usize) -> Option<f64> {
         // |∇h| = 1 / sin(rod angle), largest where the rod is flattest.
         Some(1.0 / MIN_ROD_SINE)
@@ -158,6 +180,100 @@ impl Kinematics for Delta {
         match near {
             true => Err(Unreachable::NearSingularity),
             false => Ok(()),
+        }
+    }
+}
+
+/// One carriage along the line `p0 + w·s`: its height is
+/// `h(s) = z0 + wz·s + √R(s)` with `R(s) = arm² − |a + (wx, wy)·s|²`, `a`
+/// the line's start relative to the tower in the plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Carriage {
+    a: [f64; 2],
+    z0: f64,
+    w: Xyz,
+    arm2: f64,
+}
+
+impl Carriage {
+    /// `R(s)`: the rod's vertical extent, squared.
+    #[inline]
+    fn rise2(&self, s: f64) -> f64 {
+        let (x, y) = (self.a[0] + self.w[0] * s, self.a[1] + self.w[1] * s);
+        self.arm2 - x * x - y * y
+    }
+
+    /// The height at `s` (NaN where the rod cannot reach).
+    #[inline]
+    pub fn value(&self, s: f64) -> f64 {
+        let r2 = self.rise2(s);
+        if r2 < 0.0 {
+            return f64::NAN;
+        }
+        self.z0 + self.w[2] * s + sqrt(r2)
+    }
+
+    /// Where the carriage turns (its one maximum: `h` is concave), if the
+    /// line has one: `h'(s) = wz − (b + q·s)/√R(s) = 0`, with `q` the
+    /// squared horizontal rate and `b = a·(wx, wy)`.
+    pub fn turn(&self) -> Option<f64> {
+        let [wx, wy, wz] = self.w;
+        let q = wx * wx + wy * wy;
+        let b = self.a[0] * wx + self.a[1] * wy;
+        if q == 0.0 {
+            // Straight up or down: monotone.
+            return None;
+        }
+        if wz == 0.0 {
+            return Some(-b / q);
+        }
+        // Squared: q·s² + 2b·s + (b² − wz²·C)/|w|² = 0, C = R(0); the root
+        // where b + q·s has wz's sign is the turn.
+        let c0 = self.rise2(0.0);
+        let ww = q + wz * wz;
+        let disc = b * b - q * (b * b - wz * wz * c0) / ww;
+        if disc < 0.0 {
+            return None;
+        }
+        let root = sqrt(disc);
+        let s = if wz > 0.0 {
+            (-b + root) / q
+        } else {
+            (-b - root) / q
+        };
+        Some(s)
+    }
+
+    /// The distance in `[lo, hi]` (a leg where the carriage is monotone) at
+    /// which it is at height `target`: where the line meets the sphere of
+    /// radius `arm` around the carriage's joint, on its lower half,
+    /// `|w|²·s² + 2(b − D·wz)·s + D² − C = 0` with `D = target − z0`.
+    pub fn solve(&self, target: f64, lo: f64, hi: f64) -> f64 {
+        let [wx, wy, wz] = self.w;
+        let ww = wx * wx + wy * wy + wz * wz;
+        if ww == 0.0 {
+            return lo;
+        }
+        let d = target - self.z0;
+        let half_b = self.a[0] * wx + self.a[1] * wy - d * wz;
+        let c = d * d - self.rise2(0.0);
+        let disc = (half_b * half_b - ww * c).max(0.0);
+        // Both roots without cancellation: q' = −(B + sign(B)·√disc).
+        let k = -(half_b + sqrt(disc).copysign(half_b));
+        let roots = [k / ww, if k != 0.0 { c / k } else { k / ww }];
+        // The root in the leg, on the sphere's lower half (the carriage
+        // above the tool); the nearer to the leg if rounding puts both out.
+        let mid = 0.5 * (lo + hi);
+        let score = |s: f64| {
+            let outside = (lo - s).max(s - hi).max(0.0);
+            let above = (d - wz * s).min(0.0).abs();
+            (outside + above, (s - mid).abs())
+        };
+        let (s0, s1) = (roots[0], roots[1]);
+        if score(s0) <= score(s1) {
+            s0
+        } else {
+            s1
         }
     }
 }

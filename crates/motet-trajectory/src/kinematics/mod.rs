@@ -42,7 +42,7 @@ mod table;
 
 pub use cartesian::Cartesian;
 pub use corexy::CoreXY;
-pub use delta::Delta;
+pub use delta::{Carriage, Delta};
 pub use five_bar::FiveBar;
 pub use hbot::HBot;
 pub use path::{ClosedForm, JointPath};

@@ -1,6 +1,7 @@
 //! One joint along one segment, as a function of path distance `s`: what a
 //! node steps and the planner bounds.
 
+use super::delta::Carriage;
 use super::{tool_point, JointMap, KinematicsKind, Xyz, DEG};
 use crate::math::{atan2, cos, sin, sqrt};
 use crate::point::Point;
@@ -18,6 +19,9 @@ pub enum ClosedForm {
         w: (f64, f64),
         theta0: f64,
     },
+    /// A delta's carriage: z + √(arm² − d²) along the line (see
+    /// [`Carriage`]).
+    Carriage(Carriage),
 }
 
 /// One joint along one segment.
@@ -153,6 +157,7 @@ impl JointPath {
                 }
                 theta0 + atan2(cross, dot) * DEG
             }
+            Shape::Closed(ClosedForm::Carriage(c)) => c.value(s),
             Shape::Bracketed {
                 kinematics,
                 joint,
@@ -187,36 +192,54 @@ impl JointPath {
                 let s = -(p0.0 * w.0 + p0.1 * w.1) / ww;
                 (s > after && s < self.length).then_some(s)
             }
+            Shape::Closed(ClosedForm::Carriage(c)) => {
+                c.turn().filter(|s| *s > after && *s < self.length)
+            }
             Shape::Bracketed { .. } => self.sampled_turn(after),
             _ => None,
         }
     }
 
     /// A bracketed joint's first extremum after `after`: where successive
-    /// samples' differences change sign, refined by golden section.
+    /// samples' differences change sign, refined by golden section. The
+    /// rates at both ends count as differences too, so that an extremum
+    /// within the first or last sample is not missed.
     fn sampled_turn(&self, after: f64) -> Option<f64> {
         let span = self.length - after;
         if span <= 0.0 {
             return None;
         }
         let h = span / SAMPLES as f64;
+        let tiny = h * 1e-4;
         let v = |i: usize| self.value_at(after + h * i as f64);
+        let tol = 1e-12 * (1.0 + self.length);
+        let refine = |lo: f64, hi: f64, max: bool| {
+            let s = self.golden(lo, hi, max);
+            (s > after + tol && s < self.length - tol).then_some(s)
+        };
+        let start_rate = self.value_at(after + tiny) - self.value_at(after);
         let mut prev = v(1) - v(0);
+        if start_rate * prev < 0.0 {
+            if let Some(s) = refine(after, after + h, start_rate > 0.0) {
+                return Some(s);
+            }
+        }
         let mut last = v(1);
         for i in 2..=SAMPLES {
             let now = v(i);
             let d = now - last;
             if d * prev < 0.0 {
                 // An extremum within [s_{i-2}, s_i].
-                let max = prev > 0.0;
-                let s = self.golden(after + h * (i - 2) as f64, after + h * i as f64, max);
-                let tol = 1e-12 * (1.0 + self.length);
-                return (s > after + tol && s < self.length - tol).then_some(s);
+                return refine(after + h * (i - 2) as f64, after + h * i as f64, prev > 0.0);
             }
             if d != 0.0 {
                 prev = d;
             }
             last = now;
+        }
+        let end_rate = self.value_at(self.length) - self.value_at(self.length - tiny);
+        if end_rate * prev < 0.0 {
+            return refine(self.length - h, self.length, prev > 0.0);
         }
         None
     }
@@ -272,7 +295,9 @@ impl JointPath {
                     cross / m * DEG
                 }
             }
-            Shape::Bracketed { .. } => self.sampled_rate(s_lo, s_hi),
+            Shape::Bracketed { .. } | Shape::Closed(ClosedForm::Carriage(_)) => {
+                self.sampled_rate(s_lo, s_hi)
+            }
         }
     }
 
@@ -318,7 +343,9 @@ impl JointPath {
             Shape::Closed(ClosedForm::Radius { p0, w } | ClosedForm::Angle { p0, w, .. }) => {
                 (p0, w)
             }
-            Shape::Bracketed { .. } => return self.sampled_curvature(s_lo, s_hi),
+            Shape::Bracketed { .. } | Shape::Closed(ClosedForm::Carriage(_)) => {
+                return self.sampled_curvature(s_lo, s_hi)
+            }
         };
         let ww = w.0 * w.0 + w.1 * w.1;
         let r = sqrt(closest_r2(p0, w, s_lo, s_hi));
@@ -399,6 +426,7 @@ impl JointPath {
                     -cross_dp / cross_dw
                 }
             }
+            Shape::Closed(ClosedForm::Carriage(c)) => c.solve(target, s_lo, s_hi),
             Shape::Bracketed { .. } => self.bracket(target, s_lo, s_hi),
         };
         if s.is_nan() {
