@@ -54,8 +54,14 @@ pub fn resume_at(
 /// [`resume_at`]'s result.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResumeAt {
+    /// Where the machine rests.
     pub from: Point,
+    /// Where the job continues; the travel there, if any, is the first
+    /// command.
     pub to: Point,
+    /// The job command it continues at, at most the job's length.
     pub command: usize,
+    /// Travel to `to` (unless already there), each tool's last setting
+    /// before `command`, then the job from `command` on.
     pub commands: Vec<Located<Command>>,
 }
