@@ -84,11 +84,10 @@ pub enum Mismatch {
     },
 }
 
-/// The driver for a node that can serve machine node `spec` of `machine`,
-/// or why it cannot.
-/// Whether the node that answered `info` can serve the machine node
-/// `spec`: a driver for its kind, enough channels, tools and queue, and step
-/// rates its channels reach. Returns its driver.
+/// The driver for a node (that answered `info`) that can serve machine
+/// node `spec` of `machine`, or why it cannot: it needs a driver for its
+/// kind, enough channels, tools and queue, and step rates its channels
+/// reach.
 pub fn check(machine: &Machine, spec: &NodeSpec, info: &Info) -> Result<&'static Driver, Mismatch> {
     let d = driver(info.kind.as_str()).ok_or_else(|| Mismatch::NoDriver {
         kind: info.kind.to_string(),
