@@ -48,7 +48,7 @@ pub struct LinkStats {
     pub bytes_out: u64,
     /// Frames handed out by `recv`.
     pub frames_in: u64,
-    /// Bytes of those frames, delimiter included.
+    /// Bytes of those frames as handed out.
     pub bytes_in: u64,
 }
 

@@ -239,7 +239,8 @@ impl Peer {
         }
     }
 
-    /// Where the link's handshake is (connecting, established, closed).
+    /// Where the link is: connecting, established (with the protocol version
+    /// agreed) or failed.
     pub fn link_state(&self) -> State {
         self.link.state()
     }
