@@ -11,8 +11,12 @@ use std::path::{Path, PathBuf};
 /// The kinds of job file motet reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JobKind {
+    /// G-code (`.gcode`, `.nc`, `.g`, optionally gzipped), read a line at a
+    /// time.
     Gcode,
+    /// An SVG drawing (`.svg`): its paths become pen strokes.
     Svg,
+    /// A photograph (`.png`, `.jpg`): its edges are traced into strokes.
     Image,
 }
 
@@ -21,20 +25,59 @@ pub enum JobKind {
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
     #[error("{file}: unknown job type `.{ext}`; expected G-code (.gcode, .nc, .g), SVG (.svg) or a photo (.png, .jpg)")]
-    UnknownKind { file: String, ext: String },
+    /// The file's extension names no job type motet reads.
+    UnknownKind {
+        /// The job file's path.
+        file: String,
+        /// Its extension, without the dot.
+        ext: String,
+    },
     #[error("cannot read job {file}: {error}")]
-    Read { file: String, error: std::io::Error },
+    /// The file could not be opened or read.
+    Read {
+        /// The job file's path.
+        file: String,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
     #[error("{file}: not a valid gzip file: {error}")]
-    Gzip { file: String, error: std::io::Error },
+    /// A `.gz` job whose compressed data is damaged or not gzip.
+    Gzip {
+        /// The job file's path.
+        file: String,
+        /// What the decompressor said.
+        error: std::io::Error,
+    },
     #[error("{file}:{line}: G-code is not valid UTF-8 text")]
-    NotText { file: String, line: usize },
+    /// A G-code line that is not UTF-8: most likely not a G-code file.
+    NotText {
+        /// The job file's path.
+        file: String,
+        /// The 1-based line.
+        line: usize,
+    },
     #[error(
         "{file}:{line}: line longer than {} bytes; is this a G-code file?",
         crate::reader::MAX_LINE
     )]
-    LineTooLong { file: String, line: usize },
+    /// A G-code line longer than [`crate::reader::MAX_LINE`] bytes: refused
+    /// rather than held in memory.
+    LineTooLong {
+        /// The job file's path.
+        file: String,
+        /// The 1-based line.
+        line: usize,
+    },
     #[error("{}", located(.file, .error))]
-    Source { file: String, error: SourceError },
+    /// The job's content is wrong for this machine (a code, a coordinate
+    /// beyond travel, a move the planner refuses); shown as
+    /// `file:line:column: message`.
+    Source {
+        /// The job file's path.
+        file: String,
+        /// What is wrong, and where in the file.
+        error: SourceError,
+    },
 }
 
 /// `file:line:column: message`; `file: message` for errors about the whole
@@ -56,8 +99,11 @@ pub struct JobOptions {
 /// A job read and checked against a machine.
 #[derive(Clone, Debug)]
 pub struct Job {
+    /// The job file it was read from.
     pub path: PathBuf,
+    /// What kind of file it was read as (from its extension).
     pub kind: JobKind,
+    /// The job's commands in machine space, each with its place in the file.
     pub commands: Vec<Located<Command>>,
     /// `file:line:column: message` for things accepted but not acted on.
     pub warnings: Vec<String>,

@@ -12,12 +12,26 @@ use std::time::Instant;
 /// Why a call was refused. Nothing queued before the call is affected.
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
+    /// The machine file could not be read or is invalid.
     #[error(transparent)]
     Machine(#[from] MachineError),
+    /// A call named an axis the machine does not have.
     #[error("unknown axis `{name}`; this machine's axes are {axes}")]
-    UnknownAxis { name: String, axes: String },
+    UnknownAxis {
+        /// The name given.
+        name: String,
+        /// The machine's axis names, comma-separated.
+        axes: String,
+    },
+    /// A call named a tool the machine does not have.
     #[error("unknown tool `{name}`; this machine's tools are {tools}")]
-    UnknownTool { name: String, tools: String },
+    UnknownTool {
+        /// The name given.
+        name: String,
+        /// The machine's tool names, comma-separated.
+        tools: String,
+    },
+    /// The move would leave the travel or the kinematics' reach.
     #[error("{0}")]
     Unreachable(motet_host::MoveError),
     /// A feed outside [`ranges::VELOCITY`].
@@ -29,16 +43,33 @@ pub enum ApiError {
     /// A tool value outside [`ranges::TOOL_VALUE`].
     #[error("tool value must be {}, got {}", ranges::TOOL_VALUE, number(f64::from(*.0)))]
     BadToolValue(f32),
+    /// The planner refused the call's command.
     #[error(transparent)]
     Plan(#[from] PlanError),
+    /// The simulated machine refused what was streamed to it.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// [`Machine::save`] could not create the folder or write a file in it.
     #[error("cannot write {path}: {error}")]
-    Io { path: String, error: std::io::Error },
+    Io {
+        /// The folder being saved into.
+        path: String,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
+    /// [`Machine::save`] into a folder whose parent does not exist (only the
+    /// folder itself is created).
     #[error("cannot save into {dir}: the directory {parent} does not exist")]
-    NoParent { dir: String, parent: String },
+    NoParent {
+        /// The folder asked for.
+        dir: String,
+        /// Its missing ancestor nearest the root.
+        parent: String,
+    },
+    /// The executed path could not be drawn as PNG.
     #[error("render failed: {0}")]
     Render(String),
+    /// A job file given to the machine could not be read or does not fit it.
     #[error(transparent)]
     Job(#[from] crate::job::JobError),
     /// The check given to [`Machine::on_interrupt`] asked to stop.
@@ -50,9 +81,19 @@ pub enum ApiError {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Event {
     /// A tool output changed (pen lifted, laser power set).
-    Tool { time: f64, tool: String, value: f32 },
+    Tool {
+        /// Simulated time of the change, seconds since the machine opened.
+        time: f64,
+        /// The tool's name in the machine file.
+        tool: String,
+        /// Its new value (0 off, 1 full on for a pen or a laser).
+        value: f32,
+    },
     /// The machine came to rest after [`Machine::wait`].
-    Idle { time: f64 },
+    Idle {
+        /// Simulated time it came to rest, seconds since the machine opened.
+        time: f64,
+    },
 }
 
 // `Send`, so that a machine can be handed to another thread (the Python

@@ -377,7 +377,9 @@ fn read_line(text: &mut dyn BufRead, line: &mut Vec<u8>) -> Result<bool, LineErr
 pub struct JobScan {
     /// Commands in the job.
     pub commands: usize,
+    /// `file:line:column: message` for things accepted but not acted on.
     pub warnings: Vec<String>,
+    /// Coordinates beyond travel by less than half a step, clamped onto it.
     pub clamps: Clamps,
     /// How long the job takes as planned, seconds.
     pub planned_s: f64,

@@ -187,7 +187,11 @@ impl Default for GcodeOptions {
 /// The result of a successful [`parse`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Parsed {
+    /// The machine-space commands, each with the line:column of the G-code word
+    /// it came from.
     pub commands: Vec<Located<Command>>,
+    /// Codes accepted but not acted on (repeats folded, at most
+    /// [`MAX_WARNINGS`] kept); the job runs without them.
     pub warnings: Vec<SourceError>,
 }
 
@@ -225,6 +229,9 @@ pub struct Interpreter {
 }
 
 impl Interpreter {
+    /// An interpreter in the program's initial modal state for `target`.
+    /// Fails (at line 0) when `opts.retract_length` is negative or not finite,
+    /// or `opts.retract_speed` is not positive.
     pub fn new(target: &JobTarget, opts: &GcodeOptions) -> Result<Interpreter, SourceError> {
         Ok(Interpreter {
             interp: Interp::new(target, opts)?,

@@ -21,32 +21,48 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{}: {message}", place(.file, *.line, *.column))]
 pub struct FileError {
+    /// The graph file's path as given.
     pub file: String,
+    /// 1-based line; 0 when the problem is about the whole file.
     pub line: usize,
+    /// 1-based column in characters; 0 with line 0.
     pub column: usize,
     /// The key the problem is about (`components.knob.kind`, `map[2].to`).
     pub key: String,
+    /// What is wrong, for the person editing the file.
     pub message: String,
 }
 
 /// A place in the graph file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Loc {
+    /// 1-based line.
     pub line: usize,
+    /// 1-based column, in characters.
     pub column: usize,
 }
 
+/// A change to the running graph that names something the graph does not
+/// have; nothing is sent to the node.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LiveError {
+    /// No component of that name in the file.
     #[error("no component `{0}` in the graph")]
     UnknownComponent(String),
+    /// The component exists but its kind has no live parameter of that name
+    /// (construction parameters cannot change while running).
     #[error("component `{component}` ({kind}) has no live parameter `{param}`; it has: {known}")]
     UnknownParam {
+        /// The component's name in the file.
         component: String,
+        /// Its kind (`encoder`, `channel`, …).
         kind: &'static str,
+        /// The parameter asked for.
         param: String,
+        /// The kind's live parameters, comma-separated.
         known: String,
     },
+    /// No input of that name in the file's `[inputs]`.
     #[error("no input `{0}` in the graph's [inputs]")]
     UnknownInput(String),
 }
@@ -57,6 +73,7 @@ pub struct ChannelDef {
     pub ordinal: u8,
     /// `units` world units are `steps` steps.
     pub units: f64,
+    /// See `units`; nonzero.
     pub steps: f64,
     /// The machine actuator it drives (simulation), if named.
     pub actuator: Option<String>,
@@ -65,13 +82,17 @@ pub struct ChannelDef {
 /// One component of the file.
 #[derive(Clone, Debug)]
 pub struct ComponentDef {
+    /// Its name in the file (`[components.NAME]`).
     pub name: String,
+    /// Its kind's declaration: ports, parameters, defaults, live parameters.
     pub info: &'static Declaration,
     /// Index in the graph (creation order = file order).
     pub index: u8,
     /// Construction values as sent.
     pub params: Vec<f64>,
+    /// For a `channel` component, its place and scale; `None` otherwise.
     pub channel: Option<ChannelDef>,
+    /// Where its table is in the file, for errors.
     pub loc: Loc,
 }
 
@@ -80,8 +101,11 @@ pub struct ComponentDef {
 pub struct InputDef {
     /// The component reading it (also the input's name).
     pub name: String,
+    /// Which hardware inputs it reads: encoder, analog, button or stream.
     pub kind: GraphInputKind,
+    /// Which of them (`encoder3` is 3), below the node's count of that kind.
     pub index: u8,
+    /// The reading component's index in the graph.
     pub component: u8,
 }
 
@@ -89,10 +113,16 @@ pub struct InputDef {
 /// `amplitude · e^(−damping·t) · sin(2π·frequency·t + phase)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pendulum {
+    /// The encoder or analog input it swings (a name in `[inputs]`).
     pub input: String,
+    /// Peak value at t = 0, in the input's own units (counts for an
+    /// encoder).
     pub amplitude: f64,
+    /// Swings per second, Hz; not negative.
     pub frequency: f64,
+    /// Decay rate, 1/s; not negative (0 swings for ever).
     pub damping: f64,
+    /// Phase at t = 0, radians.
     pub phase: f64,
 }
 
@@ -100,19 +130,29 @@ pub struct Pendulum {
 /// `pen_channel`'s position (steps) is below `pen_down_below`.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct RenderDef {
+    /// The channel component whose position lifts and lowers the pen;
+    /// `None`: the pen is always down.
     pub pen_channel: Option<String>,
+    /// Position, in steps, below which the pen is down.
     pub pen_down_below: f64,
 }
 
 /// A validated graph file.
 #[derive(Clone, Debug)]
 pub struct GraphFile {
+    /// The file's path as given, for errors.
     pub file: String,
+    /// The node's core frame period, µs (`frame_us`, default 40).
     pub frame_us: f64,
+    /// The components, in file order (which is the order they run in).
     pub components: Vec<ComponentDef>,
+    /// The external inputs named in `[inputs]`.
     pub inputs: Vec<InputDef>,
+    /// The staged workflow, in file order; empty when the file has none.
     pub stages: Vec<crate::stage::Stage>,
+    /// Simulated inputs (`[[pendulum]]`).
     pub pendulums: Vec<Pendulum>,
+    /// How a simulation draws the result (`[render]`).
     pub render: RenderDef,
     pub(crate) ops: Vec<(Op, Loc, String)>,
 }

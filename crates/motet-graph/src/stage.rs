@@ -65,7 +65,9 @@ struct RawUntil {
 pub struct Change {
     /// `component.param`.
     pub what: String,
+    /// The value it is set to, in the parameter's units.
     pub value: f64,
+    /// The `GraphParam` message that makes the change on the node.
     pub message: HostMessage,
 }
 
@@ -80,17 +82,28 @@ pub enum Until {
     Seconds(f64),
     /// The component is done (player stopped, position generator arrived,
     /// homing done, recorder stopped).
-    Finished { component: String, index: u8 },
+    Finished {
+        /// The component's name in the file.
+        component: String,
+        /// Its index in the graph, as the node reports it.
+        index: u8,
+    },
     /// Never.
     Never,
 }
 
+/// One `[[stage]]` of a graph file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stage {
+    /// Its name, unique in the file; the log shows it as `name#pass`.
     pub name: String,
+    /// Parameter changes sent on entering it (every pass).
     pub set: Vec<Change>,
+    /// When it ends.
     pub until: Until,
+    /// Parameter changes sent when it ends (every pass).
     pub after: Vec<Change>,
+    /// How many passes it runs before going on; at least 1.
     pub repeat: u32,
     /// The stage after the last pass; `None`: the machine stops.
     pub next: Option<usize>,
@@ -299,6 +312,7 @@ pub struct StageMachine {
 }
 
 impl StageMachine {
+    /// The file's stages, none entered yet (call [`StageMachine::start`]).
     pub fn new(file: &GraphFile) -> StageMachine {
         StageMachine {
             stages: file.stages.clone(),

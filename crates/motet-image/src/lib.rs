@@ -146,6 +146,8 @@ impl Default for ImageOptions {
 pub struct ImageInfo {
     /// Working resolution (after resizing to [`ImageOptions::max_px`]).
     pub width_px: u32,
+    /// Working height in pixels, after the same resizing as
+    /// [`ImageInfo::width_px`].
     pub height_px: u32,
     /// Polylines drawn (after dropping short chains).
     pub polylines: usize,
@@ -174,8 +176,13 @@ pub fn parse(
 /// Edge polylines in the working image's pixels (x right, y down).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeDrawing {
+    /// Working image width in pixels (after resizing to
+    /// [`ImageOptions::max_px`]).
     pub width_px: u32,
+    /// Working image height in pixels.
     pub height_px: u32,
+    /// Traced, simplified edge chains, each at least the minimum length, as
+    /// `[x, y]` pixel coordinates of the working image.
     pub polylines: Vec<Vec<[f64; 2]>>,
 }
 

@@ -23,14 +23,18 @@ use std::time::Duration;
 /// CAN-FD payload per fragment.
 pub const FD_CHUNK: usize = 64;
 
+/// Why the simulated bus refused a node or a frame.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum BusError {
     /// Another node already owns this identifier.
     DuplicateId(u32),
+    /// An identifier beyond 11 bits (standard) or 29 bits (extended).
     IdOutOfRange(u32),
     /// A node may only send under its own identifier.
     WrongId {
+        /// The node's identifier.
         own: u32,
+        /// The identifier the frame carried.
         frame: u32,
     },
     /// Payload length that is not a CAN / CAN-FD length.
@@ -70,6 +74,7 @@ fn lock(m: &Mutex<BusInner>) -> MutexGuard<'_, BusInner> {
 }
 
 impl CanBus {
+    /// A bus with no node attached.
     pub fn new() -> CanBus {
         CanBus::default()
     }
@@ -141,10 +146,12 @@ pub struct CanNode {
 }
 
 impl CanNode {
+    /// The identifier this node sends under.
     pub fn id(&self) -> u32 {
         self.id
     }
 
+    /// The bus it is attached to.
     pub fn bus(&self) -> &CanBus {
         &self.bus
     }
@@ -220,6 +227,8 @@ pub struct CanTransport {
 }
 
 impl CanTransport {
+    /// A transport sending under `node`'s identifier and taking only frames
+    /// from `peer` (every sender's if `None`, each reassembled separately).
     pub fn new(node: CanNode, peer: Option<u32>) -> CanTransport {
         CanTransport {
             name: format!("can:{:#x}", node.id()),
@@ -231,6 +240,7 @@ impl CanTransport {
         }
     }
 
+    /// The bus node it sends under.
     pub fn node(&self) -> &CanNode {
         &self.node
     }

@@ -42,6 +42,7 @@ pub struct WallClock {
 }
 
 impl WallClock {
+    /// The unscaled wall clock, at 0 now.
     pub fn new() -> WallClock {
         WallClock::with(1.0, 0.0, 0)
     }
@@ -78,18 +79,23 @@ impl Clock for WallClock {
 pub struct SimClock(Arc<AtomicU64>);
 
 impl SimClock {
+    /// A simulated clock at 0.
     pub fn new() -> SimClock {
         SimClock::default()
     }
 
+    /// The time now, µs.
     pub fn get(&self) -> u64 {
         self.0.load(Ordering::Relaxed)
     }
 
+    /// Moves the clock to `us` µs; every handle on it sees the new time.
+    /// Nothing stops it from going back: the caller keeps it monotonic.
     pub fn set(&self, us: u64) {
         self.0.store(us, Ordering::Relaxed);
     }
 
+    /// Moves the clock `us` µs ahead.
     pub fn advance(&self, us: u64) {
         self.0.fetch_add(us, Ordering::Relaxed);
     }

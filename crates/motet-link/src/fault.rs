@@ -17,11 +17,14 @@ use std::time::{Duration, Instant};
 pub struct XorShift(u64);
 
 impl XorShift {
+    /// A generator seeded with `seed`; the same seed gives the same sequence
+    /// (seed 0 is allowed).
     pub fn new(seed: u64) -> XorShift {
         // Spread small seeds and keep the state non-zero.
         XorShift(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
     }
 
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         let mut x = self.0;
         x ^= x >> 12;
@@ -63,10 +66,13 @@ pub enum FaultClock {
 }
 
 impl FaultClock {
+    /// Real time, starting now.
     pub fn real() -> FaultClock {
         FaultClock::Real(Instant::now())
     }
 
+    /// µs since the clock's origin (creation for [`FaultClock::Real`], the
+    /// shared counter for [`FaultClock::Simulated`]).
     pub fn now_us(&self) -> u64 {
         match self {
             FaultClock::Real(t0) => t0.elapsed().as_micros() as u64,
@@ -91,9 +97,12 @@ impl crate::clock::Clock for FaultClock {
 /// Fault rates (probability per received frame) and sizes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaultConfig {
+    /// Seed of the fault generator: the same seed and traffic give the same
+    /// faults.
     pub seed: u64,
     /// Flip one byte (never the trailing delimiter, never into 0x00).
     pub corrupt: f64,
+    /// Lose the frame.
     pub drop: f64,
     /// Deliver a second copy right after the frame.
     pub duplicate: f64,
@@ -101,7 +110,9 @@ pub struct FaultConfig {
     /// or 1..=[`FaultConfig::delay_us`] µs (one of the two at random when
     /// both are set).
     pub delay: f64,
+    /// Most later frames a frame is held back for.
     pub delay_frames: u32,
+    /// Most µs a frame is held back for.
     pub delay_us: u64,
     /// Swap the frame with the next one to arrive.
     pub reorder: f64,
@@ -160,11 +171,17 @@ impl FaultConfig {
 pub struct FaultCounts {
     /// Frames taken from the inner transport.
     pub frames: u64,
+    /// Frames that had one byte flipped.
     pub corrupted: u64,
+    /// Frames lost.
     pub dropped: u64,
+    /// Frames delivered twice.
     pub duplicated: u64,
+    /// Frames held back behind later frames.
     pub delayed_frames: u64,
+    /// Frames held back for a time.
     pub delayed_time: u64,
+    /// Frames swapped with the next one.
     pub reordered: u64,
     /// Frames given a non-zero jitter delay.
     pub jittered: u64,
@@ -219,6 +236,8 @@ impl<T: Transport> Faulty<T> {
         Self::with_clock(inner, cfg, FaultClock::real())
     }
 
+    /// Faults on `clock`: a [`FaultClock::Simulated`] one lets a test run
+    /// delays without waiting for them.
     pub fn with_clock(inner: T, cfg: FaultConfig, clock: FaultClock) -> Faulty<T> {
         Faulty {
             name: format!("faulty:{}", inner.name()),
@@ -232,14 +251,18 @@ impl<T: Transport> Faulty<T> {
         }
     }
 
+    /// What has been injected so far.
     pub fn counts(&self) -> &FaultCounts {
         &self.counts
     }
 
+    /// The wrapped transport.
     pub fn inner(&self) -> &T {
         &self.inner
     }
 
+    /// The wrapped transport, mutably (frames already taken from it stay
+    /// subject to the faults).
     pub fn inner_mut(&mut self) -> &mut T {
         &mut self.inner
     }

@@ -18,6 +18,7 @@ pub struct Inbox {
 }
 
 impl Inbox {
+    /// An empty inbox.
     pub fn new() -> Inbox {
         Inbox::default()
     }
@@ -51,6 +52,7 @@ impl Inbox {
         self.ready.len()
     }
 
+    /// No frame is waiting to be handed out.
     pub fn is_empty(&self) -> bool {
         self.ready.is_empty()
     }

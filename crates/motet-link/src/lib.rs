@@ -41,9 +41,14 @@ pub use udp::UdpTransport;
 /// from it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LinkStats {
+    /// Frames sent.
     pub frames_out: u64,
+    /// Bytes sent, as this transport puts them on its medium (a delimiter
+    /// it adds, CAN padding included).
     pub bytes_out: u64,
+    /// Frames handed out by `recv`.
     pub frames_in: u64,
+    /// Bytes of those frames as handed out.
     pub bytes_in: u64,
 }
 
@@ -221,6 +226,7 @@ impl Default for StreamSplitter {
 }
 
 impl StreamSplitter {
+    /// A splitter that cuts runs longer than `max` bytes without a delimiter.
     pub fn new(max: usize) -> StreamSplitter {
         StreamSplitter {
             buf: Vec::new(),

@@ -29,7 +29,9 @@ pub const BITRATES: [u32; 9] = [
 /// A CAN or CAN-FD frame.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CanFrame {
+    /// The identifier: 11 bits, or 29 if `extended`.
     pub id: u32,
+    /// 29-bit extended identifier.
     pub extended: bool,
     /// CAN-FD format (up to 64 data bytes).
     pub fd: bool,
@@ -38,7 +40,9 @@ pub struct CanFrame {
     /// Remote frame (classic only); `data` is empty and `rtr_len` gives the
     /// requested length.
     pub rtr: bool,
+    /// Data length a remote frame requests, 0 to 8.
     pub rtr_len: u8,
+    /// The payload: up to 8 bytes (classic) or a CAN-FD length up to 64.
     pub data: Vec<u8>,
 }
 
@@ -84,28 +88,36 @@ impl CanFrame {
 /// One slcan line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Command {
+    /// `O`: open the channel; the adapter starts sending and receiving.
     Open,
+    /// `C`: close the channel.
     Close,
     /// `Sn`: index into [`BITRATES`].
     Bitrate(u8),
+    /// A frame to send (or one received).
     Frame(CanFrame),
 }
 
 /// Why a line was rejected.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SlcanError {
+    /// A line with no command letter.
     Empty,
+    /// A command letter slcan does not have (the byte).
     UnknownCommand(u8),
     /// Fewer characters than the command needs.
     Truncated,
     /// A character that should be a hex digit is not.
     BadHex(usize),
+    /// An identifier beyond 11 bits (`t`, `r`, `d`, `b`) or 29 bits (upper
+    /// case).
     IdOutOfRange(u32),
     /// A length digit beyond 8 (classic) or a data length that is not a DLC
     /// length.
     BadLength(usize),
     /// Characters after the data.
     Trailing,
+    /// `Sn` with `n` beyond 8.
     BadBitrate(u8),
     /// A frame that cannot be written (remote CAN-FD, too much data).
     Unencodable,

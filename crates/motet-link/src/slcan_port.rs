@@ -27,6 +27,8 @@ pub struct SlcanConfig {
     pub bitrate: u32,
     /// Identifier this end sends under.
     pub id: u32,
+    /// `id` is a 29-bit extended identifier (an 11-bit standard one if
+    /// `false`).
     pub extended: bool,
     /// Only frames from this identifier are taken (all senders if `None`).
     pub peer: Option<u32>,
@@ -145,10 +147,13 @@ impl SlcanTransport {
         Ok(t)
     }
 
+    /// The settings it was opened with.
     pub fn config(&self) -> &SlcanConfig {
         &self.cfg
     }
 
+    /// What the adapter answered so far: acknowledgements, errors, lines that
+    /// did not decode, frames skipped.
     pub fn adapter_counts(&self) -> &AdapterCounts {
         &self.rx.counts
     }

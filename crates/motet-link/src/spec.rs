@@ -24,36 +24,67 @@ pub const DEFAULT_BITRATE: u32 = 500_000;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum LinkSpec {
     /// `udp:HOST:PORT`.
-    Udp { host: String, port: u16 },
+    Udp {
+        /// The node's host name or address (IPv6 in brackets).
+        host: String,
+        /// The node's UDP port, 1-65535.
+        port: u16,
+    },
     /// `udp-listen:HOST:PORT`.
-    UdpListen { host: String, port: u16 },
+    UdpListen {
+        /// The local address to bind (IPv6 in brackets).
+        host: String,
+        /// The local port; 0 takes any free one.
+        port: u16,
+    },
     /// `serial:PATH[@BAUD]`.
-    Serial { path: String, baud: u32 },
+    Serial {
+        /// The serial device (`/dev/ttyACM0`, `COM3`).
+        path: String,
+        /// Baud rate, [`DEFAULT_BAUD`] if not given.
+        baud: u32,
+    },
     /// `slcan:PATH[@BITRATE]`.
-    Slcan { path: String, bitrate: u32 },
+    Slcan {
+        /// The adapter's serial device.
+        path: String,
+        /// Nominal CAN bit rate, bit/s, one of the slcan rates;
+        /// [`DEFAULT_BITRATE`] if not given.
+        bitrate: u32,
+    },
 }
 
 /// Why a spec string was refused.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum SpecError {
+    /// Nothing given.
     #[error("empty link spec")]
     Empty,
+    /// No `scheme:` before the address (the spec given).
     #[error("link spec {0:?} has no scheme (expected udp:, udp-listen:, serial: or slcan:)")]
     NoScheme(String),
+    /// A scheme motet has no transport for.
     #[error("unknown link scheme {0:?} (expected udp, udp-listen, serial or slcan)")]
     UnknownScheme(String),
+    /// `HOST:PORT` with an empty host.
     #[error("missing host in {0:?} (expected HOST:PORT)")]
     MissingHost(String),
+    /// No `:PORT`, or an empty one.
     #[error("missing port in {0:?} (expected HOST:PORT)")]
     MissingPort(String),
+    /// A port that is not a number in range (0 only to listen).
     #[error("bad port {0:?} (expected 1-65535, or 0 to listen on any)")]
     BadPort(String),
+    /// A host with one bracket, or an IPv6 address without brackets.
     #[error("unbalanced brackets in host {0:?}")]
     BadHost(String),
+    /// `serial:` or `slcan:` without a device.
     #[error("missing device path")]
     MissingPath,
+    /// `@BAUD` that is not a positive integer.
     #[error("bad baud rate {0:?} (expected a positive integer)")]
     BadBaud(String),
+    /// `@BITRATE` that is not one of the rates slcan can select.
     #[error("bad CAN bit rate {0:?} (expected one of 10k 20k 50k 100k 125k 250k 500k 800k 1M)")]
     BadBitrate(String),
 }
@@ -63,13 +94,26 @@ pub enum SpecError {
 /// system's error is part of the message, not a separate source.
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {
+    /// The spec string is malformed.
     #[error(transparent)]
     Spec(#[from] SpecError),
+    /// The host name did not resolve to an address.
     #[error("cannot resolve {addr:?}: {error}")]
-    Resolve { addr: String, error: io::Error },
-    /// `spec` is the link with its defaults filled in (`serial:PATH@115200`).
+    Resolve {
+        /// `HOST:PORT` as given.
+        addr: String,
+        /// What the resolver said (or that it found no address).
+        error: io::Error,
+    },
+    /// The socket or device could not be opened (missing device, port in
+    /// use, permissions).
     #[error("{error}")]
-    Io { spec: String, error: io::Error },
+    Io {
+        /// The link with its defaults filled in (`serial:PATH@115200`).
+        spec: String,
+        /// What the operating system said.
+        error: io::Error,
+    },
 }
 
 /// `any_port` lets port 0 (any free port) through, for binding.

@@ -88,6 +88,8 @@ impl UdpTransport {
         self.foreign
     }
 
+    /// The local address the socket is bound to (the port the OS chose when
+    /// bound to port 0).
     pub fn local_addr(&self) -> io::Result<SocketAddr> {
         self.sock.local_addr()
     }

@@ -13,68 +13,126 @@ use motet_wire::service::{
 };
 use std::time::Duration;
 
+/// Why an administrative request failed. Every request is safe to repeat,
+/// so the person can put the cause right and ask again.
 #[derive(Debug, thiserror::Error)]
 pub enum AdminError {
+    /// The transport failed (port closed, no route).
     #[error("{link}: {error}")]
-    Io { link: String, error: std::io::Error },
+    Io {
+        /// The link's name, as given (its spec).
+        link: String,
+        /// What the transport said.
+        error: std::io::Error,
+    },
+    /// Nothing answered any of the tries: the node is off, on another link or
+    /// at another address.
     #[error("{link}: no answer from node {address:#06x} after {tries} tries")]
     NoAnswer {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// Requests sent.
         tries: u32,
     },
+    /// Only another address answered.
     #[error("{link}: a request to node {address} was answered from address {from}: another node is on this link, or the node's address changed; pair again")]
     WrongAddress {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// The address that answered.
         from: u16,
     },
+    /// The node answered with an error.
     #[error("{link}: node {address:#06x} refused: {error}")]
     Refused {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// The node's refusal, as text.
         error: String,
     },
+    /// The node answered with a reply that does not fit the request.
     #[error("{link}: node {address:#06x} answered {got} to {asked}")]
     Unexpected {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// The request, as debug text.
         asked: String,
+        /// The answer, as debug text.
         got: String,
     },
+    /// Pairing was answered by another uid or with another address than asked.
     #[error("{link}: a node answered as uid {got:016x} address {got_address} where uid {want:016x} address {want_address} was asked")]
     WrongNode {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The uid asked for.
         want: u64,
+        /// The address asked for.
         want_address: u16,
+        /// The uid that answered.
         got: u64,
+        /// The address it answered with.
         got_address: u16,
     },
+    /// Nobody pressed a node's button while pairing waited.
     #[error("{link}: no node's button was pressed within {seconds:.0} s")]
-    NoButton { link: String, seconds: f64 },
+    NoButton {
+        /// The link's name, as given (its spec).
+        link: String,
+        /// How long the pairing waited, s.
+        seconds: f64,
+    },
     /// The image's own message; every one of them says it is about firmware.
     #[error("{0}")]
     Image(String),
+    /// The request would lose the position of a node that is moving.
     #[error("{link}: node {address:#06x} is moving (it has committed motion): {what} would lose its position; wait for its job to finish or stop")]
     Busy {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// What was asked (`a firmware upload`).
         what: &'static str,
     },
+    /// The firmware read back from the node is not what was written.
     #[error("{link}: firmware read-back differs at byte {offset}")]
-    ReadBack { link: String, offset: u32 },
+    ReadBack {
+        /// The link's name, as given (its spec).
+        link: String,
+        /// Byte offset in the image of the first difference.
+        offset: u32,
+    },
+    /// The firmware image is built for another board than the node.
     #[error("{link}: the image is for board {image}, node {address:#06x} is a {node}: build the firmware for {node}")]
     WrongBoard {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// The board the image was built for.
         image: String,
+        /// The board the node says it is.
         node: String,
     },
+    /// After the upload the node runs another version than the one uploaded.
     #[error("{link}: node {address:#06x} restarted running firmware {running}, not the {flashed} it was given: its bootloader refused the image (the board's console says why)")]
     NotInstalled {
+        /// The link's name, as given (its spec).
         link: String,
+        /// The node's address on the link.
         address: u16,
+        /// The version uploaded.
         flashed: Version,
+        /// The version the node runs.
         running: Version,
     },
 }
@@ -84,6 +142,7 @@ pub enum AdminError {
 pub struct Found {
     /// The address the answer came from.
     pub from: u16,
+    /// What it says it is: uid, kind, board, firmware, queue size.
     pub info: Info,
 }
 
@@ -95,10 +154,13 @@ pub struct Admin {
     clock: SharedClock,
     /// Wait for an answer before repeating the request.
     pub timeout: Duration,
+    /// How many times a request is sent before giving up.
     pub tries: u32,
 }
 
 impl Admin {
+    /// Requests over `transport` (named `link` in errors), waits on the wall
+    /// clock, 200 ms per try, 5 tries.
     pub fn new(transport: Box<dyn Transport + Send>, link: &str) -> Admin {
         Admin::with_clock(transport, link, clock::wall())
     }
@@ -118,6 +180,7 @@ impl Admin {
         }
     }
 
+    /// The link's name, as given.
     pub fn link(&self) -> &str {
         &self.link
     }

@@ -11,10 +11,12 @@ use std::str::FromStr;
 pub struct Digest(pub [u8; 32]);
 
 impl Digest {
+    /// The SHA-256 of `bytes`.
     pub fn of(bytes: &[u8]) -> Digest {
         Digest(Sha256::digest(bytes).into())
     }
 
+    /// The SHA-256 of the file at `path`, read whole.
     pub fn of_file(path: &Path) -> std::io::Result<Digest> {
         Ok(Digest::of(&std::fs::read(path)?))
     }

@@ -16,6 +16,7 @@ use motet_trajectory::Point;
 
 /// One simulated node and its clock.
 pub struct LoopbackNode {
+    /// The node's endpoint, storing what it persists in RAM.
     pub node: SimNode<RamStore>,
     /// Crystal error, parts per million.
     pub ppm: f64,
@@ -37,12 +38,19 @@ impl LoopbackNode {
 /// Clock of a loopback node: crystal error and starting offset.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodeClock {
+    /// Crystal error, parts per million (positive: the node's clock runs
+    /// fast).
     pub ppm: f64,
+    /// The node's clock at host time 0, µs.
     pub offset_us: u64,
 }
 
+/// A whole networked run, host and nodes, stepped together on one simulated
+/// clock.
 pub struct Loopback {
+    /// The host's side of the run.
     pub run: NetRun,
+    /// One per machine node, in the machine's order.
     pub nodes: Vec<LoopbackNode>,
     /// Host time, µs.
     pub now: u64,

@@ -36,26 +36,50 @@ pub struct PairedNode {
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PairingFile {
+    /// Each paired node, keyed by its machine node's name.
     #[serde(default)]
     pub nodes: BTreeMap<String, PairedNode>,
 }
 
+/// Why a pairing file was refused; pairing again (`motet nodes pair`)
+/// writes a good one.
 #[derive(Debug, thiserror::Error)]
 pub enum PairingFileError {
+    /// The file could not be read.
     #[error("{path}: {error}")]
-    Io { path: String, error: std::io::Error },
-    #[error("{path}:{message}")]
-    Parse { path: String, message: String },
-    #[error("{path}: node {node}: {message}")]
-    Invalid {
+    Io {
+        /// The pairing file's path.
         path: String,
-        node: String,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
+    /// The file is not valid TOML or has unknown keys; the message starts with
+    /// line and column.
+    #[error("{path}:{message}")]
+    Parse {
+        /// The pairing file's path.
+        path: String,
+        /// `line:column: ` and what TOML or serde found wrong.
         message: String,
     },
+    /// A node's address or uid is not valid.
+    #[error("{path}: node {node}: {message}")]
+    Invalid {
+        /// The pairing file's path.
+        path: String,
+        /// The machine node's name (its table key).
+        node: String,
+        /// What is wrong with its address or uid.
+        message: String,
+    },
+    /// Two machine nodes are paired with one device.
     #[error("{path}: nodes {first} and {second} are both {device}: each machine node needs its own device; pair again with `motet nodes pair`")]
     SameDevice {
+        /// The pairing file's path.
         path: String,
+        /// One machine node.
         first: String,
+        /// The other.
         second: String,
         /// How the device is named in both: "uid …" or "address … on LINK".
         device: String,
@@ -92,6 +116,8 @@ impl PairingFile {
         PairingFile::parse(&text, &path.display().to_string())
     }
 
+    /// Parses and checks pairing file text (`path` names it in errors):
+    /// addresses in 2..=65519, uids in hex, no device paired twice.
     pub fn parse(text: &str, path: &str) -> Result<PairingFile, PairingFileError> {
         let file: PairingFile = toml::from_str(text).map_err(|e| PairingFileError::Parse {
             path: path.to_string(),

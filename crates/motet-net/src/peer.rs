@@ -72,6 +72,9 @@ impl Default for NodeClock {
 }
 
 impl NodeClock {
+    /// Takes one clock exchange into every estimator running; starts the
+    /// fine one once the coarse one has a skew over long enough, and a new
+    /// fine one when the skew moved away from its seed.
     pub fn add(&mut self, e: Exchange) {
         let now = e.t4;
         let first = *self.first.get_or_insert(e.t1);
@@ -121,22 +124,29 @@ impl NodeClock {
         }
     }
 
+    /// The estimate in use rests on data (two points at least).
     pub fn synced(&self) -> bool {
         self.current().synced()
     }
 
+    /// The clock model in use: `local = offset + (1 + skew) · host`, what is
+    /// sent to the node.
     pub fn model(&self) -> motet_wire::sync::ClockModel {
         self.current().model()
     }
 
+    /// Estimated standard deviation of the node time the model gives at host
+    /// time `host`, µs; infinite before two points.
     pub fn error_estimate(&self, host: f64) -> f64 {
         self.current().error_estimate(host)
     }
 
+    /// Host time at node time `local`, µs.
     pub fn local_to_host(&self, local: f64) -> f64 {
         self.current().local_to_host(local)
     }
 
+    /// Filtered points the estimate in use was fitted to.
     pub fn points(&self) -> u32 {
         self.current().points()
     }
@@ -163,7 +173,10 @@ pub fn datagram(dst: u16, req: &ServiceRequest) -> Vec<u8> {
 /// Something a node sent that the run acts on.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Incoming {
+    /// A message on the reliable link's data port: status, position,
+    /// refusals, events.
     Motion(NodeMessage),
+    /// A reply on a service port (clock exchange, info, status).
     Service(ServiceReply),
 }
 
@@ -176,11 +189,17 @@ struct Outgoing {
     seal: bool,
 }
 
+/// The host's end of the link to one node: the reliable link, the frames
+/// waiting for room in its window, the node's clock estimate and what came
+/// in.
 pub struct Peer {
+    /// The machine node's name, for messages.
     pub name: String,
+    /// The node's address on its link.
     pub address: u16,
     transport: Box<dyn Transport + Send>,
     link: Link,
+    /// The node's clock, estimated from the exchanges.
     pub sync: NodeClock,
     outbox: VecDeque<Outgoing>,
     /// Host time of the last frame from the node, µs.
@@ -220,14 +239,19 @@ impl Peer {
         }
     }
 
+    /// Where the link is: connecting, established (with the protocol version
+    /// agreed) or failed.
     pub fn link_state(&self) -> State {
         self.link.state()
     }
 
+    /// The reliable link, for its statistics (round-trip time,
+    /// retransmits, CRC errors).
     pub fn link(&self) -> &Link {
         &self.link
     }
 
+    /// The transport under the link, for its traffic counters.
     pub fn transport(&self) -> &dyn Transport {
         self.transport.as_ref()
     }

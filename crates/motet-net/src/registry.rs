@@ -8,9 +8,11 @@ use motet_wire::service::{kind, Info};
 /// What the host knows about driving one kind of node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Driver {
+    /// The node kind it drives, as a node names itself in `Info`.
     pub kind: &'static str,
     /// Follows the trajectory with step channels.
     pub trajectory: bool,
+    /// One line for `motet nodes scan`.
     pub description: &'static str,
 }
 
@@ -36,25 +38,56 @@ pub fn driver(kind: &str) -> Option<&'static Driver> {
 /// Why a node cannot serve a machine node.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Mismatch {
+    /// The host has no driver for the node's kind.
     #[error("node kind `{kind}` has no driver on this host (known: {known})")]
-    NoDriver { kind: String, known: String },
+    NoDriver {
+        /// The kind the node named.
+        kind: String,
+        /// The kinds this host drives, comma-separated.
+        known: String,
+    },
+    /// The node has fewer step channels than the machine node has actuators.
     #[error("the machine gives it {want} actuators but it has {have} channels")]
-    Channels { want: usize, have: u8 },
+    Channels {
+        /// Actuators the machine file gives the node.
+        want: usize,
+        /// Step channels the node has.
+        have: u8,
+    },
+    /// The node has fewer tool outputs than the machine node has tools.
     #[error("the machine gives it {want} tools but it has {have} outputs")]
-    Tools { want: usize, have: u8 },
+    Tools {
+        /// Tools the machine file gives the node.
+        want: usize,
+        /// Tool outputs the node has.
+        have: u8,
+    },
+    /// The node's segment queue is smaller than the machine file asks for.
     #[error("the machine file asks for a queue of {want} but the node holds {have}")]
-    Queue { want: usize, have: u16 },
+    Queue {
+        /// Queue places the machine file asks for (`queue`).
+        want: usize,
+        /// Queue places the node has.
+        have: u16,
+    },
+    /// An actuator would need to step faster than the node's channels can.
     #[error("actuator {actuator} steps up to {hz:.0} times a second at its joint's top speed, but the node's channels reach {max} ({board}): lower its max_velocity or its microstepping")]
     StepRate {
+        /// The actuator's name in the machine file.
         actuator: String,
+        /// Steps per second it needs at its joint's top speed.
         hz: f64,
+        /// Steps per second the node's channels reach.
         max: u32,
+        /// The node's board (`its board` when it names none).
         board: String,
     },
 }
 
-/// The driver for a node that can serve machine node `spec` of `machine`,
-/// or why it cannot.
+/// The driver for a node (that answered `info`) that can serve machine
+/// node `spec` of `machine`, or why it cannot: it needs a driver for its
+/// kind, enough channels, tools and queue, and step rates its channels
+/// reach.
 pub fn check(machine: &Machine, spec: &NodeSpec, info: &Info) -> Result<&'static Driver, Mismatch> {
     let d = driver(info.kind.as_str()).ok_or_else(|| Mismatch::NoDriver {
         kind: info.kind.to_string(),

@@ -11,19 +11,33 @@ use std::path::{Path, PathBuf};
 /// The `resume.toml` format this crate writes and reads.
 pub const RECORD_FORMAT: u32 = 2;
 
+/// Why `resume.toml` could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
+    /// The file could not be read: most often the folder is not a run's.
     #[error("cannot read {path}: {source} (is {dir} the output folder of a networked run?)")]
     Read {
+        /// The `resume.toml` path.
         path: String,
+        /// The folder it was looked for in.
         dir: String,
+        /// What the operating system said.
         source: std::io::Error,
     },
+    /// The file is not a valid record: TOML, format, run number, ranges.
     #[error("{path}: {message}")]
-    Parse { path: String, message: String },
+    Parse {
+        /// The `resume.toml` path.
+        path: String,
+        /// What is wrong, with the key where TOML says it.
+        message: String,
+    },
+    /// The file could not be written into the run's output folder.
     #[error("cannot write {path}: {source}")]
     Write {
+        /// The `resume.toml` path.
         path: String,
+        /// What the operating system said.
         source: std::io::Error,
     },
 }
@@ -32,21 +46,32 @@ pub enum RecordError {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunRecord {
+    /// [`RECORD_FORMAT`] when written; another is refused.
     pub format: u32,
     /// The run's number (hex), as the journal and the nodes know it.
     pub run: String,
     /// Absolute paths, so that resuming works from any folder.
     pub machine: PathBuf,
+    /// SHA-256 of the machine file when the run started.
     pub machine_sha256: Digest,
+    /// The job file's absolute path.
     pub job: PathBuf,
+    /// SHA-256 of the job file when the run started.
     pub job_sha256: Digest,
+    /// G-code codes not supported were skipped with a warning
+    /// (`--allow-unknown`); the job must be read the same way again.
     pub allow_unknown: bool,
+    /// `--time-scale`: how many times faster than real time the simulated
+    /// nodes' clocks ran.
     pub time_scale: f64,
+    /// `--lead-ms`: least time the committed window reached ahead, ms.
     pub lead_ms: f64,
+    /// `--sync-ms`: clock exchanges with each node, ms apart.
     pub sync_ms: f64,
     /// For a run that resumed another: how its commands follow from the job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub continues: Option<Continuation>,
+    /// The machine's nodes, in the machine file's order.
     pub nodes: Vec<RunNode>,
 }
 
@@ -58,11 +83,17 @@ pub struct RunRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Continuation {
+    /// The job command the job continues at.
     pub command: usize,
+    /// Commands before it in the resumed run: the travel and the tools.
     pub prelude: usize,
+    /// Where the machine rested, `MAX_AXES` coordinates.
     pub from: Vec<f64>,
+    /// Where the job continues, `MAX_AXES` coordinates.
     pub to: Vec<f64>,
+    /// The stopped run's number (hex).
     pub after_run: String,
+    /// The stopped run's committed window end (segments).
     pub after_window: u32,
 }
 
@@ -70,11 +101,15 @@ pub struct Continuation {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunNode {
+    /// Its name in the machine file.
     pub name: String,
+    /// The link spec it was reached on.
     pub link: String,
+    /// Its address on that link.
     pub address: u16,
     /// Unique id (16 hex digits) and firmware version the node reported.
     pub uid: String,
+    /// See `uid`.
     pub firmware: String,
 }
 
@@ -126,6 +161,7 @@ impl RunRecord {
         Ok(r)
     }
 
+    /// Writes `DIR/resume.toml`, replacing one there.
     pub fn save(&self, dir: &Path) -> Result<(), RecordError> {
         let path = dir.join("resume.toml");
         let text = toml::to_string_pretty(self).map_err(|e| RecordError::Parse {

@@ -16,23 +16,51 @@ use motet_wire::HostMessage;
 use std::path::Path;
 use std::time::Duration;
 
+/// Why the run's nodes could not be brought together; each names the
+/// machine node it is about. No motion has been sent when it is returned.
 #[derive(Debug, thiserror::Error)]
 pub enum SessionError {
+    /// A simulated node process could not be started.
     #[error("node {node}: {source}")]
-    Spawn { node: String, source: SpawnError },
+    Spawn {
+        /// The node's name in the machine file.
+        node: String,
+        /// Why the process did not start or announce itself.
+        source: SpawnError,
+    },
+    /// The node's link could not be opened.
     #[error("node {node}: cannot open {link}: {message}")]
     Open {
+        /// The node's name in the machine file.
         node: String,
+        /// The link spec.
         link: String,
+        /// Why it could not be opened.
         message: String,
     },
+    /// Pairing or asking the node what it is failed.
     #[error("node {node}: {source}")]
-    Admin { node: String, source: AdminError },
+    Admin {
+        /// The node's name in the machine file.
+        node: String,
+        /// The request that failed, and why.
+        source: AdminError,
+    },
+    /// The node is not paired, or another device answers at its address.
     #[error("node {node}: {message}")]
-    Node { node: String, message: String },
+    Node {
+        /// The node's name in the machine file.
+        node: String,
+        /// What is wrong and how to put it right.
+        message: String,
+    },
+    /// The device is not what the machine file says the node is (kind,
+    /// channels, tools, protocol).
     #[error("node {node}: {source}")]
     Mismatch {
+        /// The node's name in the machine file.
         node: String,
+        /// How it differs.
         source: registry::Mismatch,
     },
 }
@@ -40,13 +68,20 @@ pub enum SessionError {
 /// Where a node of the run is.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeAddr {
+    /// Its name in the machine file.
     pub name: String,
+    /// The link spec it is reached on.
     pub link: String,
+    /// Its address on that link.
     pub address: u16,
 }
 
+/// The machine's nodes, reached and checked, ready for a run: one peer per
+/// machine node, in the machine file's order.
 pub struct Session {
+    /// The link to each node (connected by the run, not yet here).
     pub peers: Vec<Peer>,
+    /// Where each node is.
     pub nodes: Vec<NodeAddr>,
     /// What each node said it is when the session began.
     pub infos: Vec<Info>,

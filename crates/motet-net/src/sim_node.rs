@@ -49,6 +49,7 @@ pub fn sim_config(kind: &str, uid: u64) -> Option<NodeConfig> {
 /// written whole and renamed into place so a crash never leaves half a record.
 #[derive(Clone, Debug)]
 pub struct FileStore {
+    /// The file; created on the first save.
     pub path: PathBuf,
 }
 
@@ -104,6 +105,7 @@ pub struct StepCounter {
     pub position: [i64; MAX_CHANNELS],
     /// All steps per channel.
     pub steps: [u64; MAX_CHANNELS],
+    /// Each tool output's present value.
     pub tools: [f32; MAX_TOOLS],
     /// Every step (host time µs, channel, forward) when tracing.
     pub trace: Option<Vec<(f64, u8, bool)>>,
@@ -136,14 +138,19 @@ pub type SimEndpoint<S> = Endpoint<S, RamFlash<SIM_FLASH>, DEFAULT_QUEUE>;
 
 /// A simulated node bound to a transport.
 pub struct SimNode<S: Store> {
+    /// The node firmware's endpoint: link, services and motion.
     pub endpoint: Box<SimEndpoint<S>>,
+    /// What carries its frames to the host.
     pub transport: Box<dyn Transport + Send>,
+    /// The simulated board its outputs drive.
     pub board: StepCounter,
     /// Transport errors seen (the link is down).
     pub link_errors: u64,
 }
 
 impl<S: Store> SimNode<S> {
+    /// A node with configuration `cfg`, persisting its identity in `store`,
+    /// reached over `transport`, started at local time `now` (µs).
     pub fn new(cfg: NodeConfig, store: S, transport: Box<dyn Transport + Send>, now: u64) -> Self {
         SimNode {
             endpoint: Box::new(Endpoint::new(cfg, store, RamFlash::new(), now)),

@@ -7,7 +7,9 @@ use std::collections::VecDeque;
 /// A planned item and the index of the command it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sourced {
+    /// The planner's output.
     pub item: Planned,
+    /// Index of the job command it came from.
     pub command: usize,
 }
 
@@ -24,6 +26,7 @@ pub struct SourcedPlanner {
 }
 
 impl SourcedPlanner {
+    /// Tags the output of `planner`, which must have nothing queued yet.
     pub fn new(planner: Planner) -> SourcedPlanner {
         SourcedPlanner {
             planner,
@@ -32,6 +35,7 @@ impl SourcedPlanner {
         }
     }
 
+    /// Plans command `index` of the job.
     pub fn push(&mut self, index: usize, cmd: &Command) -> Result<(), PlanError> {
         let before = self.planner.tail();
         self.current = index;
@@ -42,14 +46,12 @@ impl SourcedPlanner {
         Ok(())
     }
 
+    /// The job has ended: the planner plans its tail to rest.
     pub fn finish(&mut self) {
         self.planner.finish();
     }
 
-    pub fn clock(&self) -> f64 {
-        self.planner.clock()
-    }
-
+    /// The next planned item that is final, with its command.
     pub fn pop(&mut self) -> Option<Sourced> {
         let item = self.planner.pop()?;
         let command = match &item {

@@ -13,10 +13,19 @@ pub struct SpawnedNode {
     pub uid: u64,
 }
 
+/// Why a simulated node process could not be started.
 #[derive(Debug, thiserror::Error)]
 pub enum SpawnError {
+    /// The executable could not be run.
     #[error("cannot start {exe}: {error}")]
-    Start { exe: String, error: std::io::Error },
+    Start {
+        /// The executable's path.
+        exe: String,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
+    /// Its first line on stdout was not the announcement (what it printed;
+    /// empty if it exited first). The process is killed.
     #[error("node process did not announce its link (it printed {0:?})")]
     NoAnnounce(String),
 }
@@ -69,6 +78,7 @@ pub fn spawn_sim_node(exe: &Path, kind: &str, extra: &[String]) -> Result<Spawne
 }
 
 impl SpawnedNode {
+    /// The process id.
     pub fn pid(&self) -> u32 {
         self.child.id()
     }

@@ -36,6 +36,7 @@ pub const MAX_PX: u32 = 16384;
 /// One continuous run of machine motion, in machine x,y (mm).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Stroke {
+    /// Vertices in the order the machine passed them, machine x,y in mm.
     pub points: Vec<[f64; 2]>,
     /// `true` when the tool was working (cutting, extruding, drawing);
     /// `false` for travel moves.
@@ -69,10 +70,16 @@ impl RenderSpec {
 pub enum RenderError {
     /// Bounds with zero or negative width/height, or a non-finite value.
     #[error("invalid bounds {bounds:?}: need finite min < max on both axes")]
-    InvalidBounds { bounds: [[f64; 2]; 2] },
+    InvalidBounds {
+        /// The bounds given, `[[xmin, ymin], [xmax, ymax]]` in mm.
+        bounds: [[f64; 2]; 2],
+    },
     /// `max_px` outside `MIN_PX..=MAX_PX`, or an image that cannot be allocated.
     #[error("invalid image size: max_px = {max_px} (accepted {MIN_PX}..={MAX_PX})")]
-    InvalidSize { max_px: u32 },
+    InvalidSize {
+        /// The longest image side asked for, pixels.
+        max_px: u32,
+    },
     /// The PNG encoder failed.
     #[error("PNG encoding failed: {0}")]
     Encode(String),

@@ -35,17 +35,25 @@ use motet_wire::frame::Crc32c;
 /// The journal format this crate writes and reads.
 pub const JOURNAL_FORMAT: u32 = 2;
 
+/// Why a journal could not be read back; what `motet resume` shows.
 #[derive(Debug, thiserror::Error)]
 pub enum JournalError {
+    /// The file could not be read.
     #[error("{path}: {source}")]
     Io {
+        /// The journal's path.
         path: String,
+        /// What the operating system said.
         source: std::io::Error,
     },
+    /// A record is malformed, out of order or fails its checksum.
     #[error("{path}:{line}: {error}")]
     Parse {
+        /// The journal's path.
         path: String,
+        /// The record's 1-based line.
         line: usize,
+        /// What is wrong with it.
         error: BadRecord,
     },
 }
@@ -54,61 +62,151 @@ pub enum JournalError {
 /// [`JournalError::Parse`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum BadRecord {
+    /// The line does not end in ` *` and a checksum.
     #[error("record without a checksum (` *` and 8 hex digits)")]
     NoChecksum,
+    /// The checksum is not 8 hex digits (the text given).
     #[error("checksum `{0}` is not 8 hex digits")]
     ChecksumDigits(String),
+    /// The checksum does not follow from the record and the one before.
     #[error("checksum {want:08x} does not match the record ({got:08x}): this record or one before it was changed, removed or damaged")]
-    Checksum { want: u32, got: u32 },
+    Checksum {
+        /// The checksum the record's text and its predecessor give.
+        want: u32,
+        /// The checksum written on the line.
+        got: u32,
+    },
+    /// The first record is not a `motet-journal` header.
     #[error("not a motet journal (it must start with a `motet-journal` header)")]
     NotAJournal,
+    /// A header after the first record.
     #[error("a second header")]
     SecondHeader,
+    /// A record after the `stop` record, which must be the last.
     #[error("record after the run's stop")]
     AfterStop,
+    /// A record kind this format does not have (its first word).
     #[error("unknown record `{0}`")]
     UnknownRecord(String),
+    /// More words than the record has.
     #[error("unexpected `{word}` after the {what}")]
-    Trailing { word: String, what: &'static str },
+    Trailing {
+        /// The first extra word.
+        word: String,
+        /// The record's last field (`stop record`, `end point`).
+        what: &'static str,
+    },
+    /// A format version other than [`JOURNAL_FORMAT`].
     #[error("journal format {0}; this motet reads format {JOURNAL_FORMAT}")]
     Format(u32),
+    /// The header lacks a field (its key).
     #[error("header without `{0}=`")]
     NoField(&'static str),
+    /// A header word where another field was due.
     #[error("`{word}` where the header has `{key}=`")]
-    WrongField { word: String, key: &'static str },
+    WrongField {
+        /// The word found.
+        word: String,
+        /// The key due there.
+        key: &'static str,
+    },
+    /// The run number is not 8 hex digits (the text given).
     #[error("run `{0}` is not 8 hex digits")]
     RunDigits(String),
     /// A file digest that is not one (its own message).
     #[error("{0}")]
     Digest(String),
+    /// The record ends before a field (its name).
     #[error("missing {0}")]
     Missing(&'static str),
+    /// A field that is not a number in the form the journal writes.
     #[error("{what} `{word}` is not a number as motet writes it")]
-    Number { what: &'static str, word: String },
+    Number {
+        /// The field.
+        what: &'static str,
+        /// The text found.
+        word: String,
+    },
+    /// A coordinate or time that is not a finite number (the text given).
     #[error("`{0}` is not a finite number as motet writes it")]
     Finite(String),
+    /// A point with fewer than `MAX_AXES` coordinates (which point).
     #[error("{0} with too few coordinates")]
     FewCoordinates(&'static str),
+    /// A segment record without `|` between its start and end points.
     #[error("expected `|` between start and end")]
     NoSeparator,
+    /// A `stop` record's lost node that is not an index (the text given).
     #[error("lost node `{0}` is not a node index")]
     LostNode(String),
+    /// Segments must be recorded in order from 0, none missing.
     #[error("segment {got} where segment {want} was due")]
-    SegmentIndex { got: u32, want: u32 },
+    SegmentIndex {
+        /// The index recorded.
+        got: u32,
+        /// The index due.
+        want: u32,
+    },
+    /// A segment whose end time is before its start time.
     #[error("segment ends ({t1} µs) before it starts ({t0} µs)")]
-    EndsBeforeStart { t0: f64, t1: f64 },
+    EndsBeforeStart {
+        /// Its start, host µs.
+        t0: f64,
+        /// Its end, host µs.
+        t1: f64,
+    },
+    /// A segment that starts before the one before it ends.
     #[error("segment {index} starts at {t0} µs, before segment {prev} ends")]
-    Overlap { index: u32, t0: f64, prev: u32 },
+    Overlap {
+        /// The segment.
+        index: u32,
+        /// Its start, host µs.
+        t0: f64,
+        /// The segment before it.
+        prev: u32,
+    },
+    /// A seal commits segments not recorded before it.
     #[error("window end {end} beyond the {segments} segments recorded")]
-    EndBeyond { end: u32, segments: u32 },
+    EndBeyond {
+        /// The seal's window end.
+        end: u32,
+        /// Segments recorded so far.
+        segments: u32,
+    },
+    /// A seal's tail starts after its window ends.
     #[error("tail start {tail} after window end {end}")]
-    TailAfterEnd { tail: u32, end: u32 },
+    TailAfterEnd {
+        /// The tail start.
+        tail: u32,
+        /// The window end.
+        end: u32,
+    },
+    /// A seal says more segments finished than it committed.
     #[error("{done} segments done, but the window ends at {end}")]
-    DoneAfterEnd { done: u32, end: u32 },
+    DoneAfterEnd {
+        /// Segments finished.
+        done: u32,
+        /// The window end.
+        end: u32,
+    },
+    /// The `stop` record names a window other than the last seal's.
     #[error("the run stopped on window end {end}, but the last seal ends at {last}")]
-    StopEnd { end: u32, last: u32 },
+    StopEnd {
+        /// The stop's window end.
+        end: u32,
+        /// The last seal's window end.
+        last: u32,
+    },
+    /// A seal whose window ends before the previous seal's.
     #[error("window end {end} does not follow {last}")]
-    EndBack { end: u32, last: u32 },
+    EndBack {
+        /// This seal's window end.
+        end: u32,
+        /// The previous seal's.
+        last: u32,
+    },
+    /// A seal with fewer segments done, or an earlier host time, than the
+    /// seal before it.
     #[error("segments done or host time going back")]
     GoingBack,
 }
@@ -116,8 +214,11 @@ pub enum BadRecord {
 /// What identifies a run and what its plan depends on.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JournalHeader {
+    /// The run number the nodes hold (never 0).
     pub run: u32,
+    /// SHA-256 of the machine file the run was made from.
     pub machine: Digest,
+    /// SHA-256 of the job file.
     pub job: Digest,
     /// Host time the trajectory starts at, µs.
     pub t0: f64,
@@ -130,13 +231,17 @@ pub struct JournalHeader {
 /// One committed segment.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JournalSegment {
+    /// Its sequence number in the run, from 0.
     pub index: u32,
     /// Index of the command (in the run's command list) it came from.
     pub command: usize,
-    /// Start and end, host µs.
+    /// Start, host µs.
     pub t0: f64,
+    /// End, host µs.
     pub t1: f64,
+    /// Where it starts, machine units.
     pub start: Point,
+    /// Where it ends.
     pub end: Point,
 }
 
@@ -144,9 +249,13 @@ pub struct JournalSegment {
 /// node had reported the segments before `done` finished at host time `time`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct JournalSeal {
+    /// Segments committed (those with an index below `end`).
     pub end: u32,
+    /// First segment of the contingency tail, at most `end`.
     pub tail: u32,
+    /// Segments every node had reported finished, at most `end`.
     pub done: u32,
+    /// Host time of that report, µs.
     pub time: u64,
 }
 
@@ -154,7 +263,9 @@ pub struct JournalSeal {
 /// node had finished, and the machine nodes that were lost.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct JournalStop {
+    /// The window it stopped on and what had finished.
     pub seal: JournalSeal,
+    /// Machine node indices that stopped answering; empty if none.
     pub lost: Vec<usize>,
 }
 

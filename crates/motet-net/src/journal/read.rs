@@ -13,8 +13,11 @@ pub struct Journal {
     /// None for an empty journal: the run stopped before its trajectory
     /// started (nothing was sent to move).
     pub header: Option<JournalHeader>,
+    /// Every segment record, in index order.
     pub segments: Vec<JournalSegment>,
+    /// Every `seal` record, in order (the stop's own seal is in `stop`).
     pub seals: Vec<JournalSeal>,
+    /// How the run stopped; `None` if the host died before writing it.
     pub stop: Option<JournalStop>,
     /// Line of each segment record, for errors that name it.
     pub segment_lines: Vec<usize>,
@@ -25,6 +28,8 @@ pub struct Journal {
 }
 
 impl Journal {
+    /// Reads and checks the journal at `path`: every record's checksum, order
+    /// and consistency with the records before it.
     pub fn load(path: &Path) -> Result<Journal, JournalError> {
         let bytes = std::fs::read(path).map_err(|source| JournalError::Io {
             path: path.display().to_string(),

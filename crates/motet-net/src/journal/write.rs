@@ -15,6 +15,7 @@ pub struct JournalWriter {
 }
 
 impl JournalWriter {
+    /// Creates (or truncates) the journal at `path`.
     pub fn create(path: &Path) -> Result<JournalWriter, JournalError> {
         let io = |source| JournalError::Io {
             path: path.display().to_string(),
@@ -28,20 +29,26 @@ impl JournalWriter {
         })
     }
 
+    /// Writes the header; it is on disk when this returns.
     pub fn header(&mut self, h: &JournalHeader) -> Result<(), JournalError> {
         self.record(&header_text(h))?;
         self.sync()
     }
 
+    /// Appends a segment record (buffered: on disk with the next seal, before
+    /// the seal is sent).
     pub fn segment(&mut self, s: &JournalSegment) -> Result<(), JournalError> {
         self.record(&segment_text(s))
     }
 
+    /// Appends a seal record; it and every segment before it are on disk when
+    /// this returns, so the seal may be sent.
     pub fn seal(&mut self, s: JournalSeal) -> Result<(), JournalError> {
         self.record(&seal_text("seal", &s))?;
         self.sync()
     }
 
+    /// Appends the stop record, the last; on disk when this returns.
     pub fn stop(&mut self, s: &JournalStop) -> Result<(), JournalError> {
         self.record(&stop_text(s))?;
         self.sync()

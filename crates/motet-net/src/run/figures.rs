@@ -8,8 +8,12 @@ use motet_wire::{HostMessage, NodeMessage};
 /// What a node's outputs did in a run (`NodeMessage::Tally`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tally {
+    /// Steps made on each channel (both directions), by channel index.
     pub steps: [u32; 8],
+    /// Tool output changes.
     pub tool_changes: u32,
+    /// Hash over every output with its exact time: equal on two nodes that
+    /// ran the same trajectory the same way.
     pub hash: u64,
 }
 
@@ -26,16 +30,28 @@ impl From<&motet_node::StepTally> for Tally {
 /// Per-node figures for the report.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PeerFigures {
+    /// The machine node's name.
     pub name: String,
+    /// The link's smoothed round-trip time, µs.
     pub rtt_us: u64,
+    /// Frames the link sent again for want of an acknowledgement.
     pub retransmits: u64,
+    /// Frames received that failed their CRC (or did not decode).
     pub crc_errors: u64,
+    /// Bytes the transport sent.
     pub bytes_out: u64,
+    /// Bytes the transport received.
     pub bytes_in: u64,
+    /// Frames the transport sent.
     pub frames_out: u64,
+    /// Frames the transport received.
     pub frames_in: u64,
+    /// Estimated standard deviation of the node's clock model at the time
+    /// asked, µs.
     pub sync_error_us: f64,
+    /// The node's crystal error as measured, parts per million.
     pub skew_ppm: f64,
+    /// Times the node ran out of segments while moving, as it last reported.
     pub underruns: u32,
 }
 

@@ -76,7 +76,9 @@ impl Default for NetConfig {
 pub struct RunIdentity {
     /// Never 0 (a node with no run reports 0).
     pub run: u32,
+    /// SHA-256 of the machine file.
     pub machine: Digest,
+    /// SHA-256 of the job file.
     pub job: Digest,
 }
 
@@ -102,17 +104,38 @@ impl Default for RunIdentity {
     }
 }
 
+/// Why a run could not go on. Once streaming has started, a node's trouble
+/// stops the run safely instead ([`Phase::Stopping`]); these are what is
+/// left: the run cannot start, the job does not plan, or the journal cannot
+/// be written (then nothing more is sealed).
 #[derive(Debug, thiserror::Error)]
 pub enum NetError {
+    /// The planner refused a job command.
     #[error("{loc}: {error}")]
-    Plan { loc: SourceLoc, error: PlanError },
+    Plan {
+        /// Where in the job.
+        loc: SourceLoc,
+        /// What it refused.
+        error: PlanError,
+    },
+    /// A node refused, failed its link, or its clock could not be trusted
+    /// while the run started; or a segment could not be routed to it.
     #[error("node {node}: {message}")]
-    Node { node: String, message: String },
+    Node {
+        /// The machine node's name.
+        node: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The journal could not be written: without it nothing is sealed.
     #[error("journal: {0}")]
     Journal(#[from] crate::journal::JournalError),
+    /// A node's transport failed while the run started.
     #[error("node {node}: link: {source}")]
     Io {
+        /// The machine node's name.
         node: String,
+        /// What the transport said.
         source: std::io::Error,
     },
 }
@@ -134,6 +157,11 @@ pub enum Phase {
     Stopped(StopInfo),
 }
 
+/// The host's side of a networked run: plans the job, streams it to the
+/// nodes in sealed windows ahead of their clocks, keeps their clocks
+/// synchronised, journals every seal before sending it, and stops safely
+/// on its contingency tails when a node is lost. Driven by polling with the
+/// time as an argument.
 pub struct NetRun {
     machine: Machine,
     cfg: NetConfig,
@@ -177,8 +205,12 @@ pub struct NetRun {
     /// Each node's answer: not yet, none kept, or its tally.
     tallies: Vec<Option<Option<Tally>>>,
     room_asked_at: Option<u64>,
+    /// Windows sealed so far.
     pub windows: u64,
+    /// Segments routed to the nodes so far (each once, whatever the number
+    /// of nodes).
     pub segments_sent: u64,
+    /// Pauses for the person (M0, M1) routed so far.
     pub pauses: u64,
     status: Vec<Option<NodeMessage>>,
 }
@@ -245,14 +277,17 @@ impl NetRun {
         self.identity = identity;
     }
 
+    /// The run's number and files.
     pub fn identity(&self) -> &RunIdentity {
         &self.identity
     }
 
+    /// Where the run is.
     pub fn phase(&self) -> &Phase {
         &self.phase
     }
 
+    /// The links to the nodes, in the machine's order.
     pub fn peers(&self) -> &[Peer] {
         &self.peers
     }

@@ -14,6 +14,7 @@ const WHERE_INTERVAL_US: u64 = 100_000;
 /// A coordinated stop.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StopInfo {
+    /// Why the run stopped, for the person (a lost node, Ctrl-C).
     pub reason: String,
     /// Segments before this index were committed; every node that kept
     /// running rests at the end of the one before it.
@@ -37,8 +38,11 @@ pub struct StopInfo {
 /// A node the host lost during a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LostNode {
+    /// Its index among the machine's nodes.
     pub node: usize,
+    /// Its name in the machine file.
     pub name: String,
+    /// What the host noticed (silent for too long, its link failed).
     pub why: String,
 }
 
