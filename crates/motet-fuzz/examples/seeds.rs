@@ -118,7 +118,7 @@ fn job_script(windowed: bool) -> Script {
 /// resume to prove what it resumes).
 fn journals() {
     use motet_net::journal::JournalWriter;
-    use motet_net::loopback::{Loopback, NodeClock};
+    use motet_net::loopback::{Loopback, Crystal};
     let path = root().join("examples/plotter.toml");
     let m = Machine::load(&path).expect("plotter");
     let job = motet_api::load_job(
@@ -144,7 +144,7 @@ fn journals() {
             cmds.clone(),
             m.start,
             vec![(Box::new(a), Box::new(b))],
-            &[NodeClock::default()],
+            &[Crystal::default()],
             Default::default(),
             Some(JournalWriter::create(&jpath).expect("journal")),
         );

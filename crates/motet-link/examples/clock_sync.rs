@@ -18,12 +18,12 @@ const BASE_US: u64 = 50;
 const STEP_US: u64 = 2;
 
 /// Piecewise-constant crystal skew from a start offset.
-struct NodeClock {
+struct Crystal {
     offset: f64,
     skews: Vec<(f64, f64)>,
 }
 
-impl NodeClock {
+impl Crystal {
     fn local(&self, h: f64) -> f64 {
         let (mut t, mut l, mut skew) = (0.0, self.offset, self.skews[0].1);
         for &(from, s) in &self.skews[1..] {
@@ -49,7 +49,7 @@ fn wait_frame(t: &mut dyn Transport, clock: &SimClock) -> Vec<u8> {
 }
 
 /// Runs to `end` s; returns (host time, error) from 30 s on and the estimator.
-fn run(node: &NodeClock, jitter_us: u64, seed: u64, end: f64) -> (Vec<(f64, f64)>, ClockSync) {
+fn run(node: &Crystal, jitter_us: u64, seed: u64, end: f64) -> (Vec<(f64, f64)>, ClockSync) {
     let clock = SimClock::new();
     let (h, n) = pair("host", "node");
     let sim = || FaultClock::Simulated(clock.clone());
@@ -105,7 +105,7 @@ fn main() {
     println!("jitter µs | skew ppm | max |err| µs | rms µs | skew err ppm | drift changes");
     for jitter in [0u64, 100, 1_000] {
         for (seed, skew) in [(1u64, 200e-6), (2, -200e-6)] {
-            let node = NodeClock {
+            let node = Crystal {
                 offset: 123_456.0,
                 skews: vec![(0.0, skew)],
             };
@@ -128,7 +128,7 @@ fn main() {
         (10, -100e-6, -80e-6),
         (11, 0.0, 200e-6),
     ] {
-        let node = NodeClock {
+        let node = Crystal {
             offset: 5.0,
             skews: vec![(0.0, from), (60.0 * S, to)],
         };

@@ -35,9 +35,10 @@ impl LoopbackNode {
     }
 }
 
-/// Clock of a loopback node: crystal error and starting offset.
+/// A loopback node's crystal: its error and its clock's starting offset
+/// (the host's estimate of that clock is [`crate::peer::NodeClock`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NodeClock {
+pub struct Crystal {
     /// Crystal error, parts per million (positive: the node's clock runs
     /// fast).
     pub ppm: f64,
@@ -71,7 +72,7 @@ impl Loopback {
         commands: Vec<Located<Command>>,
         start: Point,
         links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)>,
-        clocks: &[NodeClock],
+        clocks: &[Crystal],
         cfg: NetConfig,
     ) -> Loopback {
         Loopback::with_journal(machine, commands, start, links, clocks, cfg, None)
@@ -83,7 +84,7 @@ impl Loopback {
         commands: Vec<Located<Command>>,
         start: Point,
         links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)>,
-        clocks: &[NodeClock],
+        clocks: &[Crystal],
         cfg: NetConfig,
         journal: Option<JournalWriter>,
     ) -> Loopback {

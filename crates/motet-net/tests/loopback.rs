@@ -8,7 +8,7 @@ use common::*;
 use motet_host::Machine;
 use motet_link::fault::SimClock;
 use motet_link::pair;
-use motet_net::loopback::{Loopback, NodeClock};
+use motet_net::loopback::{Loopback, Crystal};
 use motet_net::{NetConfig, Phase};
 use motet_planner::{Command, Located};
 
@@ -153,7 +153,7 @@ fn the_host_knows_where_the_machine_was_at_any_time() {
         cmds,
         m.start,
         clean_links(n),
-        &[NodeClock::default(); 3],
+        &[Crystal::default(); 3],
         NetConfig::default(),
     );
     assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);

@@ -25,13 +25,13 @@ impl Rng {
 }
 
 /// The node's crystal: a piecewise-constant skew from a start offset.
-struct NodeClock {
+struct Crystal {
     offset: f64,
     /// (from host time µs, skew)
     skews: Vec<(f64, f64)>,
 }
 
-impl NodeClock {
+impl Crystal {
     fn local(&self, h: f64) -> f64 {
         let mut t = 0.0;
         let mut l = self.offset;
@@ -62,7 +62,7 @@ struct Path {
 /// Runs exchanges until `end` µs; returns the true errors (host time, µs) at
 /// every exchange from `measure_from` on, and the estimator.
 fn run(
-    clock: &NodeClock,
+    clock: &Crystal,
     path: Path,
     cfg: SyncConfig,
     seed: u64,
@@ -122,7 +122,7 @@ fn converges_to_ten_microseconds() {
         (6, 199e-6, 1e10),
     ];
     for (seed, skew, offset) in cases {
-        let clock = NodeClock {
+        let clock = Crystal {
             offset,
             skews: vec![(0.0, skew)],
         };
@@ -161,7 +161,7 @@ fn converges_to_ten_microseconds() {
 /// max error from 100 s on, seconds from the step to the last error over 10
 /// µs and over 15 µs, and the estimator.
 fn drift_step(seed: u64, from: f64, to: f64) -> (f64, f64, f64, f64, f64, ClockSync) {
-    let clock = NodeClock {
+    let clock = Crystal {
         offset: 5.0,
         skews: vec![(0.0, from), (60.0 * S, to)],
     };
@@ -233,7 +233,7 @@ fn tracks_a_drift_change() {
 #[test]
 fn stalls_are_gated_out() {
     // Every 50th exchange is held up by 30 ms (a retransmission, a busy host).
-    let clock = NodeClock {
+    let clock = Crystal {
         offset: 0.0,
         skews: vec![(0.0, 100e-6)],
     };

@@ -12,7 +12,7 @@ use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
 use motet_link::Transport;
 use motet_net::digest::Digest;
 use motet_net::journal::{Journal, JournalWriter};
-use motet_net::loopback::{Loopback, NodeClock};
+use motet_net::loopback::{Loopback, Crystal};
 use motet_net::pairing_file::format_uid;
 use motet_net::resume::{prove, Evidence};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
@@ -114,8 +114,8 @@ pub fn bench_net(args: Args) -> Result<()> {
         })
         .collect();
     // Crystals off by up to ±200 ppm.
-    let clocks: Vec<NodeClock> = (0..n)
-        .map(|k| NodeClock {
+    let clocks: Vec<Crystal> = (0..n)
+        .map(|k| Crystal {
             ppm: [200.0, -200.0, 120.0, -80.0][k % 4],
             offset_us: 987_654_321 * (k as u64 + 1),
         })

@@ -5,7 +5,7 @@
 use motet_host::Machine;
 use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
 use motet_link::{pair, Transport};
-use motet_net::loopback::{Loopback, NodeClock};
+use motet_net::loopback::{Loopback, Crystal};
 use motet_planner::{Command, Located};
 use std::path::Path;
 
@@ -74,10 +74,10 @@ pub fn faulty_links(n: usize, clock: &SimClock, p: f64, seed: u64) -> Links {
         .collect()
 }
 
-pub fn clocks(n: usize) -> Vec<NodeClock> {
+pub fn clocks(n: usize) -> Vec<Crystal> {
     // Crystals off by up to ±200 ppm, clocks started anywhere.
     (0..n)
-        .map(|k| NodeClock {
+        .map(|k| Crystal {
             ppm: if k % 2 == 0 { 200.0 } else { -150.0 },
             offset_us: 123_456_789 * (k as u64 + 1),
         })
