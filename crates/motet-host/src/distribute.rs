@@ -24,13 +24,17 @@ pub struct Subscription {
 /// A message for a node and the segments it carries (for queue room).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outgoing {
+    /// The message as the node receives it.
     pub message: HostMessage,
+    /// Segments it adds to the node's queue (0 for events and setup): what
+    /// the sender must have room for before sending it.
     pub segments: usize,
 }
 
 /// Routes the trajectory to nodes.
 #[derive(Clone, Debug)]
 pub struct Distributor {
+    /// One per node, in [`Machine::nodes`]' order.
     pub subscriptions: Vec<Subscription>,
     stream: StreamConfig,
     quantizer: Quantizer,
@@ -38,6 +42,8 @@ pub struct Distributor {
 }
 
 impl Distributor {
+    /// Subscriptions for every node of `machine`, and a batched stream
+    /// started with the machine at rest at its `start`.
     pub fn new(machine: &Machine) -> Distributor {
         let subscriptions = machine
             .nodes

@@ -81,28 +81,53 @@ impl JobCheck {
 /// Why the machine cannot make a move.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MoveError {
+    /// A target coordinate is NaN or infinite.
     #[error("move to {axis}={value}: not a number")]
-    NotANumber { axis: String, value: f64 },
+    NotANumber {
+        /// The axis's name in the machine file.
+        axis: String,
+        /// The coordinate given.
+        value: f64,
+    },
+    /// A target is beyond the axis's travel by half a step or more (a
+    /// motor would notice); less than that is clamped instead.
     #[error(
         "move to {axis}={} is {} beyond the axis's travel [{}, {}] (half a step is {})",
         rounded(*.value), rounded(*.beyond), rounded(.travel[0]), rounded(.travel[1]), rounded(*.half_step)
     )]
     BeyondTravel {
+        /// The axis's name in the machine file.
         axis: String,
+        /// The coordinate given, in axis units (mm or degrees).
         value: f64,
+        /// How far beyond the travel's nearer end it is.
         beyond: f64,
+        /// The axis's `travel = [min, max]`.
         travel: [f64; 2],
+        /// [`Machine::half_step`] of the axis: the clamp it missed.
         half_step: f64,
     },
+    /// On a polar machine, the straight move passes closer to the centre
+    /// than `[motion] min_radius`, where the turntable would have to spin
+    /// faster than it can.
     #[error("move passes {distance:.3} mm from the polar centre; the turntable cannot follow closer than min_radius = {min_radius} mm")]
-    PolarCentre { distance: f64, min_radius: f64 },
+    PolarCentre {
+        /// The move's closest approach to the centre, mm.
+        distance: f64,
+        /// The machine's `min_radius`, mm.
+        min_radius: f64,
+    },
+    /// Some point of the move is out of an arm's, linkage's or delta's
+    /// reach, or within the margin of one of its singularities.
     #[error("move passes {}, {why} of the {kinematics} kinematics", show_point(&.at[..*.dims]))]
     Unreachable {
         /// The first point checked that is out of reach: x, y, z.
         at: Xyz,
         /// How many of its coordinates the kinematics replaces (2 or 3).
         dims: usize,
+        /// Out of reach, or too near a singularity.
         why: Unreachable,
+        /// The kinematics' name, as in `[motion] kinematics`.
         kinematics: &'static str,
     },
 }

@@ -12,9 +12,15 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{}: {message}", place(.file, *.line, *.column))]
 pub struct MachineError {
+    /// The machine file's path as given.
     pub file: String,
+    /// Line of the offending key or value, from 1 (a missing section
+    /// points at the file's start); 0 when the file could not be read.
     pub line: usize,
+    /// Column in characters, from 1 (0 with line 0).
     pub column: usize,
+    /// What is wrong, naming the section and key (`axis x: travel must be
+    /// [min, max] with min < max`).
     pub message: String,
 }
 
@@ -26,30 +32,53 @@ fn place(file: &str, line: usize, column: usize) -> String {
     }
 }
 
+/// One machine axis (`[axes.NAME]`): a coordinate of every [`Point`], in
+/// mm (degrees for a rotary axis).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Axis {
+    /// Lower-case letters (`x`, `y`, `z`, `e`, ...).
     pub name: String,
-    /// `[min, max]`; infinite for axes without travel limits.
+    /// `[min, max]`; infinite for axes without travel limits (only axes
+    /// that ride along, such as `e`, may leave it out).
     pub travel: [f64; 2],
+    /// Fastest the axis moves, units/s.
     pub max_velocity: f64,
+    /// Hardest it accelerates, units/s².
     pub max_acceleration: f64,
+    /// Jerk limit, units/s³, for S-curve profiles (which need it on at
+    /// least one axis); `None`: unlimited.
     pub max_jerk: Option<f64>,
+    /// Counts toward path length and feed (x, y, z); `false` for axes that
+    /// ride along (`e` by default).
     pub path: bool,
 }
 
 /// What an actuator moves: a machine axis, or a joint of the kinematics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Joint {
+    /// The kinematics' joint name (`a`, `theta`, `shoulder`, ...) or the
+    /// axis's name: what an actuator's `joint` key names.
     pub name: String,
+    /// How its value follows from a machine-space point.
     pub map: JointMap,
+    /// Degrees for an angle joint, mm otherwise: where its actuators'
+    /// chains start.
     pub unit: Unit,
+    /// The lowest `max_velocity` of its actuators, joint units/s; `None`:
+    /// only the axes' limits bound it.
     pub max_velocity: Option<f64>,
+    /// The lowest `max_acceleration` of its actuators, joint units/s².
     pub max_acceleration: Option<f64>,
 }
 
+/// One motor (`[actuators.NAME]`) and the chain that turns its joint's
+/// motion into steps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Actuator {
+    /// Its name in the machine file, which `[nodes.*] actuators` lists.
     pub name: String,
+    /// Index into [`Machine::joints`] of the joint it drives (several
+    /// actuators may drive one joint, as two z motors do).
     pub joint: usize,
     /// Signed; negative when the chain inverts.
     pub steps_per_unit: f64,
@@ -62,47 +91,86 @@ pub struct Actuator {
     pub max_step_hz: Option<f64>,
 }
 
+/// One tool output (`[tools.NAME]`): a pen servo, a laser, a spindle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tool {
+    /// Its name in the machine file.
     pub name: String,
+    /// What it drives; decides whether motion stops for a change.
     pub kind: ToolKind,
+    /// Seconds to stand still after a change (default: pen 0.15, spindle
+    /// 1, laser 0).
     pub settle: f64,
+    /// The value "on" means when a job gives none, `0.0..=1.0` (default 1).
     pub on_value: f32,
 }
 
+/// One node (`[nodes.NAME]`): the board that steps some actuators and
+/// switches some tools. A file without `[nodes]` gets one node `main` with
+/// everything.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeSpec {
+    /// Its name in the machine file.
     pub name: String,
     /// Indices into [`Machine::actuators`]; the position is the node's channel id.
     pub actuators: Vec<usize>,
     /// Indices into [`Machine::tools`]; the position is the node's tool output.
     pub tools: Vec<usize>,
+    /// Segments its queue holds (default 64); bounds `[motion]
+    /// stop_horizon`.
     pub queue: usize,
+    /// Its frame period, µs (default 40): how often it polls for the steps
+    /// and tool changes due (each still carries its own exact time).
     pub frame_us: f64,
 }
 
+/// A machine file, validated: everything the planner, the job checks and
+/// the distribution to nodes need. Built only by [`Machine::load`] or
+/// [`Machine::parse`], so its indices are consistent (every joint driven,
+/// every actuator on one node).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Machine {
+    /// The machine's `name`.
     pub name: String,
+    /// Its `description`, if the file has one.
     pub description: Option<String>,
+    /// The file it was read from, as given.
     pub file: PathBuf,
+    /// In the order x, y, z, e, a, b, c, then the others alphabetically;
+    /// axis `i` is coordinate `i` of a [`Point`].
     pub axes: Vec<Axis>,
+    /// `[motion] kinematics` with its `[geometry]`.
     pub kinematics: KinematicsKind,
     /// Indices of the x, y and z axes when the kinematics has joints of
     /// its own; its joints replace the first
     /// [`KinematicsKind::joints`]`.len()` of them (z is `NO_AXIS` unless
     /// they replace it too).
     pub kinematic_axes: Option<[usize; 3]>,
+    /// The kinematics' joints first, then every axis they do not replace
+    /// as a joint of its own.
     pub joints: Vec<Joint>,
+    /// By name (the machine file's tables are read sorted).
     pub actuators: Vec<Actuator>,
+    /// By name; a tool's index is what [`motet_planner::Command::Tool`]
+    /// names.
     pub tools: Vec<Tool>,
+    /// By name; each actuator is on exactly one, each tool on at most one.
     pub nodes: Vec<NodeSpec>,
+    /// grbl-style junction deviation, mm: how fast corners are taken.
     pub junction_deviation: f64,
+    /// Trapezoid or S-curve ramps.
     pub profile: ProfileKind,
+    /// Chord tolerance for flattening curves (arcs, SVG), mm.
     pub tolerance: f64,
+    /// Feed for drawing when a job gives none, units/s (default: half the
+    /// slowest path axis's `max_velocity`).
     pub draw_feed: f64,
+    /// Where the machine is when a job starts: `[motion] start`, else 0 or
+    /// the travel's low end; within travel and reach.
     pub start: Point,
+    /// Polar machines: the closest a move may pass to the centre, mm.
     pub min_radius: f64,
+    /// Most moves the planner holds for lookahead.
     pub lookahead: usize,
     /// Moves within which the machine can always come to rest (0: off); see
     /// [`motet_planner::Limits::stop_horizon`].
@@ -218,6 +286,7 @@ impl Machine {
         }
     }
 
+    /// Index of the axis named `name` (exactly, as in the machine file).
     pub fn axis(&self, name: &str) -> Option<usize> {
         self.axes.iter().position(|a| a.name == name)
     }

@@ -5,7 +5,11 @@ use motet_trajectory::{JointMap, ProfileKind, MAX_AXES};
 /// Limits of one machine axis, in axis units per second (squared, cubed).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisLimits {
+    /// Fastest the axis moves, units/s; caps a move's speed by the axis's
+    /// share of the move's direction.
     pub max_velocity: f64,
+    /// Hardest it accelerates, units/s²; bounds a move's acceleration the
+    /// same way.
     pub max_acceleration: f64,
     /// Only used with [`ProfileKind::SCurve`].
     pub max_jerk: Option<f64>,
@@ -17,8 +21,14 @@ pub struct AxisLimits {
 /// units per second (squared).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointLimits {
+    /// How the joint follows from machine-space points; the planner
+    /// samples its rate per mm of path along each move.
     pub map: JointMap,
+    /// Fastest the joint moves, joint units/s (infinite: only the axes'
+    /// limits count). The host lowers it to what the motors' step rate
+    /// allows.
     pub max_velocity: f64,
+    /// Hardest it accelerates, joint units/s² (infinite: unbounded).
     pub max_acceleration: f64,
 }
 
@@ -32,6 +42,8 @@ pub struct ToolTiming {
     pub settle: f64,
 }
 
+/// Everything the planner obeys: the machine file's limits and motion
+/// settings, gathered by the host (`Machine::limits`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Limits {
     /// One entry per machine axis, in axis index order (at most [`MAX_AXES`]).
@@ -40,6 +52,7 @@ pub struct Limits {
     pub joints: Vec<JointLimits>,
     /// grbl-style junction deviation, mm.
     pub junction_deviation: f64,
+    /// Trapezoid or S-curve ramps; S-curves use the axes' `max_jerk`.
     pub profile: ProfileKind,
     /// One entry per tool index used by [`crate::Command::Tool`].
     pub tools: Vec<ToolTiming>,

@@ -22,7 +22,9 @@ use std::collections::VecDeque;
 pub struct ToolEvent {
     /// Microseconds on the host clock.
     pub time: f64,
+    /// Index into the machine's tools ([`crate::Limits::tools`]).
     pub tool: u8,
+    /// The output's new value, `0.0..=1.0`.
     pub value: f32,
     /// When set, the output is `value × speed / feed` (capped at `value`): power
     /// that follows the actual speed along the path.
@@ -32,8 +34,13 @@ pub struct ToolEvent {
 /// An auxiliary channel changing value (temperature, fan, coolant).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AuxEvent {
+    /// Microseconds on the host clock. A waiting change comes when
+    /// everything before it has come to rest; any other one at the start of
+    /// the move after it.
     pub time: f64,
+    /// Which output.
     pub channel: AuxChannel,
+    /// Its new value, in the channel's unit.
     pub value: f32,
     /// Motion holds until the channel reaches the value.
     pub wait: bool,
@@ -43,13 +50,19 @@ pub struct AuxEvent {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[allow(clippy::large_enum_variant)] // segments are the common case; boxing them would cost an allocation each
 pub enum Planned {
+    /// A move or a dwell (a segment of length 0), starting where the last
+    /// one ended in time and place.
     Segment(Segment),
+    /// A tool output change.
     Event(ToolEvent),
+    /// An auxiliary channel change.
     Aux(AuxEvent),
     /// The machine is at rest and waits for the person; `optional` pauses (M1)
     /// may be skipped.
     Pause {
+        /// Microseconds on the host clock: the end of everything before.
         time: f64,
+        /// From an optional stop (M1; see [`Command::Pause`]).
         optional: bool,
     },
 }
@@ -61,21 +74,39 @@ enum Loose {
     Aux(AuxChannel, f32),
 }
 
+/// Why the planner refused a command. A refused command leaves the plan as
+/// it was (everything queued before it stays); the planner does not know
+/// where the command came from, so the caller adds its place
+/// ([`crate::Located`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PlanError {
+    /// A move's target has a NaN or infinite coordinate.
     #[error("target coordinate {axis} is not a finite number")]
-    NotFinite { axis: usize },
+    NotFinite {
+        /// Index of the axis, as in [`crate::JobTarget::axes`].
+        axis: usize,
+    },
+    /// A feed move's or per-speed tool's feed is zero, negative or NaN.
     #[error("feed must be a positive number (got {0})")]
     BadFeed(f64),
+    /// A coordinate or dwell outside what motet accepts
+    /// ([`crate::ranges`]).
     #[error(transparent)]
     OutOfRange(#[from] OutOfRange),
+    /// A tool index the machine has no tool for.
     #[error("tool {0} is not on this machine")]
     UnknownTool(u8),
+    /// The limits leave the move no speed or acceleration: a joint's rate
+    /// is unbounded along it.
     #[error("the move cannot be made within the joint limits (it passes through a kinematic singularity, such as the polar centre)")]
     Singular,
     /// The plan would last longer than [`ranges::JOB_S`].
     #[error("{}", too_long(*at_least_s))]
-    TooLong { at_least_s: f64 },
+    TooLong {
+        /// A lower bound of how long the plan would last with the command,
+        /// seconds (infinite when it cannot be bounded).
+        at_least_s: f64,
+    },
 }
 
 fn too_long(at_least_s: f64) -> String {
@@ -126,6 +157,11 @@ struct Pending {
     events: Vec<Loose>,
 }
 
+/// Plans commands pushed one at a time into segments and events popped in
+/// time order. Holds back at most [`Limits::lookahead`] moves (at least 2)
+/// for lookahead; after [`Planner::finish`] everything is emitted, ending at
+/// rest. Deterministic: the same commands and limits give the same
+/// segments bit for bit, however they are split between pushes.
 pub struct Planner {
     limits: Limits,
     path_mask: u8,
@@ -171,6 +207,7 @@ impl Planner {
         }
     }
 
+    /// The limits it plans within.
     pub fn limits(&self) -> &Limits {
         &self.limits
     }

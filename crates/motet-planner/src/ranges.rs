@@ -17,13 +17,16 @@ use std::fmt;
 /// A closed range of accepted values and their unit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ValueRange {
+    /// Smallest accepted value, inclusive.
     pub min: f64,
+    /// Largest accepted value, inclusive.
     pub max: f64,
     /// Unit as printed after the numbers (empty for plain counts).
     pub unit: &'static str,
 }
 
 impl ValueRange {
+    /// The values from `min` to `max` inclusive, printed with `unit`.
     pub const fn new(min: f64, max: f64, unit: &'static str) -> ValueRange {
         ValueRange { min, max, unit }
     }
@@ -81,8 +84,12 @@ impl fmt::Display for ValueRange {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{what} must be {range}, got {}", number(*value))]
 pub struct OutOfRange {
+    /// The value's name as the user wrote it, with its section where it
+    /// has one (`axis x: max_velocity`, `--sync-ms`, `dwell`).
     pub what: String,
+    /// What was given (NaN and infinities included).
     pub value: f64,
+    /// What is accepted.
     pub range: ValueRange,
 }
 

@@ -112,6 +112,7 @@ impl StrokeEmitter {
         }
     }
 
+    /// The settings it was made with.
     pub fn settings(&self) -> &StrokeSettings {
         &self.settings
     }

@@ -2,6 +2,7 @@
 
 use motet_trajectory::{Point, MAX_AXES};
 
+/// One machine axis as a job source sees it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisInfo {
     /// Lower-case name as in the machine file (`x`, `y`, `z`, `e`, …).
@@ -13,6 +14,8 @@ pub struct AxisInfo {
     pub path: bool,
 }
 
+/// What a tool output drives: decides whether motion stops for a change
+/// and how a source's on/off maps to a value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ToolKind {
     /// A pen lifted and lowered by a servo: value 1 down, 0 up.
@@ -23,9 +26,12 @@ pub enum ToolKind {
     Spindle,
 }
 
+/// One tool output as a job source sees it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ToolInfo {
+    /// Its name as in the machine file's `[tools.NAME]`.
     pub name: String,
+    /// What it drives.
     pub kind: ToolKind,
     /// Value meaning "on" when a source has no explicit power (pen down, full power).
     pub on_value: f32,
@@ -36,6 +42,7 @@ pub struct ToolInfo {
 pub struct JobTarget {
     /// Machine axes in index order; index `i` is coordinate `i` of a [`Point`].
     pub axes: Vec<AxisInfo>,
+    /// Tool outputs in index order: [`crate::Command::Tool`]'s `tool`.
     pub tools: Vec<ToolInfo>,
     /// Where the machine is when the job starts.
     pub start: Point,

@@ -6,14 +6,20 @@ use serde::{Deserialize, Serialize};
 /// The quantity flowing between elements of a chain.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Unit {
+    /// A linear joint's position, or a belt's or screw's travel.
     Millimetre,
+    /// A rotary joint's angle.
     Degree,
+    /// A shaft's turns, between a pulley, screw or gear and the motor.
     Revolution,
+    /// The motor's full steps (what a [`Element::Stepper`] gives).
     FullStep,
+    /// The driver's microsteps (what a [`Element::Microstep`] gives).
     Microstep,
 }
 
 impl Unit {
+    /// Plural English name, as chain errors print it ("millimetres").
     pub fn name(self) -> &'static str {
         match self {
             Unit::Millimetre => "millimetres",
@@ -31,20 +37,38 @@ impl Unit {
 pub enum Element {
     /// Belt and pulley: millimetres to revolutions; the belt moves one
     /// circumference (π × pitch diameter, or belt pitch × teeth) per revolution.
-    Pulley { circumference: f64 },
+    Pulley {
+        /// Belt travel per pulley revolution, mm.
+        circumference: f64,
+    },
     /// Leadscrew: millimetres to revolutions, `lead` mm per revolution.
-    Leadscrew { lead: f64 },
+    Leadscrew {
+        /// Travel per screw revolution, mm (pitch × starts).
+        lead: f64,
+    },
     /// Gear or reduction: `ratio` input revolutions per output revolution.
-    Gear { ratio: f64 },
+    Gear {
+        /// Motor-side revolutions per joint-side revolution (5 for a 5:1
+        /// reduction).
+        ratio: f64,
+    },
     /// Stepper motor: revolutions to full steps, `step_angle` degrees per step.
-    Stepper { step_angle: f64 },
+    Stepper {
+        /// Degrees per full step (1.8 for a 200-step motor).
+        step_angle: f64,
+    },
     /// Microstepping driver: `divisions` microsteps per full step.
-    Microstep { divisions: u32 },
+    Microstep {
+        /// Microsteps per full step, `1..=256`.
+        divisions: u32,
+    },
     /// Reverses the direction of motion.
     Invert,
 }
 
 impl Element {
+    /// Its name as machine files spell it in an actuator's `chain`
+    /// (`pulley`, `leadscrew`, `gear`, `stepper`, `microstep`, `invert`).
     pub fn name(&self) -> &'static str {
         match self {
             Element::Pulley { .. } => "pulley",
@@ -112,17 +136,28 @@ impl Element {
     }
 }
 
+/// What is wrong with a chain (see [`ChainError`] for where).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ChainErrorKind {
+    /// The element cannot take what the elements before it give: a
+    /// microstep driver before the stepper, two pulleys in a row, a linear
+    /// joint straight into a stepper.
     WrongInput {
+        /// The unit the element takes.
         expected: Unit,
+        /// The unit the chain gives it (the joint's unit for the first).
         got: Unit,
     },
+    /// A value that must be a positive finite number is not, or a
+    /// microstep's `divisions` is outside `1..=256`.
     BadValue {
+        /// The element's field at fault (`lead`, `divisions`, ...).
         what: &'static str,
     },
     /// The chain does not end at the motor's steps.
     Incomplete {
+        /// The unit the last element gives (the joint's own for an empty
+        /// chain).
         ends_in: Unit,
     },
 }
@@ -130,7 +165,11 @@ pub enum ChainErrorKind {
 /// Why a chain is impossible, and at which element (0-based).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChainError {
+    /// 0-based position of the element at fault in the chain; for
+    /// [`ChainErrorKind::Incomplete`], the chain's length (the missing end).
+    /// Displayed 1-based, as a user counts the machine file's list.
     pub index: usize,
+    /// What is wrong there.
     pub kind: ChainErrorKind,
 }
 
@@ -169,7 +208,9 @@ pub struct ElementChain {
 }
 
 impl ElementChain {
-    /// Composes `elements` for a joint measured in `joint_unit`.
+    /// Composes `elements` (listed from the joint toward the motor) for a
+    /// joint measured in `joint_unit`. The chain must end in full steps or
+    /// microsteps; the error names the first element that does not fit.
     pub fn new(joint_unit: Unit, elements: &[Element]) -> Result<ElementChain, ChainError> {
         let mut unit = joint_unit;
         let mut factor = 1.0;

@@ -12,6 +12,8 @@
 use crate::math::{cbrt, sqrt};
 use serde::{Deserialize, Serialize};
 
+/// The shape of a profile's ramps, chosen per machine (`profile` in the
+/// machine file's `[motion]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ProfileKind {
     /// Constant acceleration ramps.
@@ -22,7 +24,7 @@ pub enum ProfileKind {
 
 /// One speed change at bounded acceleration (and jerk, for S-curves).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ramp {
+pub(crate) struct Ramp {
     v_from: f64,
     /// +1 when speeding up, -1 when slowing down.
     sign: f64,
@@ -39,7 +41,7 @@ pub struct Ramp {
 impl Ramp {
     /// A ramp from `v_from` to `v_to` with acceleration limit `accel` and jerk
     /// limit `jerk` (0 = unlimited).
-    pub fn new(v_from: f64, v_to: f64, accel: f64, jerk: f64) -> Ramp {
+    pub(crate) fn new(v_from: f64, v_to: f64, accel: f64, jerk: f64) -> Ramp {
         let dv = v_to - v_from;
         let sign = if dv < 0.0 { -1.0 } else { 1.0 };
         let dv = dv * sign;
@@ -86,23 +88,27 @@ impl Ramp {
         }
     }
 
+    /// Seconds the ramp takes.
     #[inline]
-    pub fn duration(&self) -> f64 {
+    pub(crate) fn duration(&self) -> f64 {
         2.0 * self.t_jerk + self.t_const
     }
 
+    /// Speed at the ramp's end (units/s).
     #[inline]
-    pub fn v_to(&self) -> f64 {
+    pub(crate) fn v_to(&self) -> f64 {
         self.v_from + self.sign * self.accel * (self.t_jerk + self.t_const)
     }
 
+    /// Distance the ramp covers: the mean of its end speeds times its
+    /// duration, since ramps are symmetric in time.
     #[inline]
-    pub fn distance(&self) -> f64 {
+    pub(crate) fn distance(&self) -> f64 {
         0.5 * (self.v_from + self.v_to()) * self.duration()
     }
 
     /// (distance, speed, acceleration) at time `t` into the ramp (clamped).
-    pub fn state(&self, t: f64) -> (f64, f64, f64) {
+    pub(crate) fn state(&self, t: f64) -> (f64, f64, f64) {
         let t = t.clamp(0.0, self.duration());
         let (s, a, j) = (self.sign, self.accel, self.jerk);
         let v0 = self.v_from;
@@ -178,7 +184,7 @@ impl Ramp {
     }
 
     /// Time at which the ramp has covered distance `d` (clamped to the ramp).
-    pub fn time_at(&self, d: f64) -> f64 {
+    pub(crate) fn time_at(&self, d: f64) -> f64 {
         let total = self.duration();
         if d <= 0.0 || total == 0.0 {
             return 0.0;
@@ -240,10 +246,14 @@ pub struct Piece {
     pub t0: f64,
     /// Distance into the profile where the piece starts.
     pub d0: f64,
+    /// Seconds the piece lasts; 0 for a piece the profile does not have.
     pub duration: f64,
-    /// Speed, acceleration and jerk at the piece's start.
+    /// Speed at the piece's start (units/s, never negative).
     pub v: f64,
+    /// Acceleration at the piece's start (units/s²; negative when slowing).
     pub a: f64,
+    /// Jerk, constant over the piece (units/s³; 0 in trapezoid profiles and
+    /// in the constant-acceleration and cruise pieces).
     pub j: f64,
 }
 
@@ -271,11 +281,17 @@ pub struct Profile {
 /// by the same code on both ends, so host and node agree bit for bit.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProfileParams {
+    /// Path length (mm); 0 for a dwell.
     pub length: f64,
+    /// Entry speed (units/s).
     pub v0: f64,
+    /// Cruise speed (units/s); the ramps to and from it fit into `length`.
     pub vc: f64,
+    /// Exit speed (units/s).
     pub v1: f64,
+    /// Acceleration limit the ramps were built with (units/s²).
     pub accel: f64,
+    /// Jerk limit (units/s³); 0 for trapezoid ramps.
     pub jerk: f64,
     /// Seconds of standing still, for dwells (`length == 0`).
     pub dwell: f64,
@@ -318,6 +334,8 @@ impl Profile {
         }
     }
 
+    /// Rebuilds the profile [`Profile::params`] gave, bit for bit: what a
+    /// node does with the parameters the wire carries.
     pub fn from_params(p: &ProfileParams) -> Profile {
         if p.length == 0.0 {
             Profile::dwell(p.dwell)
@@ -326,6 +344,8 @@ impl Profile {
         }
     }
 
+    /// The parameters that rebuild this profile on a node
+    /// ([`Profile::from_params`]).
     pub fn params(&self) -> ProfileParams {
         ProfileParams {
             length: self.length,
@@ -338,18 +358,22 @@ impl Profile {
         }
     }
 
+    /// Path length (mm); 0 for a dwell.
     #[inline]
     pub fn length(&self) -> f64 {
         self.length
     }
+    /// Entry speed (units/s): the previous segment's exit speed.
     #[inline]
     pub fn v0(&self) -> f64 {
         self.v0
     }
+    /// Cruise speed (units/s), the highest the profile reaches.
     #[inline]
     pub fn vc(&self) -> f64 {
         self.vc
     }
+    /// Exit speed (units/s): the next segment's entry speed.
     #[inline]
     pub fn v1(&self) -> f64 {
         self.v1
@@ -361,13 +385,14 @@ impl Profile {
         self.ramp_in.duration() + self.cruise + self.ramp_out.duration()
     }
 
-    /// Largest |acceleration| along the path anywhere in the profile.
     /// Distance the two ramps take; at most [`Profile::length`] in a plan
     /// (the planner lowers speeds until they fit).
     pub fn ramps_length(&self) -> f64 {
         self.ramp_in.distance() + self.ramp_out.distance()
     }
 
+    /// Largest |acceleration| along the path anywhere in the profile
+    /// (units/s²); at most the limit it was built with.
     pub fn peak_accel(&self) -> f64 {
         self.ramp_in.accel.max(self.ramp_out.accel)
     }

@@ -11,8 +11,17 @@ pub struct Segment {
     /// Start time, microseconds on the host clock. Fractional: the planner never
     /// rounds durations, so segment boundaries stay exact.
     pub t0: f64,
+    /// Machine-space position at `t0`, one coordinate per axis (mm, or
+    /// degrees for rotary axes).
     pub start: Point,
+    /// Position at [`Segment::t1`]; the move is the straight line from
+    /// `start`, so a joint that is not linear in the axes (polar, arms) is
+    /// what curves, not the tool.
     pub end: Point,
+    /// Speed along the path over time. Its [`Profile::length`] is the path
+    /// length the planner measured (over the axes that set the feed rate, or
+    /// over all axes for a move of riding axes only); every axis covers its
+    /// share of `end - start` in proportion.
     pub profile: Profile,
 }
 

@@ -10,6 +10,8 @@ use std::ops::Range;
 
 /// The joints and where each comes from in the file.
 pub(super) struct Joints {
+    /// See [`crate::Machine::joints`]; limits still unset until the
+    /// actuators narrow them.
     pub joints: Vec<Joint>,
     /// Where each joint comes from, for "no actuator" errors.
     pub spans: Vec<Range<usize>>,

@@ -19,11 +19,15 @@ use std::path::Path;
 
 /// Turns byte offsets into line and column for error messages.
 pub(crate) struct Source<'a> {
+    /// The file's path as errors print it.
     pub file: String,
+    /// The whole file, which the TOML spans index.
     pub text: &'a str,
 }
 
 impl Source<'_> {
+    /// An error at the start of `span` (a byte range into `text`), with
+    /// its 1-based line and column in characters.
     pub fn err(&self, span: Range<usize>, message: impl Into<String>) -> MachineError {
         let at = span.start.min(self.text.len());
         let before = &self.text[..at];
@@ -51,6 +55,8 @@ impl Source<'_> {
     }
 }
 
+/// Checks every section of `raw` in turn and composes the machine; the
+/// first problem found is the error, at its place in `src`.
 pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machine, MachineError> {
     let m = &raw.motion;
     let kinematics =

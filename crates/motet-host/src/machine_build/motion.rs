@@ -10,7 +10,9 @@ use motet_trajectory::{KinematicsKind, Point, ProfileKind, MAX_AXES};
 
 /// The motion settings checked before the axes.
 pub(super) struct Settings {
+    /// `[motion] profile`; the axes need `max_jerk` for an S-curve.
     pub profile: ProfileKind,
+    /// `[motion] lookahead`, in range.
     pub lookahead: usize,
 }
 

@@ -3,6 +3,8 @@
 use super::{GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
+/// Cartesian kinematics: no joints of its own, every axis is stepped
+/// directly (each one a [`super::JointMap::Linear`] row).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cartesian;
 

@@ -3,6 +3,8 @@
 use super::{GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
+/// CoreXY kinematics: joints `a` = x + y and `b` = x − y, mm of belt; both
+/// linear, so stepped in closed form. No geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoreXY;
 

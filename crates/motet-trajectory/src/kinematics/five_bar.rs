@@ -13,13 +13,24 @@ use super::{
 use crate::math::{acos, atan2, cos, hypot, sin, sqrt};
 use serde::{Deserialize, Serialize};
 
+/// A five-bar linkage's geometry, mm (see the module documentation for
+/// the layout). Joints `theta1` and `theta2` are the proximal links' angles
+/// from +x, degrees.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FiveBar {
+    /// Distance from the left base pivot `(0, 0)` to the right one
+    /// `(s, 0)`, mm.
     pub s: f64,
+    /// Left proximal link, left pivot to left elbow, mm.
     pub l1: f64,
+    /// Right proximal link, right pivot to right elbow, mm.
     pub l2: f64,
+    /// Left distal link, left elbow to the joint, mm.
     pub l3: f64,
+    /// Right distal link, right elbow to the joint, mm.
     pub l4: f64,
+    /// The stylus's distance beyond the joint along the left distal link,
+    /// mm (0: the stylus is at the joint).
     pub ext: f64,
 }
 

@@ -5,6 +5,7 @@
 use super::{CoreXY, GeometryError, JointSpec, Kinematics, Param, Xyz, MAX_PARAMS};
 use serde::{Deserialize, Serialize};
 
+/// H-bot kinematics: CoreXY's joints `a` and `b` under the name `hbot`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HBot;
 

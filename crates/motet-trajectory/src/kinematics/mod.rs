@@ -1,7 +1,7 @@
 //! Kinematics: how joints (what actuators move) follow from machine-space points.
 //!
 //! A kinematics is one type implementing [`Kinematics`], in a file of its
-//! own, listed once in [`table`]'s `kinematics!` invocation, which makes it
+//! own, listed once in `table.rs`'s `kinematics!` invocation, which makes it
 //! a variant of [`KinematicsKind`]: the value machine files name, the wire
 //! carries and every layer dispatches through. The planner, the nodes, the
 //! host and the simulator only ever see a [`JointMap`] per joint and a
@@ -58,14 +58,20 @@ use serde::{Deserialize, Serialize};
 /// an angle (degrees) or a length (mm).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct JointSpec {
+    /// The name a machine file's actuator gives as its `joint` (`a`,
+    /// `theta`, `shoulder`, ...).
     pub name: &'static str,
+    /// An angle in degrees (unwrapped along a path, stepped through a chain
+    /// starting at degrees) rather than a length in mm.
     pub angle: bool,
 }
 
 impl JointSpec {
+    /// A joint measured in mm (a carriage, a belt, a radius).
     pub const fn length(name: &'static str) -> JointSpec {
         JointSpec { name, angle: false }
     }
+    /// A joint measured in degrees (a turntable, a shoulder, an elbow).
     pub const fn angle(name: &'static str) -> JointSpec {
         JointSpec { name, angle: true }
     }
@@ -85,7 +91,10 @@ pub struct Param {
 /// Why a geometry is refused: which key, and why.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GeometryError {
+    /// The `[geometry]` key at fault, as the machine file spells it; the
+    /// host adds the file and line.
     pub key: &'static str,
+    /// What the value must be ("must be a positive length", ...).
     pub reason: &'static str,
 }
 
@@ -179,13 +188,22 @@ pub const MAX_PARAMS: usize = 6;
 /// How one joint's value follows from a point in machine space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum JointMap {
-    /// joint = Σ coeffs[i] · p[i]: cartesian, CoreXY, any kinematic matrix.
-    Linear { coeffs: [f64; MAX_AXES] },
+    /// `joint = Σ coeffs[i] · p[i]`: cartesian, CoreXY, any kinematic matrix.
+    /// Stepped in closed form.
+    Linear {
+        /// Joint units per unit of each machine axis, indexed like a
+        /// [`Point`]; 0 for axes the joint ignores.
+        coeffs: [f64; MAX_AXES],
+    },
     /// Joint `joint` of a kinematics, of the point's axes `axes` (x, y and
     /// z; z is [`NO_AXIS`] on a machine without one).
     Kinematic {
+        /// The kinematics with its geometry.
         kinematics: KinematicsKind,
+        /// Index into the kinematics' [`Kinematics::JOINTS`].
         joint: u8,
+        /// Indices of the machine axes that are the tool point's x, y and
+        /// z ([`tool_point`]); [`JointMap::is_valid`] checks them.
         axes: [u8; 3],
     },
 }

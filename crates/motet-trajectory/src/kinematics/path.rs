@@ -11,12 +11,21 @@ use crate::segment::Segment;
 /// one (see [`super::Kinematics::closed_form`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ClosedForm {
-    /// value = |p0 + w·s|
-    Radius { p0: (f64, f64), w: (f64, f64) },
+    /// value = |p0 + w·s| (mm)
+    Radius {
+        /// Tool point `(x, y)` at the segment's start, mm.
+        p0: (f64, f64),
+        /// Change of `(x, y)` per mm of path.
+        w: (f64, f64),
+    },
     /// value = θ0 + the angle from p0 to p0 + w·s (degrees)
     Angle {
+        /// Tool point `(x, y)` at the segment's start, mm.
         p0: (f64, f64),
+        /// Change of `(x, y)` per mm of path.
         w: (f64, f64),
+        /// The joint's value at `p0`, degrees, on the turn the joint is on
+        /// (so the angle stays continuous across segments).
         theta0: f64,
     },
     /// A delta's carriage: z + √(arm² − d²) along the line (see
@@ -122,6 +131,7 @@ impl JointPath {
         JointPath { shape, length }
     }
 
+    /// The segment's path length (mm): `s` runs over `0..=length`.
     #[inline]
     pub fn length(&self) -> f64 {
         self.length

@@ -8,6 +8,10 @@ use super::{
 use crate::math::{atan2, cos, hypot, sin};
 use serde::{Deserialize, Serialize};
 
+/// Polar kinematics: joints `r` (mm, from the turntable's centre at the
+/// origin) and `theta` (degrees from +x); no geometry. θ's rate grows
+/// without bound near the centre, so how close a path may pass is the
+/// machine's `min_radius`, which the host checks.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Polar;
 

@@ -9,10 +9,13 @@ use super::{
 use crate::math::{acos, atan2, cos, sin};
 use serde::{Deserialize, Serialize};
 
+/// A SCARA arm's geometry. Joints `shoulder` and `elbow` in degrees (see
+/// the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Scara {
-    /// Upper arm and forearm lengths, mm.
+    /// Upper arm length, shoulder to elbow, mm.
     pub l1: f64,
+    /// Forearm length, elbow to tool, mm.
     pub l2: f64,
     /// +1: the elbow angle is positive (the forearm turned counter-clockwise
     /// from the upper arm); −1: negative.

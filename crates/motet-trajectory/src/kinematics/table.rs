@@ -15,7 +15,10 @@ macro_rules! kinematics {
         /// the table.
         #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
         pub enum KinematicsKind {
-            $($kind($kind)),*
+            $(
+                #[doc = concat!("[`", stringify!($kind), "`] kinematics, with its geometry.")]
+                $kind($kind)
+            ),*
         }
 
         impl KinematicsKind {
@@ -40,6 +43,7 @@ macro_rules! kinematics {
                 None
             }
 
+            /// Its name in machine files ([`Kinematics::NAME`]).
             pub fn name(&self) -> &'static str {
                 match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::NAME),* }
             }
@@ -50,10 +54,14 @@ macro_rules! kinematics {
                 match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::JOINTS),* }
             }
 
+            /// The geometry keys its kind reads ([`Kinematics::PARAMS`]).
             pub fn param_specs(&self) -> &'static [Param] {
                 match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::PARAMS),* }
             }
 
+            /// Its geometry values in [`KinematicsKind::param_specs`]'
+            /// order, padded with 0: what the wire carries and
+            /// [`KinematicsKind::from_name`] rebuilds it from.
             pub fn params(&self) -> [f64; MAX_PARAMS] {
                 match self { $(KinematicsKind::$kind(k) => k.params()),* }
             }
@@ -94,10 +102,14 @@ macro_rules! kinematics {
 kinematics!(Cartesian, CoreXY, HBot, Polar, FiveBar, Scara, Delta);
 
 impl KinematicsKind {
-    /// The kinds that have no geometry.
+    /// Cartesian: x and y are joints of their own (no geometry).
     pub const CARTESIAN: KinematicsKind = KinematicsKind::Cartesian(Cartesian);
+    /// CoreXY: joints a = x + y, b = x − y (no geometry).
     pub const COREXY: KinematicsKind = KinematicsKind::CoreXY(CoreXY);
+    /// H-bot: CoreXY's joint math under its own name (no geometry).
     pub const HBOT: KinematicsKind = KinematicsKind::HBot(HBot);
+    /// Polar: radius r (mm) and turntable angle θ (degrees) of (x, y), no
+    /// geometry.
     pub const POLAR: KinematicsKind = KinematicsKind::Polar(Polar);
 
     /// Whether its geometry is one its kind accepts (a value off the wire
