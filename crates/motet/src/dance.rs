@@ -10,7 +10,7 @@ use motet_render::{render_png, render_svg, RenderSpec};
 use motet_sim::dance::{
     run_dance_with, CsvTrace, DanceOptions, InputSource, Pendulums, PlannedJob, Recording,
 };
-use motet_sim::live::{input_names, Clock, LiveSource};
+use motet_sim::dance::live::{input_names, Clock, LiveSource};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 

@@ -40,7 +40,7 @@
 //! the same run however fast it is read. A line without a stamp applies at the
 //! latest stamp before it (0 before any).
 
-use crate::dance::InputSource;
+use super::InputSource;
 use std::fmt;
 use std::io::{self, BufRead, BufReader, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};

@@ -5,6 +5,8 @@
 //! the node through the machine's distributor, interleaved in time with the
 //! graph frames, so `trajectory_reader` components follow it.
 
+pub mod live;
+
 use crate::path::PathRecorder;
 use motet_graph::{GraphFile, StageMachine, StageView};
 use motet_host::{Distributor, Machine};
