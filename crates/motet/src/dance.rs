@@ -7,10 +7,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use motet_api::{load_job, JobOptions};
 use motet_graph::GraphFile;
 use motet_render::{render_png, render_svg, RenderSpec};
+use motet_sim::dance::live::{input_names, Clock, LiveSource};
 use motet_sim::dance::{
     run_dance_with, CsvTrace, DanceOptions, InputSource, Pendulums, PlannedJob, Recording,
 };
-use motet_sim::dance::live::{input_names, Clock, LiveSource};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 

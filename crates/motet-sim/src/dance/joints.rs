@@ -67,9 +67,10 @@ impl<'m> Joints<'m> {
     /// Sets [`Joints::now`] from each channel's net step count: its joint is
     /// the start value plus the steps over the actuator's steps per unit.
     pub fn update(&mut self, counts: &[i64]) {
-        for k in 0..self.actuator_of.len() {
-            if let Some(act) = self.actuator(k) {
-                self.now[act.joint] = self.start[act.joint] + counts[k] as f64 / act.steps_per_unit;
+        let machine = self.machine;
+        for (a, &count) in self.actuator_of.iter().zip(counts) {
+            if let Some(act) = a.map(|a| &machine.actuators[a]) {
+                self.now[act.joint] = self.start[act.joint] + count as f64 / act.steps_per_unit;
             }
         }
     }
