@@ -20,6 +20,7 @@ impl Recording {
         self.bytes.len()
     }
 
+    /// Whether it holds no sample.
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }

@@ -21,6 +21,8 @@ pub struct CsvTrace {
 }
 
 impl CsvTrace {
+    /// Reads and parses the trace at `path` for `graph` (see
+    /// [`CsvTrace::parse`]).
     pub fn load(path: &Path, graph: &GraphFile) -> Result<CsvTrace, DanceError> {
         let text = std::fs::read_to_string(path).map_err(|e| DanceError::Trace {
             file: path.display().to_string(),
@@ -31,6 +33,12 @@ impl CsvTrace {
         CsvTrace::parse(&text, &path.display().to_string(), graph)
     }
 
+    /// Parses `text`, named `file` in errors; an error says where
+    /// (`file:line:column`, 1-based) what is wrong: a header whose first
+    /// column is not `time_s` or that names a column that is not an input of
+    /// `graph` (or one twice), a row with a field count unlike the header's,
+    /// a field that is not a finite number, a time that does not increase, or
+    /// no rows at all.
     pub fn parse(text: &str, file: &str, graph: &GraphFile) -> Result<CsvTrace, DanceError> {
         let err = |line: usize, column: usize, message: String| DanceError::Trace {
             file: file.to_string(),
