@@ -118,7 +118,7 @@ fn job_script(windowed: bool) -> Script {
 /// resume to prove what it resumes).
 fn journals() {
     use motet_net::journal::JournalWriter;
-    use motet_net::loopback::{Loopback, Crystal};
+    use motet_net::loopback::{Crystal, Loopback};
     let path = root().join("examples/plotter.toml");
     let m = Machine::load(&path).expect("plotter");
     let job = motet_api::load_job(

@@ -8,7 +8,7 @@ use common::*;
 use motet_host::Machine;
 use motet_link::fault::SimClock;
 use motet_link::pair;
-use motet_net::loopback::{Loopback, Crystal};
+use motet_net::loopback::{Crystal, Loopback};
 use motet_net::{NetConfig, Phase};
 use motet_planner::{Command, Located};
 

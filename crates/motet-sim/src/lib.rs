@@ -4,7 +4,6 @@
 
 pub mod dance;
 mod ideal;
-pub mod live;
 pub mod path;
 pub mod plant;
 pub mod plant_thread;

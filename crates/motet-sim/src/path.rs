@@ -33,6 +33,8 @@ pub struct PathRecorder {
 pub const MAX_STROKE_POINTS: usize = 8192;
 
 impl PathRecorder {
+    /// Draws machine axes `x` and `y` (indices into a point); a new point is
+    /// kept once the path has moved `resolution` mm from the last one.
     pub fn new(x: usize, y: usize, resolution: f64) -> PathRecorder {
         PathRecorder {
             x,
@@ -52,6 +54,7 @@ impl PathRecorder {
         self.x
     }
 
+    /// See [`PathRecorder::x`].
     pub fn y(&self) -> usize {
         self.y
     }

@@ -9,19 +9,39 @@ use motet_trajectory::{JointMap, KinematicsKind, Point, Segment, MAX_AXES};
 /// Something a node did, with its exact time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Output {
-    Step { actuator: usize, forward: bool },
-    Tool { tool: usize, value: f32 },
+    /// One step pulse.
+    Step {
+        /// Index into the machine's actuators.
+        actuator: usize,
+        /// The driver's direction line: forward is the joint's positive
+        /// direction unless the actuator's `steps_per_unit` is negative.
+        forward: bool,
+    },
+    /// A tool output set.
+    Tool {
+        /// Index into the machine's tools.
+        tool: usize,
+        /// The new output value (0 is off).
+        value: f32,
+    },
 }
 
+/// An output with when it happened.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stamped {
+    /// On the shared clock, µs.
     pub time: f64,
+    /// What happened.
     pub output: Output,
 }
 
+/// How one actuator fared over a run.
 #[derive(Clone, Debug, Default)]
 pub struct ActuatorStats {
+    /// Steps made, either direction.
     pub steps: u64,
+    /// Where it is, steps along its joint (positive is the joint's positive
+    /// direction, whatever the driver's inversion).
     pub position: i64,
     /// Largest |ideal − executed| seen at step instants, steps.
     pub max_deviation_steps: f64,
@@ -56,12 +76,15 @@ pub struct Plant {
     /// For each joint, the actuators driving it (averaged for the executed path).
     joint_actuators: Vec<Vec<usize>>,
     joint_axis: Vec<Option<usize>>,
+    /// Each machine tool's current output value.
     pub tools: Vec<f32>,
     /// Segments sent to nodes and not yet in the past, followed at step
     /// instants.
     ideal: IdealTrajectory,
     /// The axes whose path deviation is checked (all but the extruder).
     checked_axes: Vec<usize>,
+    /// The executed path, sampled at every step in the drawing's plane and
+    /// every tool change.
     pub recorder: PathRecorder,
     /// Largest distance between executed and commanded points at step instants, mm.
     pub max_path_deviation: f64,
@@ -72,12 +95,16 @@ pub struct Plant {
     executed: Point,
     /// Tool outputs executed: (time, tool, value), kept only for observers.
     pub tool_changes: Vec<(f64, usize, f32)>,
+    /// Whether to keep `tool_changes` (off by default: a long job's would
+    /// grow without bound).
     pub watch_tools: bool,
     /// Outputs given and not yet applied (see `PlantSink`).
     pub(crate) inbox: Vec<Stamped>,
 }
 
 impl Plant {
+    /// The plant of `machine` with its motors at the machine's start point,
+    /// tools off, drawing into `recorder`.
     pub fn new(machine: &Machine, recorder: PathRecorder) -> Plant {
         let mut joint_actuators = vec![Vec::new(); machine.joints.len()];
         let actuators = machine
@@ -332,6 +359,7 @@ impl Plant {
         self.executed
     }
 
+    /// Each machine actuator's statistics so far, in the machine's order.
     pub fn actuator_stats(&self) -> Vec<ActuatorStats> {
         self.actuators
             .iter()

@@ -128,7 +128,10 @@ impl PlantLink {
 
 /// The plant's side: what it ran, and the most it held.
 pub struct PlantRun {
+    /// The plant as the run left it (its statistics and path deviation).
     pub plant: Plant,
+    /// The most the plant held at once (its `node_segments` is 0: the
+    /// nodes are not the plant's).
     pub held: Held,
 }
 

@@ -2,28 +2,44 @@
 
 use serde::Serialize;
 
+/// One machine axis over the job, against its limits.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct AxisReport {
+    /// The axis' name in the machine file (`x`, `y`, `e`...).
     pub name: String,
     /// Distance the axis moved, units.
     pub distance: f64,
+    /// Fastest the plan moved it, units/s (never above `max_velocity` when
+    /// the planner keeps its limits).
     pub peak_velocity: f64,
+    /// Its limit from the machine file, units/s.
     pub max_velocity: f64,
+    /// Largest acceleration the plan gave it, units/s².
     pub peak_acceleration: f64,
+    /// Its limit from the machine file, units/s².
     pub max_acceleration: f64,
 }
 
+/// A joint that is not simply one axis (an arm's angle, a belt of a
+/// CoreXY), over the job.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct JointReport {
+    /// The joint's name in the machine file.
     pub name: String,
+    /// Fastest the plan moved it, joint units/s.
     pub peak_velocity: f64,
+    /// Its limit from the machine file, joint units/s (none: unbounded).
     pub max_velocity: Option<f64>,
 }
 
+/// One motor over the job, and how closely its steps followed the plan.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ActuatorReport {
+    /// The actuator's name in the machine file.
     pub name: String,
+    /// The node that steps it (empty when no node lists it).
     pub node: String,
+    /// Steps per joint unit; negative when the chain inverts.
     pub steps_per_unit: f64,
     /// Step pulses taken.
     pub steps: u64,
@@ -35,17 +51,23 @@ pub struct ActuatorReport {
     pub max_step_time_error_us: f64,
 }
 
+/// How a simulated job went; written as `report.json`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Report {
+    /// The machine's name.
     pub machine: String,
+    /// The job, as named on the command line.
     pub job: String,
     /// Planned and executed duration, seconds.
     pub duration_s: f64,
+    /// Commands read from the job.
     pub commands: usize,
+    /// Motion segments the planner made of them and the nodes ran.
     pub segments: usize,
     /// Moves that end at rest (the last one always does; others only where a
     /// stop was needed: reversals, pen lifts, dwells).
     pub rests: usize,
+    /// Tool output changes (pen, laser, spindle, extruder).
     pub tool_events: usize,
     /// Temperature, fan and coolant changes.
     pub aux_events: usize,
@@ -55,13 +77,19 @@ pub struct Report {
     pub tool_on_distance_mm: f64,
     /// Distance along the path with the tool off, mm.
     pub travel_distance_mm: f64,
+    /// Every machine axis, in the machine file's order.
     pub axes: Vec<AxisReport>,
+    /// Joints that are not one axis one to one, in the machine file's order.
     pub joints: Vec<JointReport>,
+    /// Every actuator, in the machine file's order.
     pub actuators: Vec<ActuatorReport>,
     /// Largest distance between the executed and the commanded point at any
     /// step instant, mm (extruders excluded).
     pub max_path_deviation_mm: f64,
+    /// The largest of the actuators' `max_deviation_steps`, steps (half a
+    /// step is exact stepping).
     pub max_deviation_steps: f64,
+    /// The largest of the actuators' `max_step_time_error_us`, µs.
     pub max_step_time_error_us: f64,
     /// Times a node ran dry while moving (0 when the host keeps up).
     pub underruns: u32,

@@ -16,12 +16,26 @@ use std::time::Instant;
 /// Capacity every simulated node is built with; a machine file may ask for less.
 pub const NODE_QUEUE: usize = 64;
 
+/// Why a simulation stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
+    /// The planner refused a command of the job.
     #[error("{loc}: {error}")]
-    Plan { loc: SourceLoc, error: PlanError },
+    Plan {
+        /// Where the command is in the job.
+        loc: SourceLoc,
+        /// Why it was refused.
+        error: PlanError,
+    },
+    /// A node refused what the host sent it.
     #[error("node {node} refused a message: {reason}")]
-    Refused { node: String, reason: Refusal },
+    Refused {
+        /// The node's name in the machine file.
+        node: String,
+        /// The node's reason.
+        reason: Refusal,
+    },
+    /// A segment did not fit the wire's batch format.
     #[error("a segment could not be batched: {0}")]
     Stream(motet_wire::stream::StreamError),
     /// The job's own stream failed (a read error, a bad line).
@@ -31,7 +45,9 @@ pub enum SimError {
 
 /// What a run produced.
 pub struct SimResult {
+    /// The figures.
     pub report: Report,
+    /// The executed path in the machine's x, y, mm.
     pub strokes: Vec<Stroke>,
 }
 
@@ -199,6 +215,7 @@ impl<P: PlantSink> SimMachine<P> {
         self.now
     }
 
+    /// The machine simulated.
     pub fn machine(&self) -> &Machine {
         &self.machine
     }
@@ -502,8 +519,12 @@ impl SimMachine {
 /// Counts of what a simulation holds (see [`SimMachine::held`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Held {
+    /// Segments the plant keeps to check steps against.
     pub plant_segments: usize,
+    /// Points the path recorder holds: the open stroke's and finished
+    /// strokes' not yet taken.
     pub path_points: usize,
+    /// Segments queued in the nodes, all nodes together.
     pub node_segments: usize,
 }
 
@@ -540,6 +561,7 @@ pub fn simulate(
 
 /// What [`simulate_stream`] returns: the report, and the most it held.
 pub struct StreamRun {
+    /// The figures.
     pub report: Report,
     /// The largest of each count in [`SimMachine::held`] over the run.
     pub held: Held,

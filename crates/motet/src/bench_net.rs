@@ -12,7 +12,7 @@ use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
 use motet_link::Transport;
 use motet_net::digest::Digest;
 use motet_net::journal::{Journal, JournalWriter};
-use motet_net::loopback::{Loopback, Crystal};
+use motet_net::loopback::{Crystal, Loopback};
 use motet_net::pairing_file::format_uid;
 use motet_net::resume::{prove, Evidence};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
@@ -67,7 +67,87 @@ fn frame_len<T: serde::Serialize>(m: &T) -> usize {
     frame::encode(&h, &p, &mut out).unwrap_or(0)
 }
 
+/// A machine file (with `--microsteps` applied) and a job read for it.
+struct Loaded {
+    machine: Machine,
+    /// The machine file's text as run (its digest names the run).
+    text: String,
+    /// The job file's bytes.
+    data: Vec<u8>,
+    commands: Vec<motet_planner::Located<motet_planner::Command>>,
+}
+
 pub fn bench_net(args: Args) -> Result<()> {
+    let loaded = load(&args)?;
+    let machine = &loaded.machine;
+    let n = machine.nodes.len();
+    let clock = SimClock::new();
+    let links = faulty_links(n, &clock, &args);
+    let clocks = node_clocks(n);
+    let wall = std::time::Instant::now();
+    let cfg = net_config(&args)?;
+    let scratch = std::env::temp_dir().join(format!("motet-bench-net-{}", std::process::id()));
+    let journal_path = scratch.join("journal");
+    let journal = match args.kill_host_at {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            bail!("--kill-host-at must be a positive number of seconds")
+        }
+        Some(_) => {
+            std::fs::create_dir_all(&scratch)?;
+            Some(JournalWriter::create(&journal_path)?)
+        }
+        None => None,
+    };
+    let identity = RunIdentity::new(Digest::of(loaded.text.as_bytes()), Digest::of(&loaded.data));
+    let mut lb = Loopback::with_journal(
+        machine,
+        loaded.commands.clone(),
+        machine.start,
+        links,
+        &clocks,
+        cfg,
+        journal,
+    );
+    lb.run.set_identity(identity);
+    if args.jitter_us > 0 || args.faults > 0.0 {
+        lb.max_step_us = 50;
+    }
+    let limit = args.kill_host_at.or(args.seconds).map(|s| (s * 1e6) as u64);
+    let streamed = stream(&mut lb, &clock, limit)?;
+    let motion = (lb.now - streamed.start_us) as f64 * 1e-6;
+    if motion <= 0.0 {
+        bail!("{}: the job has no motion to measure", args.job.display());
+    }
+    println!(
+        "run: {} of motion streamed in {:.1} s wall ({:?})",
+        fmt_s(motion),
+        wall.elapsed().as_secs_f64(),
+        match &streamed.phase {
+            Phase::Done => "done".to_string(),
+            Phase::Stopped(s) => format!("stopped: {}", s.reason),
+            _ => "measured part".into(),
+        }
+    );
+    print_wire(&lb, n, motion, &cfg);
+    if args.kill_host_at.is_some() {
+        resume_figures(
+            machine,
+            &loaded.text,
+            &loaded.data,
+            &loaded.commands,
+            identity,
+            &mut lb,
+            &journal_path,
+        )?;
+        let _ = std::fs::remove_dir_all(&scratch);
+    }
+    print_clock_errors(&streamed.clock_errors, machine, &clocks, args.jitter_us);
+    Ok(())
+}
+
+/// Reads the machine (with `--microsteps` applied) and the job, and prints
+/// the machine's steps per unit.
+fn load(args: &Args) -> Result<Loaded> {
     let text = std::fs::read_to_string(&args.machine)
         .with_context(|| format!("reading {}", args.machine.display()))?;
     let text = match args.microsteps {
@@ -95,13 +175,26 @@ pub fn bench_net(args: Args) -> Result<()> {
         args.machine.display(),
         steps.join(", ")
     );
-    let n = machine.nodes.len();
-    let clock = SimClock::new();
+    Ok(Loaded {
+        machine,
+        text,
+        data,
+        commands: job.commands,
+    })
+}
+
+/// Host and node ends of one in-memory link per node, each end with its own
+/// seeded faults (`--faults`, `--jitter-us`) on the simulated `clock`.
+fn faulty_links(
+    n: usize,
+    clock: &SimClock,
+    args: &Args,
+) -> Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)> {
     let fault = |seed: u64| FaultConfig {
         jitter_us: args.jitter_us,
         ..FaultConfig::all(seed, args.faults)
     };
-    let links: Vec<(Box<dyn Transport + Send>, Box<dyn Transport + Send>)> = (0..n)
+    (0..n)
         .map(|k| {
             let (a, b) = motet_link::pair(&format!("host{k}"), &format!("node{k}"));
             let c = || FaultClock::Simulated(clock.clone());
@@ -112,15 +205,21 @@ pub fn bench_net(args: Args) -> Result<()> {
                     as Box<dyn Transport + Send>,
             )
         })
-        .collect();
-    // Crystals off by up to ±200 ppm.
-    let clocks: Vec<Crystal> = (0..n)
+        .collect()
+}
+
+/// The nodes' crystals, off by up to ±200 ppm, and far apart in offset.
+fn node_clocks(n: usize) -> Vec<Crystal> {
+    (0..n)
         .map(|k| Crystal {
             ppm: [200.0, -200.0, 120.0, -80.0][k % 4],
             offset_us: 987_654_321 * (k as u64 + 1),
         })
-        .collect();
-    let wall = std::time::Instant::now();
+        .collect()
+}
+
+/// The run's configuration with `--sync-ms` (at least 1 ms) applied.
+fn net_config(args: &Args) -> Result<NetConfig> {
     let mut cfg = NetConfig::default();
     if let Some(ms) = args.sync_ms {
         if !(ms.is_finite() && ms >= 1.0) {
@@ -128,37 +227,26 @@ pub fn bench_net(args: Args) -> Result<()> {
         }
         cfg.sync_interval_us = (ms * 1000.0) as u64;
     }
-    let scratch = std::env::temp_dir().join(format!("motet-bench-net-{}", std::process::id()));
-    let journal_path = scratch.join("journal");
-    let journal = match args.kill_host_at {
-        Some(s) if !(s.is_finite() && s > 0.0) => {
-            bail!("--kill-host-at must be a positive number of seconds")
-        }
-        Some(_) => {
-            std::fs::create_dir_all(&scratch)?;
-            Some(JournalWriter::create(&journal_path)?)
-        }
-        None => None,
-    };
-    let identity = RunIdentity::new(Digest::of(text.as_bytes()), Digest::of(&data));
-    let commands = job.commands.clone();
-    let mut lb = Loopback::with_journal(
-        &machine,
-        job.commands,
-        machine.start,
-        links,
-        &clocks,
-        cfg,
-        journal,
-    );
-    lb.run.set_identity(identity);
-    if args.jitter_us > 0 || args.faults > 0.0 {
-        lb.max_step_us = 50;
-    }
+    Ok(cfg)
+}
+
+/// How the streaming went.
+struct Streamed {
+    /// The phase the run ended in (or was in when the measurement stopped).
+    phase: Phase,
+    /// When streaming began, simulated µs.
+    start_us: u64,
+    /// Each node's clock error (its idea of host time − host time), µs,
+    /// sampled every 100 ms while streaming.
+    clock_errors: Vec<Vec<f64>>,
+}
+
+/// Steps the loopback run until it is done or stopped, or until `limit_us`
+/// of streaming has passed, sampling the nodes' clock errors.
+fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<Streamed> {
     let mut streaming_at = None;
-    let mut errors: Vec<Vec<f64>> = vec![Vec::new(); n];
+    let mut errors: Vec<Vec<f64>> = vec![Vec::new(); lb.nodes.len()];
     let mut next_sample = 0u64;
-    let limit = args.kill_host_at.or(args.seconds).map(|s| (s * 1e6) as u64);
     let phase = loop {
         clock.set(lb.now);
         lb.step()?;
@@ -179,7 +267,7 @@ pub fn bench_net(args: Args) -> Result<()> {
                     }
                 }
             }
-            if limit.is_some_and(|l| lb.now > s + l) {
+            if limit_us.is_some_and(|l| lb.now > s + l) {
                 break phase;
             }
         }
@@ -187,21 +275,17 @@ pub fn bench_net(args: Args) -> Result<()> {
             bail!("the run did not finish in 100 simulated hours");
         }
     };
-    let start = streaming_at.context("the run never started streaming")?;
-    let motion = (lb.now - start) as f64 * 1e-6;
-    if motion <= 0.0 {
-        bail!("{}: the job has no motion to measure", args.job.display());
-    }
-    println!(
-        "run: {} of motion streamed in {:.1} s wall ({:?})",
-        fmt_s(motion),
-        wall.elapsed().as_secs_f64(),
-        match &phase {
-            Phase::Done => "done".to_string(),
-            Phase::Stopped(s) => format!("stopped: {}", s.reason),
-            _ => "measured part".into(),
-        }
-    );
+    Ok(Streamed {
+        phase,
+        start_us: streaming_at.context("the run never started streaming")?,
+        clock_errors: errors,
+    })
+}
+
+/// Prints the bytes and frames on the wire to and from the `n` nodes per
+/// second of `motion` (s), the
+/// clock exchanges' share, windows, segments and retransmits.
+fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig) {
     let ex = motet_net::peer::datagram(2, &ServiceRequest::TimeGet { t1: u64::MAX / 3 }).len()
         + frame_len(&ServiceReply::Time {
             t1: u64::MAX / 3,
@@ -244,18 +328,11 @@ pub fn bench_net(args: Args) -> Result<()> {
             .map(|p| p.link().stats().retransmits)
             .sum::<u64>()
     );
-    if args.kill_host_at.is_some() {
-        resume_figures(
-            &machine,
-            &text,
-            &data,
-            &commands,
-            identity,
-            &mut lb,
-            &journal_path,
-        )?;
-        let _ = std::fs::remove_dir_all(&scratch);
-    }
+}
+
+/// Prints each node's clock error while streaming: overall, and after the
+/// estimator settled.
+fn print_clock_errors(errors: &[Vec<f64>], machine: &Machine, clocks: &[Crystal], jitter_us: u64) {
     for (k, e) in errors.iter().enumerate() {
         if e.is_empty() {
             continue;
@@ -273,10 +350,9 @@ pub fn bench_net(args: Args) -> Result<()> {
             rms,
             late_max,
             e.len(),
-            args.jitter_us
+            jitter_us
         );
     }
-    Ok(())
 }
 
 fn fmt_s(s: f64) -> String {

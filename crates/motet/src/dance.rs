@@ -6,11 +6,13 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use motet_api::{load_job, JobOptions};
 use motet_graph::GraphFile;
-use motet_render::{render_png, render_svg, RenderSpec};
+use motet_host::Machine;
+use motet_render::{render_png, render_svg, RenderSpec, Stroke};
+use motet_sim::dance::live::{input_names, Clock, LiveSource};
 use motet_sim::dance::{
-    run_dance_with, CsvTrace, DanceOptions, InputSource, Pendulums, PlannedJob, Recording,
+    run_dance_with, CsvTrace, DanceOptions, DanceResult, InputSource, Pendulums, PlannedJob,
+    Recording,
 };
-use motet_sim::live::{input_names, Clock, LiveSource};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -40,123 +42,40 @@ pub fn dance(a: DanceArgs) -> Result<()> {
     let machine = crate::run::load_machine(a.machine)?;
     let recording = a.load_recording.map(Recording::load).transpose()?;
     let graph = GraphFile::load(a.graph)?;
-    let mut trace;
-    let mut pend;
-    let mut live;
-    let (source, default_s): (&mut dyn InputSource, f64) = match (a.inputs, a.pendulums) {
-        _ if a.live.is_some() => {
-            let src = a.live.unwrap_or("-");
-            let names = input_names(&graph);
-            let s = if src == "-" {
-                LiveSource::stdin(names)
-            } else {
-                LiveSource::listen(src, names)?
-            };
-            live = s.clock(if a.stamped {
-                Clock::Stamped
-            } else {
-                Clock::RealTime
-            });
-            (&mut live, 60.0)
-        }
-        (Some(_), true) => anyhow::bail!("give --inputs or --pendulums, not both"),
-        (Some(p), false) => {
-            trace = CsvTrace::load(p, &graph)?;
-            let end = trace.end();
-            (&mut trace, end)
-        }
-        (None, true) => {
-            pend = Pendulums::from_graph(&graph)?;
-            (&mut pend, 30.0)
-        }
-        (None, false) => {
-            anyhow::bail!("give the inputs: --inputs TRACE.csv, --pendulums or --live")
-        }
-    };
-    let job = match a.job {
-        Some(p) => {
-            let loaded = load_job(
-                &machine,
-                p,
-                &JobOptions {
-                    allow_unknown: false,
-                },
-            )?;
-            Some(
-                PlannedJob::plan(&machine, &loaded.commands)
-                    .with_context(|| format!("planning {}", p.display()))?,
-            )
-        }
-        None => None,
-    };
-    // With a job: at least until it ends, and a little after.
-    let default_s = job
-        .as_ref()
-        .map_or(default_s, |j| default_s.max(j.end_us * 1e-6 + 0.5));
-    let seconds = a.seconds.unwrap_or(default_s);
-    // Every frame of a graph runs: the length comes from --seconds, or else
-    // from the trace or the job, and is held to the same range either way.
-    motet_planner::ranges::DANCE_S.check("the dance's length in seconds (--seconds)", seconds)?;
-    if seconds <= 0.0 {
-        anyhow::bail!("--seconds must be positive");
-    }
+    let (mut source, default_s) = open_inputs(&a, &graph)?;
+    let job = plan_job(&machine, a.job)?;
+    let seconds = dance_seconds(a.seconds, default_s, job.as_ref())?;
     let name = a
         .graph
         .file_stem()
         .map_or("dance".to_string(), |s| s.to_string_lossy().into_owned());
-    let out = a.out.unwrap_or_else(|| PathBuf::from("out").join(&name));
-    let bar = if a.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{spinner} dancing [{bar:40}] {percent}% ({eta})")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        b
-    };
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&name));
+    let bar = progress_bar(a.quiet);
     let mut progress = |f: f64| bar.set_position((f * 1000.0) as u64);
     let options = DanceOptions {
         job: job.as_ref(),
         recording: recording.as_ref(),
     };
-    let result = run_dance_with(&machine, &graph, source, options, seconds, &mut progress)
-        .with_context(|| match a.load_recording {
-            Some(p) => format!("running {} with {}", a.graph.display(), p.display()),
-            None => format!("running {}", a.graph.display()),
-        })?;
+    let result = run_dance_with(
+        &machine,
+        &graph,
+        source.as_mut(),
+        options,
+        seconds,
+        &mut progress,
+    )
+    .with_context(|| match a.load_recording {
+        Some(p) => format!("running {} with {}", a.graph.display(), p.display()),
+        None => format!("running {}", a.graph.display()),
+    })?;
     bar.finish_and_clear();
     if let Some(p) = a.save_recording {
         result.recording.save(p)?;
     }
-
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    // Bounds: the drawing's own, with a margin.
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for s in &result.strokes {
-        for p in &s.points {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
-    if !(lo[0].is_finite() && lo[1].is_finite()) {
-        lo = [-1.0, -1.0];
-        hi = [1.0, 1.0];
-    }
-    let m = ((hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.05).max(1.0);
-    let bounds = [[lo[0] - m, lo[1] - m], [hi[0] + m, hi[1] + m]];
-    let spec = RenderSpec::new(bounds, format!("{} on {}", name, machine.name));
-    let png = render_png(&result.strokes, &spec).context("rendering the path")?;
-    std::fs::write(out.join("path.png"), png)?;
-    std::fs::write(out.join("path.svg"), render_svg(&result.strokes, &spec))?;
-    std::fs::write(
-        out.join("report.json"),
-        serde_json::to_string_pretty(&result.report)? + "\n",
-    )?;
+    write_outputs(&out, &format!("{} on {}", name, machine.name), &result)?;
     if !a.quiet {
         println!("{}", result.report.summary());
         println!(
@@ -173,6 +92,122 @@ pub fn dance(a: DanceArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The input source the flags ask for (exactly one of `--live`, `--inputs`,
+/// `--pendulums`; `--live` wins), and how long a dance it makes by default,
+/// s: a trace's length, 30 s of pendulums, a minute live.
+fn open_inputs(a: &DanceArgs, graph: &GraphFile) -> Result<(Box<dyn InputSource>, f64)> {
+    Ok(match (a.inputs, a.pendulums) {
+        _ if a.live.is_some() => {
+            let src = a.live.unwrap_or("-");
+            let names = input_names(graph);
+            let s = if src == "-" {
+                LiveSource::stdin(names)
+            } else {
+                LiveSource::listen(src, names)?
+            };
+            let live = s.clock(if a.stamped {
+                Clock::Stamped
+            } else {
+                Clock::RealTime
+            });
+            (Box::new(live), 60.0)
+        }
+        (Some(_), true) => anyhow::bail!("give --inputs or --pendulums, not both"),
+        (Some(p), false) => {
+            let trace = CsvTrace::load(p, graph)?;
+            let end = trace.end();
+            (Box::new(trace), end)
+        }
+        (None, true) => (Box::new(Pendulums::from_graph(graph)?), 30.0),
+        (None, false) => {
+            anyhow::bail!("give the inputs: --inputs TRACE.csv, --pendulums or --live")
+        }
+    })
+}
+
+/// The job at `path` (G-code or SVG), planned on `machine`.
+fn plan_job(machine: &Machine, path: Option<&Path>) -> Result<Option<PlannedJob>> {
+    let Some(p) = path else {
+        return Ok(None);
+    };
+    let loaded = load_job(
+        machine,
+        p,
+        &JobOptions {
+            allow_unknown: false,
+        },
+    )?;
+    Ok(Some(
+        PlannedJob::plan(machine, &loaded.commands)
+            .with_context(|| format!("planning {}", p.display()))?,
+    ))
+}
+
+/// The dance's length, s: `--seconds`, else `default_s` (and with a job, at
+/// least until it ends, and a little after); within the dance's range and
+/// positive.
+fn dance_seconds(seconds: Option<f64>, default_s: f64, job: Option<&PlannedJob>) -> Result<f64> {
+    let default_s = job.map_or(default_s, |j| default_s.max(j.end_us * 1e-6 + 0.5));
+    let seconds = seconds.unwrap_or(default_s);
+    // Every frame of a graph runs: the length comes from --seconds, or else
+    // from the trace or the job, and is held to the same range either way.
+    motet_planner::ranges::DANCE_S.check("the dance's length in seconds (--seconds)", seconds)?;
+    if seconds <= 0.0 {
+        anyhow::bail!("--seconds must be positive");
+    }
+    Ok(seconds)
+}
+
+/// A progress bar on a terminal, unless `quiet`; else a hidden one.
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(1000);
+    b.set_style(
+        ProgressStyle::with_template("{spinner} dancing [{bar:40}] {percent}% ({eta})")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    b
+}
+
+/// Writes `path.png`, `path.svg` (titled `title`) and `report.json` into
+/// `out`, which is created if needed.
+fn write_outputs(out: &Path, title: &str, result: &DanceResult) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let spec = RenderSpec::new(drawing_bounds(&result.strokes), title.to_string());
+    let png = render_png(&result.strokes, &spec).context("rendering the path")?;
+    std::fs::write(out.join("path.png"), png)?;
+    std::fs::write(out.join("path.svg"), render_svg(&result.strokes, &spec))?;
+    std::fs::write(
+        out.join("report.json"),
+        serde_json::to_string_pretty(&result.report)? + "\n",
+    )?;
+    Ok(())
+}
+
+/// The drawing's own bounds with a margin of 5 % of its larger side (at
+/// least 1 mm); ±2 mm around the origin for an empty drawing.
+fn drawing_bounds(strokes: &[Stroke]) -> [[f64; 2]; 2] {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for s in strokes {
+        for p in &s.points {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    if !(lo[0].is_finite() && lo[1].is_finite()) {
+        lo = [-1.0, -1.0];
+        hi = [1.0, 1.0];
+    }
+    let m = ((hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.05).max(1.0);
+    [[lo[0] - m, lo[1] - m], [hi[0] + m, hi[1] + m]]
 }
 
 #[cfg(test)]

@@ -345,33 +345,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             idle_exit,
             quiet,
         }),
-        Cmd::Nodes { command } => match command {
-            NodesCmd::Scan { links, wait } => nodes::scan(&links, wait),
-            NodesCmd::Pair {
-                machine,
-                links,
-                button,
-                wait,
-            } => nodes::pair(&machine, &links, button, wait),
-            NodesCmd::Status { machine } => nodes::status(&machine),
-            NodesCmd::Identify {
-                machine,
-                node,
-                seconds,
-            } => nodes::identify(&machine, &node, seconds),
-            NodesCmd::Flash {
-                machine,
-                node,
-                image,
-            } => nodes::flash(&machine, &node, &image),
-            NodesCmd::Image {
-                kind,
-                board,
-                version,
-                payload,
-                out,
-            } => nodes::image(&kind, board.as_deref(), &version, &payload, &out),
-        },
+        Cmd::Nodes { command } => nodes_cmd(command),
         Cmd::Check {
             machine,
             job,
@@ -423,5 +397,36 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         ),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
+    }
+}
+
+/// `motet nodes ...`: the node management commands.
+fn nodes_cmd(command: NodesCmd) -> anyhow::Result<()> {
+    match command {
+        NodesCmd::Scan { links, wait } => nodes::scan(&links, wait),
+        NodesCmd::Pair {
+            machine,
+            links,
+            button,
+            wait,
+        } => nodes::pair(&machine, &links, button, wait),
+        NodesCmd::Status { machine } => nodes::status(&machine),
+        NodesCmd::Identify {
+            machine,
+            node,
+            seconds,
+        } => nodes::identify(&machine, &node, seconds),
+        NodesCmd::Flash {
+            machine,
+            node,
+            image,
+        } => nodes::flash(&machine, &node, &image),
+        NodesCmd::Image {
+            kind,
+            board,
+            version,
+            payload,
+            out,
+        } => nodes::image(&kind, board.as_deref(), &version, &payload, &out),
     }
 }

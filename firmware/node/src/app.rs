@@ -72,21 +72,10 @@ pub fn run<B: Board>(
     let layout = B::LAYOUT;
     let mut clock = Clock::new(board.ticks(), tpu);
     let now = clock.us(board.ticks());
-    let node_cfg = NodeConfig {
-        kind: Kind::try_from(cfg.kind).unwrap_or_default(),
-        uid: board.uid(),
-        firmware: cfg.version,
-        protocol_min: PROTOCOL_VERSION,
-        protocol_max: PROTOCOL_VERSION,
-        queue_capacity: DEFAULT_QUEUE as u16,
-        channels: B::CHANNELS,
-        tools: B::TOOLS,
-        board: Kind::try_from(B::NAME).ok(),
-        max_step_hz: B::MAX_STEP_HZ,
-    };
     let store = FlashStore::new(board.flash(), layout.identity, cfg.version);
     let staging = Staging::new(board.flash(), layout.staging);
-    let mut ep: Endpoint<_, _, DEFAULT_QUEUE> = Endpoint::new(node_cfg, store, staging, now);
+    let mut ep: Endpoint<_, _, DEFAULT_QUEUE> =
+        Endpoint::new(node_config(&board, &cfg), store, staging, now);
     board.console(format_args!(
         "motet: {} node on {}, firmware {}, uid {:016x}, address {} (endpoint {} bytes)",
         cfg.kind,
@@ -97,11 +86,7 @@ pub fn run<B: Board>(
         core::mem::size_of_val(&ep),
     ));
     let mut sched = Scheduler::new(queue, tpu);
-    // What one slice can queue at the board's top rate: three operations a
-    // step on every channel, a few tool changes.
-    let reserve = (B::CHANNELS as u64 * B::MAX_STEP_HZ as u64 * cfg.slice_us as u64 * 3 / 1_000_000)
-        as usize
-        + 16;
+    let ahead = RunAhead::new::<B>(&cfg);
     let mut reader = FrameReader::new();
     let mut polled = now;
     let mut inputs = Inputs::default();
@@ -117,30 +102,8 @@ pub fn run<B: Board>(
         loop_stats.rounds += 1;
         loop_stats.max_gap_us = loop_stats.max_gap_us.max(now - last_round);
         last_round = now;
-        loop {
-            let n = board.link_read(&mut rx);
-            if n == 0 {
-                break;
-            }
-            let mut rest = &rx[..n];
-            while !rest.is_empty() {
-                let (used, frame) = reader.push(rest);
-                if let Some(f) = frame {
-                    ep.on_frame(f, now);
-                }
-                rest = &rest[used..];
-            }
-        }
-
-        // Channel timing follows the host's configuration (only taken at
-        // rest: a channel is configured with an empty queue).
-        for ch in ep.node().channels() {
-            let c = ch.config();
-            let t = Timing::from_us(c.pulse_us, c.dir_setup_us, tpu);
-            if sched.timing(c.channel) != Some(t) {
-                sched.set_timing(c.channel, c.pulse_us, c.dir_setup_us);
-            }
-        }
+        receive(&mut board, &mut reader, &mut rx, &mut ep, now);
+        follow_channel_timing(&ep, &mut sched, tpu);
 
         board.read_inputs(&mut inputs);
         if inputs != fed {
@@ -149,47 +112,17 @@ pub fn run<B: Board>(
         }
 
         let queued_before = sched.queued();
-        if let Some(model) = ep.services().clock_model() {
-            let conv = HostToTicks {
-                model,
-                ticks_per_us: tpu as f64,
-            };
-            let target = now + cfg.lookahead_us as u64;
-            // Behind (a long frame, a slow flash write): what is due now is
-            // queued at once and leaves late, nothing is skipped.
-            polled = polled.max(now);
-            while polled < target && sched.room() >= reserve {
-                polled = (polled + cfg.slice_us as u64).min(target);
-                ep.poll(polled, &mut sched.outputs(conv));
-                sched.release(clock.tick_at(polled));
-            }
-        } else {
-            let none = HostToTicks {
-                model: ClockModel {
-                    offset: 0.0,
-                    skew: 0.0,
-                },
-                ticks_per_us: tpu as f64,
-            };
-            // Not synchronised: the node does not run (the endpoint knows).
-            ep.poll(now, &mut sched.outputs(none));
-            polled = now;
-        }
+        polled = ahead.run(&mut ep, &mut sched, &clock, polled, now);
         if sched.queued() != queued_before {
             board.kick_steps();
         }
 
-        while let Some(f) = ep.transmit(now, &mut tx) {
-            board.link_write(f);
-        }
-
+        send_replies(&mut board, &mut ep, now, &mut tx);
         board.set_led(ep.services().blinking(now));
         let pressed = board.button();
         if pressed && !button {
             ep.press_button(now);
-            while let Some(f) = ep.transmit(now, &mut tx) {
-                board.link_write(f);
-            }
+            send_replies(&mut board, &mut ep, now, &mut tx);
         }
         button = pressed;
 
@@ -210,23 +143,191 @@ pub fn run<B: Board>(
         let spent = clock.us(board.ticks()) - now;
         loop_stats.max_round_us = loop_stats.max_round_us.max(spent);
 
-        let busy = ep.node().queued() > 0
-            || ep.node().graph().is_some()
-            || sched.held() > 0
-            || sched.queued() > 0;
-        let mut wake = now + if busy { cfg.refill_us as u64 } else { IDLE_US };
-        if let Some(w) = ep.next_wakeup(now) {
-            if !busy {
-                wake = wake.min(w);
-            }
-        }
-        if let Some(l) = ep.link().and_then(|l| l.next_timeout()) {
-            wake = wake.min(l);
-        }
+        let wake = next_wake(&mut ep, &sched, &cfg, now);
         if wake > now {
             board.sleep_until(clock.tick_at(wake));
         }
     }
+}
+
+/// What the node says of itself: the board's identity and capacities, the
+/// firmware's version and kind.
+fn node_config<B: Board>(board: &B, cfg: &AppConfig) -> NodeConfig {
+    NodeConfig {
+        kind: Kind::try_from(cfg.kind).unwrap_or_default(),
+        uid: board.uid(),
+        firmware: cfg.version,
+        protocol_min: PROTOCOL_VERSION,
+        protocol_max: PROTOCOL_VERSION,
+        queue_capacity: DEFAULT_QUEUE as u16,
+        channels: B::CHANNELS,
+        tools: B::TOOLS,
+        board: Kind::try_from(B::NAME).ok(),
+        max_step_hz: B::MAX_STEP_HZ,
+    }
+}
+
+/// Reads what the link received, in `rx`-sized pieces, and hands each
+/// complete frame to the endpoint.
+fn receive<B: Board, S, F, const Q: usize>(
+    board: &mut B,
+    reader: &mut FrameReader,
+    rx: &mut [u8],
+    ep: &mut Endpoint<S, F, Q>,
+    now: u64,
+) where
+    S: motet_node::Store,
+    F: motet_node::Flash,
+{
+    loop {
+        let n = board.link_read(rx);
+        if n == 0 {
+            break;
+        }
+        let mut rest = &rx[..n];
+        while !rest.is_empty() {
+            let (used, frame) = reader.push(rest);
+            if let Some(f) = frame {
+                ep.on_frame(f, now);
+            }
+            rest = &rest[used..];
+        }
+    }
+}
+
+/// Channel timing follows the host's configuration (only taken at rest: a
+/// channel is configured with an empty queue).
+fn follow_channel_timing<S, F, const Q: usize>(
+    ep: &Endpoint<S, F, Q>,
+    sched: &mut Scheduler<'_>,
+    tpu: u32,
+) where
+    S: motet_node::Store,
+    F: motet_node::Flash,
+{
+    for ch in ep.node().channels() {
+        let c = ch.config();
+        let t = Timing::from_us(c.pulse_us, c.dir_setup_us, tpu);
+        if sched.timing(c.channel) != Some(t) {
+            sched.set_timing(c.channel, c.pulse_us, c.dir_setup_us);
+        }
+    }
+}
+
+/// How the node runs ahead of now, from the configuration and the board.
+#[derive(Clone, Copy, Debug)]
+struct RunAhead {
+    /// How far ahead of now, µs.
+    lookahead_us: u64,
+    /// How far one slice runs the node, µs.
+    slice_us: u64,
+    /// Room the step queue must have before a slice runs.
+    reserve: usize,
+    ticks_per_us: f64,
+}
+
+impl RunAhead {
+    fn new<B: Board>(cfg: &AppConfig) -> RunAhead {
+        RunAhead {
+            lookahead_us: cfg.lookahead_us as u64,
+            slice_us: cfg.slice_us as u64,
+            // What one slice can queue at the board's top rate: three
+            // operations a step on every channel, a few tool changes.
+            reserve: (B::CHANNELS as u64 * B::MAX_STEP_HZ as u64 * cfg.slice_us as u64 * 3
+                / 1_000_000) as usize
+                + 16,
+            ticks_per_us: B::TICKS_PER_US as f64,
+        }
+    }
+
+    /// Runs the node from `polled` (µs, how far it has run) towards the
+    /// lookahead past `now`, a slice at a time while the step queue has
+    /// room, its outputs queued at ticks of the host's clock model; returns
+    /// how far it ran. Without a clock model the node does not move.
+    fn run<S, F, const Q: usize>(
+        &self,
+        ep: &mut Endpoint<S, F, Q>,
+        sched: &mut Scheduler<'_>,
+        clock: &Clock,
+        mut polled: u64,
+        now: u64,
+    ) -> u64
+    where
+        S: motet_node::Store,
+        F: motet_node::Flash,
+    {
+        if let Some(model) = ep.services().clock_model() {
+            let conv = HostToTicks {
+                model,
+                ticks_per_us: self.ticks_per_us,
+            };
+            let target = now + self.lookahead_us;
+            // Behind (a long frame, a slow flash write): what is due now is
+            // queued at once and leaves late, nothing is skipped.
+            polled = polled.max(now);
+            while polled < target && sched.room() >= self.reserve {
+                polled = (polled + self.slice_us).min(target);
+                ep.poll(polled, &mut sched.outputs(conv));
+                sched.release(clock.tick_at(polled));
+            }
+            polled
+        } else {
+            let none = HostToTicks {
+                model: ClockModel {
+                    offset: 0.0,
+                    skew: 0.0,
+                },
+                ticks_per_us: self.ticks_per_us,
+            };
+            // Not synchronised: the node does not run (the endpoint knows).
+            ep.poll(now, &mut sched.outputs(none));
+            now
+        }
+    }
+}
+
+/// Sends every frame the endpoint has to send.
+fn send_replies<B: Board, S, F, const Q: usize>(
+    board: &mut B,
+    ep: &mut Endpoint<S, F, Q>,
+    now: u64,
+    tx: &mut [u8],
+) where
+    S: motet_node::Store,
+    F: motet_node::Flash,
+{
+    while let Some(f) = ep.transmit(now, tx) {
+        board.link_write(f);
+    }
+}
+
+/// When the loop next wakes, µs: a refill period ahead while motion is
+/// queued or a graph runs, else the idle period or the endpoint's next
+/// deadline, whichever is sooner; never past the link's next timeout.
+fn next_wake<S, F, const Q: usize>(
+    ep: &mut Endpoint<S, F, Q>,
+    sched: &Scheduler<'_>,
+    cfg: &AppConfig,
+    now: u64,
+) -> u64
+where
+    S: motet_node::Store,
+    F: motet_node::Flash,
+{
+    let busy = ep.node().queued() > 0
+        || ep.node().graph().is_some()
+        || sched.held() > 0
+        || sched.queued() > 0;
+    let mut wake = now + if busy { cfg.refill_us as u64 } else { IDLE_US };
+    if let Some(w) = ep.next_wakeup(now) {
+        if !busy {
+            wake = wake.min(w);
+        }
+    }
+    if let Some(l) = ep.link().and_then(|l| l.next_timeout()) {
+        wake = wake.min(l);
+    }
+    wake
 }
 
 /// How the loop keeps up, between two reports.

@@ -17,6 +17,7 @@
 #![deny(unsafe_code)]
 
 pub mod app;
+pub mod bench;
 pub mod board;
 pub mod boot;
 pub mod clock;

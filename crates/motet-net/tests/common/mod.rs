@@ -5,7 +5,7 @@
 use motet_host::Machine;
 use motet_link::fault::{FaultClock, FaultConfig, Faulty, SimClock};
 use motet_link::{pair, Transport};
-use motet_net::loopback::{Loopback, Crystal};
+use motet_net::loopback::{Crystal, Loopback};
 use motet_planner::{Command, Located};
 use std::path::Path;
 

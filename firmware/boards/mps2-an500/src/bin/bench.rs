@@ -21,22 +21,15 @@ use core::panic::PanicInfo;
 use core::ptr::addr_of_mut;
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::entry;
-use heapless::Deque;
 use motet_board_mps2_an500::console::line;
 use motet_board_mps2_an500::irq::{self, Irq, Vector};
 use motet_board_mps2_an500::pins::Mps2Pins;
 use motet_board_mps2_an500::timer;
 use motet_board_mps2_an500::uart::Uart;
-use motet_firmware::clock::HostToTicks;
+use motet_firmware::bench::{self, BenchBoard};
+use motet_firmware::board::Ticks;
 use motet_firmware::interrupt::{Counters, StepInterrupt};
-use motet_firmware::op::{Op, OpKind};
 use motet_firmware::ring::Ring;
-use motet_firmware::schedule::Scheduler;
-use motet_node::graph::{FrameOut, Inputs, Tape};
-use motet_node::Node;
-use motet_trajectory::{JointMap, ProfileParams, Segment};
-use motet_wire::sync::ClockModel;
-use motet_wire::{encode, AxisSpan, ChannelConfig, HostMessage, SegmentMsg};
 
 // The test's graph file names `std::f64::consts`: core's, here.
 extern crate core as std;
@@ -47,6 +40,8 @@ mod wheelbot;
 
 /// Instructions per timer tick under `-icount shift=0` at 25 MHz.
 const INSTRUCTIONS_PER_TICK: u64 = 40;
+/// The timer's ticks per µs (25 MHz).
+const TIMER_TICKS_PER_US: u32 = 25;
 
 static RING: Ring<4096> = Ring::new();
 static RING2: Ring<4096> = Ring::new();
@@ -76,14 +71,34 @@ static __INTERRUPTS: [Vector; irq::LINES] = {
     v
 };
 
-fn send<const Q: usize>(node: &mut Node<Q>, m: &HostMessage) {
-    let mut buf = [0u8; 256];
-    let Ok(bytes) = encode(m, &mut buf) else {
-        line(format_args!("bench: cannot encode {m:?}"));
-        return;
-    };
-    if let Some(r) = node.handle(bytes) {
-        line(format_args!("bench: node refused {m:?}: {r:?}"));
+/// The board's side of the measurements: the 25 MHz timer, the step
+/// interrupt on Timer1, and the console.
+struct Mps2Bench;
+
+impl BenchBoard for Mps2Bench {
+    fn now(&self) -> Ticks {
+        timer::now()
+    }
+    fn instructions(&self, ticks: u64) -> u64 {
+        ticks * INSTRUCTIONS_PER_TICK
+    }
+    fn pend_step(&mut self) {
+        NVIC::pend(Irq::Timer1);
+    }
+    fn wait_for_interrupt(&mut self) {
+        cortex_m::asm::wfi();
+    }
+    fn isr_taken(&mut self) -> (u64, u64) {
+        // SAFETY: read with the interrupt idle (the ring is empty).
+        unsafe {
+            let r = (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS));
+            *addr_of_mut!(ISR_TICKS) = 0;
+            *addr_of_mut!(ISR_CALLS) = 0;
+            r
+        }
+    }
+    fn line(&mut self, args: core::fmt::Arguments<'_>) {
+        line(args);
     }
 }
 
@@ -91,6 +106,7 @@ fn send<const Q: usize>(node: &mut Node<Q>, m: &HostMessage) {
 fn main() -> ! {
     timer::init();
     Uart::UART1.init(false);
+    let b = &mut Mps2Bench;
     let Some((mut p, c)) = RING.split() else {
         exit()
     };
@@ -101,158 +117,18 @@ fn main() -> ! {
         *addr_of_mut!(STEP) = Some(StepInterrupt::new(c, &COUNTERS, 0, u32::MAX));
         NVIC::unmask(Irq::Timer1);
     }
-
-    // 1. One operation per interrupt: rising and falling edges 20 µs apart.
-    let n = 2000u32;
-    let t0 = timer::now().wrapping_add(25 * 1000);
-    for k in 0..n {
-        let at = t0.wrapping_add(k * 5000);
-        let kind = if k % 2 == 0 {
-            OpKind::StepHigh
-        } else {
-            OpKind::StepLow
-        };
-        let _ = p.push(Op::new(at, kind, (k / 2 % 4) as u8));
-    }
-    NVIC::pend(Irq::Timer1);
-    while !p.is_empty() {
-        cortex_m::asm::wfi();
-    }
-    let (ticks, calls) = unsafe { (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS)) };
-    let per_irq = ticks * INSTRUCTIONS_PER_TICK / calls;
-    line(format_args!(
-        "bench: step interrupt, one operation each: {per_irq} instructions per interrupt ({calls} interrupts)"
-    ));
-
-    // 2. Operations due at once, taken in one interrupt.
-    unsafe {
-        *addr_of_mut!(ISR_TICKS) = 0;
-        *addr_of_mut!(ISR_CALLS) = 0;
-    }
-    let now = timer::now();
-    for k in 0..4000u32 {
-        let kind = if k % 2 == 0 {
-            OpKind::StepHigh
-        } else {
-            OpKind::StepLow
-        };
-        let _ = p.push(Op::new(now, kind, (k / 2 % 4) as u8));
-    }
-    NVIC::pend(Irq::Timer1);
-    while !p.is_empty() {
-        cortex_m::asm::wfi();
-    }
-    let (ticks, calls) = unsafe { (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS)) };
-    let per_op = ticks * INSTRUCTIONS_PER_TICK / 4000;
-    line(format_args!(
-        "bench: step interrupt, operations back to back: {per_op} instructions per operation ({calls} interrupts)"
-    ));
-
-    // 3. The background per step: four channels on one segment.
-    let mut node: Node<8> = Node::new();
-    for ch in 0..4u8 {
-        let mut coeffs = [0.0; 6];
-        coeffs[ch as usize] = 1.0;
-        send(
-            &mut node,
-            &HostMessage::ConfigureChannel(ChannelConfig {
-                channel: ch,
-                map: JointMap::Linear { coeffs },
-                steps_per_unit: 80.0,
-                pulse_us: 2.0,
-                dir_setup_us: 1.0,
-            }),
-        );
-    }
-    send(&mut node, &HostMessage::SetPosition { position: [0.0; 6] });
-    let mut axes = heapless::Vec::new();
-    for a in 0..4u8 {
-        let _ = axes.push(AxisSpan {
-            axis: a,
-            from: 0.0,
-            to: 50.0,
-        });
-    }
-    send(
-        &mut node,
-        &HostMessage::Segment(SegmentMsg {
-            seq: 0,
-            t0: 0.0,
-            profile: ProfileParams {
-                length: 100.0,
-                v0: 0.0,
-                vc: 400.0,
-                v1: 0.0,
-                accel: 4000.0,
-                jerk: 0.0,
-                dwell: 0.0,
-            },
-            axes,
-        }),
-    );
-    // (drained, not measured: the interrupt's share is above)
+    // Edges 5000 ticks apart (200 µs at 25 MHz), the first 1 ms from now.
+    bench::step_interrupt(b, &mut p, 25 * 1000, 5000);
+    // The background is measured alone.
     NVIC::mask(Irq::Timer1);
     let Some((p2, mut c2)) = RING2.split() else {
         exit()
     };
-    let mut sched = Scheduler::new(p2, 25);
-    for ch in 0..4 {
-        sched.set_timing(ch, 2.0, 1.0);
-    }
-    let conv = HostToTicks {
-        model: ClockModel {
-            offset: 1000.0,
-            skew: 1e-4,
-        },
-        ticks_per_us: 25.0,
-    };
-    let mut measured = 0u64;
-    let mut t = 0.0;
-    while node.queued() > 0 {
-        t += 250.0;
-        let a = timer::now();
-        node.poll(t, &mut sched.outputs(conv));
-        sched.release(conv.ticks(t));
-        let b = timer::now();
-        measured += b.wrapping_sub(a) as u64;
-        while c2.front().is_some() {
-            c2.pop();
-        }
-    }
-    let steps = sched.stats().steps as u64;
-    line(format_args!(
-        "bench: background, four channels: {} instructions per step ({steps} steps, {:.2} s of motion)",
-        measured * INSTRUCTIONS_PER_TICK / steps.max(1),
-        t * 1e-6
-    ));
-
-    // 4. A Wheelbot frame (the graph of crates/motet-node/tests/graph_wheelbot.rs).
+    bench::Background::new(b, p2, TIMER_TICKS_PER_US).run(b, &mut c2);
+    // The graph of crates/motet-node/tests/graph_wheelbot.rs.
     let mut w = wheelbot::wheelbot();
     let _ = w.g.reset_deep(motet_node::graph::port(w.enc_r, 0), 50.0);
-    let mut inputs = Inputs::default();
-    inputs.analog[0] = 600.0;
-    let segs: Deque<Segment, 4> = Deque::new();
-    let mut out = FrameOut::default();
-    let frames = 5000u64;
-    let mut gt = 0.0;
-    let a = timer::now();
-    for i in 0..frames {
-        if i % 100 == 0 {
-            inputs.encoders[0] += 3;
-        }
-        let mut none = [];
-        let mut tape = Tape::new(&mut none);
-        w.g.frame(gt, &inputs, &segs, &mut out, &mut tape);
-        if i % 25 == 0 {
-            w.g.slow_frame(&inputs);
-        }
-        gt += 40.0;
-    }
-    let b = timer::now();
-    line(format_args!(
-        "bench: Wheelbot graph: {} instructions per frame ({frames} frames)",
-        b.wrapping_sub(a) as u64 * INSTRUCTIONS_PER_TICK / frames
-    ));
+    bench::graph_frames(b, "Wheelbot", &mut w.g, 5000);
     line(format_args!("bench: done"));
     exit()
 }

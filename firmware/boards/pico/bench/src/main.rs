@@ -28,18 +28,10 @@ use core::panic::PanicInfo;
 use core::ptr::{addr_of_mut, write_volatile};
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::entry;
-use heapless::Deque;
+use motet_firmware::bench::{self, BenchBoard};
 use motet_firmware::board::{Pins, Ticks};
-use motet_firmware::clock::HostToTicks;
 use motet_firmware::interrupt::{Counters, StepInterrupt};
-use motet_firmware::op::{Op, OpKind};
 use motet_firmware::ring::Ring;
-use motet_firmware::schedule::Scheduler;
-use motet_node::graph::{FrameOut, Inputs, Tape};
-use motet_node::Node;
-use motet_trajectory::{JointMap, ProfileParams, Segment};
-use motet_wire::sync::ClockModel;
-use motet_wire::{encode, AxisSpan, ChannelConfig, HostMessage, SegmentMsg};
 use nrf51::{instructions, Irq};
 use semihosting::{exit, line};
 
@@ -149,30 +141,42 @@ static __INTERRUPTS: [unsafe extern "C" fn(); 32] = {
     v
 };
 
-fn send<const Q: usize>(node: &mut Node<Q>, m: &HostMessage) {
-    let mut buf = [0u8; 256];
-    let Ok(bytes) = encode(m, &mut buf) else {
-        line(format_args!("bench: cannot encode {m:?}"));
-        return;
-    };
-    if let Some(r) = node.handle(bytes) {
-        line(format_args!("bench: node refused {m:?}: {r:?}"));
-    }
-}
+/// The board's side of the measurements: the nRF51's timer (16 MHz, in
+/// instructions by [`instructions`]), the step interrupt on Timer0, and
+/// semihosting's console.
+struct PicoBench;
 
-fn isr_taken() -> (u64, u64) {
-    // SAFETY: read with the interrupt idle (the ring is empty).
-    unsafe {
-        let r = (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS));
-        *addr_of_mut!(ISR_TICKS) = 0;
-        *addr_of_mut!(ISR_CALLS) = 0;
-        r
+impl BenchBoard for PicoBench {
+    fn now(&self) -> Ticks {
+        nrf51::now()
+    }
+    fn instructions(&self, ticks: u64) -> u64 {
+        instructions(ticks)
+    }
+    fn pend_step(&mut self) {
+        NVIC::pend(Irq::Timer0);
+    }
+    fn wait_for_interrupt(&mut self) {
+        cortex_m::asm::wfi();
+    }
+    fn isr_taken(&mut self) -> (u64, u64) {
+        // SAFETY: read with the interrupt idle (the ring is empty).
+        unsafe {
+            let r = (*addr_of_mut!(ISR_TICKS), *addr_of_mut!(ISR_CALLS));
+            *addr_of_mut!(ISR_TICKS) = 0;
+            *addr_of_mut!(ISR_CALLS) = 0;
+            r
+        }
+    }
+    fn line(&mut self, args: core::fmt::Arguments<'_>) {
+        line(args);
     }
 }
 
 #[entry]
 fn main() -> ! {
     nrf51::init();
+    let b = &mut PicoBench;
     let Some((mut p, c)) = RING.split() else {
         exit()
     };
@@ -181,156 +185,25 @@ fn main() -> ! {
         *addr_of_mut!(STEP) = Some(StepInterrupt::new(c, &COUNTERS, 0, u32::MAX));
         NVIC::unmask(Irq::Timer0);
     }
-
-    // 1. One operation per interrupt: edges 20 µs apart (320 ticks).
-    let n = 2000u32;
-    let t0 = nrf51::now().wrapping_add(16 * 1000);
-    for k in 0..n {
-        let kind = if k % 2 == 0 {
-            OpKind::StepHigh
-        } else {
-            OpKind::StepLow
-        };
-        let _ = p.push(Op::new(t0.wrapping_add(k * 320), kind, (k / 2 % 4) as u8));
-    }
-    NVIC::pend(Irq::Timer0);
-    while !p.is_empty() {
-        cortex_m::asm::wfi();
-    }
-    let (ticks, calls) = isr_taken();
-    line(format_args!(
-        "bench: step interrupt, one operation each: {} instructions per interrupt ({calls} interrupts)",
-        instructions(ticks) / calls.max(1)
-    ));
-
-    // 2. Operations due at once, taken in one interrupt.
-    let now = nrf51::now();
-    for k in 0..4000u32 {
-        let kind = if k % 2 == 0 {
-            OpKind::StepHigh
-        } else {
-            OpKind::StepLow
-        };
-        let _ = p.push(Op::new(now, kind, (k / 2 % 4) as u8));
-    }
-    NVIC::pend(Irq::Timer0);
-    while !p.is_empty() {
-        cortex_m::asm::wfi();
-    }
-    let (ticks, calls) = isr_taken();
-    line(format_args!(
-        "bench: step interrupt, operations back to back: {} instructions per operation ({calls} interrupts)",
-        instructions(ticks) / 4000
-    ));
+    // Edges 20 µs (320 ticks) apart, the first 1 ms from now.
+    bench::step_interrupt(b, &mut p, 16 * 1000, 320);
     NVIC::mask(Irq::Timer0);
 
-    // 3. The background per step: four channels on one segment.
-    let mut node: Node<8> = Node::new();
-    for ch in 0..4u8 {
-        let mut coeffs = [0.0; 6];
-        coeffs[ch as usize] = 1.0;
-        send(
-            &mut node,
-            &HostMessage::ConfigureChannel(ChannelConfig {
-                channel: ch,
-                map: JointMap::Linear { coeffs },
-                steps_per_unit: 80.0,
-                pulse_us: 2.0,
-                dir_setup_us: 1.0,
-            }),
-        );
-    }
-    send(&mut node, &HostMessage::SetPosition { position: [0.0; 6] });
-    let mut axes = heapless::Vec::new();
-    for a in 0..4u8 {
-        let _ = axes.push(AxisSpan {
-            axis: a,
-            from: 0.0,
-            to: 50.0,
-        });
-    }
-    send(
-        &mut node,
-        &HostMessage::Segment(SegmentMsg {
-            seq: 0,
-            t0: 0.0,
-            profile: ProfileParams {
-                length: 100.0,
-                v0: 0.0,
-                vc: 400.0,
-                v1: 0.0,
-                accel: 4000.0,
-                jerk: 0.0,
-                dwell: 0.0,
-            },
-            axes,
-        }),
-    );
     let Some((p2, mut c2)) = RING2.split() else {
         exit()
     };
-    let mut sched = Scheduler::new(p2, PICO_TICKS_PER_US);
-    for ch in 0..4 {
-        sched.set_timing(ch, 2.0, 1.0);
-    }
-    let conv = HostToTicks {
-        model: ClockModel {
-            offset: 1000.0,
-            skew: 1e-4,
-        },
-        ticks_per_us: PICO_TICKS_PER_US as f64,
-    };
+    let background = bench::Background::new(b, p2, PICO_TICKS_PER_US);
     #[cfg(feature = "float-calls")]
     let _ = float_calls::take();
-    let mut measured = 0u64;
-    let mut t = 0.0;
-    while node.queued() > 0 {
-        t += 250.0;
-        let a = nrf51::now();
-        node.poll(t, &mut sched.outputs(conv));
-        sched.release(conv.ticks(t));
-        let b = nrf51::now();
-        measured += b.wrapping_sub(a) as u64;
-        while c2.front().is_some() {
-            c2.pop();
-        }
-    }
-    let steps = (sched.stats().steps as u64).max(1);
-    line(format_args!(
-        "bench: background, four channels: {} instructions per step ({steps} steps, {:.2} s of motion)",
-        instructions(measured) / steps,
-        t * 1e-6
-    ));
+    let _steps = background.run(b, &mut c2);
     #[cfg(feature = "float-calls")]
-    float_report("per step", steps);
+    float_report("per step", _steps);
 
-    // 4. A Wheelbot frame (the graph of crates/motet-node/tests/graph_wheelbot.rs).
+    // The graph of crates/motet-node/tests/graph_wheelbot.rs.
     let mut w = wheelbot::wheelbot();
     let _ = w.g.reset_deep(motet_node::graph::port(w.enc_r, 0), 50.0);
-    let mut inputs = Inputs::default();
-    inputs.analog[0] = 600.0;
-    let segs: Deque<Segment, 4> = Deque::new();
-    let mut out = FrameOut::default();
-    let frames = 500u64;
-    let mut gt = 0.0;
-    let a = nrf51::now();
-    for i in 0..frames {
-        if i % 100 == 0 {
-            inputs.encoders[0] += 3;
-        }
-        let mut none = [];
-        let mut tape = Tape::new(&mut none);
-        w.g.frame(gt, &inputs, &segs, &mut out, &mut tape);
-        if i % 25 == 0 {
-            w.g.slow_frame(&inputs);
-        }
-        gt += 40.0;
-    }
-    let b = nrf51::now();
-    line(format_args!(
-        "bench: Wheelbot graph: {} instructions per frame ({frames} frames)",
-        instructions(b.wrapping_sub(a) as u64) / frames
-    ));
+    let frames = 500;
+    bench::graph_frames(b, "Wheelbot", &mut w.g, frames);
     #[cfg(feature = "float-calls")]
     float_report("per Wheelbot frame", frames);
     line(format_args!("bench: done"));

@@ -40,7 +40,7 @@
 //! the same run however fast it is read. A line without a stamp applies at the
 //! latest stamp before it (0 before any).
 
-use crate::dance::InputSource;
+use super::InputSource;
 use std::fmt;
 use std::io::{self, BufRead, BufReader, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
@@ -72,6 +72,7 @@ pub struct LiveProblem {
     pub source: String,
     /// 1-based line number in its stream (every physical line counts).
     pub line: usize,
+    /// What is wrong with it.
     pub message: String,
 }
 
@@ -197,6 +198,7 @@ impl LiveSource {
         }
     }
 
+    /// Uses `clock` instead of [`Clock::RealTime`].
     pub fn clock(mut self, clock: Clock) -> LiveSource {
         self.clock = clock;
         self
