@@ -34,7 +34,9 @@ pub use hosted::{NodeGraph, GRAPH_COMPONENTS, GRAPH_MAPPINGS};
 
 /// Segment queue capacity (MAXL's maximum buffer).
 pub const DEFAULT_QUEUE: usize = 64;
+/// Most step channels a node drives.
 pub const MAX_CHANNELS: usize = 8;
+/// Most tool outputs a node drives.
 pub const MAX_TOOLS: usize = 4;
 /// Largest |steps per unit| a channel accepts.
 pub const MAX_STEPS_PER_UNIT: f64 = 1e6;
@@ -54,9 +56,13 @@ pub const MAX_OUTPUTS_PER_POLL: u32 = 1 << 16;
 /// What a node reports about itself.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NodeStatus {
+    /// Free places in the segment queue.
     pub segment_space: usize,
+    /// Free places in the event queue.
     pub event_space: usize,
+    /// The sequence number of the next segment the node takes.
     pub next_seq: u32,
+    /// Times the node ran out of segments while moving: the host fell behind.
     pub underruns: u32,
     /// Sequence number after the last committed segment (`next_seq` unless
     /// windowed segments are pending).
@@ -117,6 +123,8 @@ impl<const Q: usize, const T: usize> Default for Node<Q, T> {
 }
 
 impl<const Q: usize, const T: usize> Node<Q, T> {
+    /// A node with nothing configured or queued, at the origin, before time began (the first poll
+    /// sets it).
     pub const fn new() -> Self {
         Node {
             channels: Vec::new(),
@@ -160,6 +168,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
     }
 
+    /// The node's queues and sequence numbers, as `Status` reports them.
     pub fn status(&self) -> NodeStatus {
         NodeStatus {
             segment_space: Q - self.segments.len(),
@@ -224,6 +233,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.segments.front().map(|s| s.t1())
     }
 
+    /// The step channels, in the order configured.
     pub fn channels(&self) -> &[Channel] {
         &self.channels
     }
