@@ -52,7 +52,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             if bi != usize::MAX && bt < other {
                 // Only steps are due first: the common case, taken directly.
                 let limit = if second < other { second } else { other };
-                match self.step_run(bi, bt, limit, board, budget, &mut last) {
+                match self.step_run(bi, bt, limit, end, board, budget, &mut last) {
                     Some(t) => next[bi] = t,
                     None => {
                         if let Some(t) = last {
@@ -121,16 +121,19 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// step time, or `None` when the budget ran out after an output (`last`
     /// holds its time).
     #[inline]
+    // The loop's state as it stands in `poll_trajectory`: this runs for
+    // nearly every step, where a recomputed `end` or a bundled state costs.
+    #[allow(clippy::too_many_arguments)]
     fn step_run<B: Board>(
         &mut self,
         i: usize,
         from: f64,
         limit: f64,
+        end: usize,
         board: &mut B,
         budget: &mut u32,
         last: &mut Option<f64>,
     ) -> Option<f64> {
-        let end = self.committed_len();
         let ch = &mut self.channels[i];
         let id = ch.config().channel;
         let mut at = from;
