@@ -30,6 +30,8 @@ pub struct Step {
 }
 
 #[derive(Clone, Debug)]
+/// One step/direction output following one joint: finds each step's exact host time from the queued
+/// segments' profiles and joint paths, a few steps ahead of the one taken.
 pub struct Channel {
     config: ChannelConfig,
     /// Steps per joint unit, unsigned; the sign lives in `invert`.
@@ -121,6 +123,8 @@ impl Leg {
 }
 
 impl Channel {
+    /// A channel on `config`, at step count 0 with nothing solved; a node sets its position
+    /// (`set_position`) before it steps.
     pub fn new(config: ChannelConfig) -> Channel {
         Channel {
             config,
@@ -139,6 +143,7 @@ impl Channel {
         }
     }
 
+    /// What the host configured: board channel id, joint map, steps per unit and step timing.
     pub fn config(&self) -> &ChannelConfig {
         &self.config
     }

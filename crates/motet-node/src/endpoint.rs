@@ -44,6 +44,7 @@ struct Reply {
 /// Counters of what the endpoint took in, refused or dropped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EndpointStats {
+    /// Frames handed to the endpoint (good or not).
     pub frames_in: u64,
     /// Frames that did not decode (CRC, COBS, length, version).
     pub bad_frames: u64,
@@ -55,6 +56,8 @@ pub struct EndpointStats {
     pub sessions: u64,
 }
 
+/// A node on the network: the link to the host, the base service routines and the motion node, with
+/// a segment queue of `Q` places.
 pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
     services: Services<S, F>,
     node: Node<Q>,
@@ -73,6 +76,8 @@ pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
 }
 
 impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
+    /// An endpoint with no link yet (the host opens one), a motion node that keeps a tally, and the
+    /// services on `store` and `flash`; `now_local_us` is the local clock, µs.
     pub fn new(cfg: NodeConfig, store: S, flash: F, now_local_us: u64) -> Self {
         // A node on a link keeps a tally of its outputs, so that a host can
         // check what a board did against what it computes (`TallyGet`).
@@ -91,10 +96,12 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         }
     }
 
+    /// The base service routines (address, pairing, firmware, clock model).
     pub fn services(&self) -> &Services<S, F> {
         &self.services
     }
 
+    /// The motion node.
     pub fn node(&self) -> &Node<Q> {
         &self.node
     }
@@ -112,10 +119,12 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         self.start_requested
     }
 
+    /// What the endpoint took in, refused or dropped.
     pub fn stats(&self) -> &EndpointStats {
         &self.stats
     }
 
+    /// The link to the host, once the host opened one.
     pub fn link(&self) -> Option<&Link> {
         self.link.as_ref()
     }

@@ -34,10 +34,15 @@ pub struct NodeConfig {
     pub uid: u64,
     /// Firmware version of this build, used when the store holds none.
     pub firmware: Version,
+    /// Oldest link protocol version the node speaks (see [`Info`]).
     pub protocol_min: u16,
+    /// Newest link protocol version the node speaks.
     pub protocol_max: u16,
+    /// Places in the motion node's segment queue, as [`Info`] reports them.
     pub queue_capacity: u16,
+    /// Step channels the board has.
     pub channels: u8,
+    /// Tool outputs the board has.
     pub tools: u8,
     /// The board the firmware runs on: an image must name it. None on a
     /// simulated node, which takes any image (it runs none of them).
@@ -49,6 +54,7 @@ pub struct NodeConfig {
 /// What the endpoint must do after a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
+    /// Nothing beyond sending the reply.
     None,
     /// Send the reply, then restart the link and the motion node.
     Reset,
@@ -63,7 +69,10 @@ pub enum Action {
 /// The outcome of a request: a reply to send (if any) and an action.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Handled {
+    /// What to send back, on the request's port; `None`: nothing (a request
+    /// ignored, or a broadcast that is not answered).
     pub reply: Option<ServiceReply>,
+    /// What the endpoint does after sending it.
     pub action: Action,
 }
 
@@ -157,12 +166,15 @@ impl<S: Store, F: Flash> Services<S, F> {
         }
     }
 
+    /// The node's address ([`UNPAIRED`] until paired).
     pub fn address(&self) -> u16 {
         self.persisted.address
     }
+    /// Whether the node has an address.
     pub fn paired(&self) -> bool {
         self.persisted.address != UNPAIRED
     }
+    /// The node's unique id.
     pub fn uid(&self) -> u64 {
         self.persisted.uid
     }
@@ -174,6 +186,7 @@ impl<S: Store, F: Flash> Services<S, F> {
     pub fn pairing(&self) -> bool {
         self.pairing.is_some()
     }
+    /// Whether an upload is under way: the bootloader owns the node and motion is stopped.
     pub fn in_bootloader(&self) -> bool {
         self.upload.is_some()
     }
@@ -181,9 +194,11 @@ impl<S: Store, F: Flash> Services<S, F> {
     pub fn blinking(&self, now_local_us: u64) -> bool {
         self.pairing.is_some() || now_local_us < self.blink_until_us
     }
+    /// The store the node's identity and address persist in.
     pub fn store(&self) -> &S {
         &self.store
     }
+    /// The firmware storage uploads are written to.
     pub fn flash(&self) -> &F {
         &self.flash
     }
@@ -207,6 +222,7 @@ impl<S: Store, F: Flash> Services<S, F> {
             self.app_state = state;
         }
     }
+    /// Whether the host's link session is up (reported in [`Status`]).
     pub fn set_link_up(&mut self, up: bool) {
         self.link_up = up;
     }
@@ -215,6 +231,7 @@ impl<S: Store, F: Flash> Services<S, F> {
     pub fn clock_model(&self) -> Option<ClockModel> {
         self.clock
     }
+    /// Whether the host set a clock model: motion runs only then.
     pub fn synced(&self) -> bool {
         self.clock.is_some()
     }
@@ -228,6 +245,7 @@ impl<S: Store, F: Flash> Services<S, F> {
         self.clock.map(|m| m.offset + (1.0 + m.skew) * host_us)
     }
 
+    /// The answer to a `Status` request at local time `now_local_us` (µs).
     pub fn status(&self, now_local_us: u64) -> Status {
         Status {
             state: self.state(),
@@ -239,6 +257,7 @@ impl<S: Store, F: Flash> Services<S, F> {
         }
     }
 
+    /// The answer to an `Info` request.
     pub fn info(&self) -> Info {
         Info {
             kind: self.cfg.kind.clone(),

@@ -28,6 +28,7 @@ impl core::fmt::Display for StorageError {
 /// `motet_wire::encode`) for a simulated node's file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Persisted {
+    /// The node's unique id, kept so that it survives restarts on a board whose chip has none.
     pub uid: u64,
     /// [`UNPAIRED`] until the node is paired.
     pub address: u16,
@@ -69,6 +70,7 @@ pub trait Flash {
 /// A [`Store`] in memory.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RamStore {
+    /// The record saved last, if any.
     pub record: Option<Persisted>,
     /// Saves made (a board counts flash wear).
     pub saves: u32,
@@ -98,9 +100,11 @@ impl<const N: usize> Default for RamFlash<N> {
 }
 
 impl<const N: usize> RamFlash<N> {
+    /// Flash erased to 0xFF.
     pub const fn new() -> Self {
         RamFlash { bytes: [0xFF; N] }
     }
+    /// The flash's contents.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
     }

@@ -29,8 +29,11 @@ const _: () = assert!(MAX_CHANNELS == 8);
 /// Steps per channel, tool changes and the hash of all of them in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepTally {
+    /// Steps per board channel id (0..8; higher ids are hashed but not counted), either direction.
     pub steps: [u32; MAX_CHANNELS],
+    /// Tool output changes handed to the board, every output together.
     pub tool_changes: u32,
+    /// Hash over every output and its time, in order (see this module's description).
     pub hash: u64,
 }
 
@@ -74,7 +77,9 @@ impl StepTally {
 
 /// A board that tallies what passes through it on the way to `inner`.
 pub struct Tallying<'a, B: Board> {
+    /// The board the outputs go to.
     pub inner: &'a mut B,
+    /// The tally they are counted in.
     pub tally: &'a mut StepTally,
 }
 

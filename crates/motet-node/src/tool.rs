@@ -15,7 +15,9 @@ pub const PER_SPEED_UPDATE_US: f64 = 1000.0;
 const RESOLUTION: f32 = 1.0 / 1024.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// One tool output following an event track: fixed, or following the path speed.
 pub struct ToolOutput {
+    /// The board output id and the event track it follows.
     pub config: ToolConfig,
     /// The value the latest event asked for.
     value: f32,
@@ -28,6 +30,7 @@ pub struct ToolOutput {
 }
 
 impl ToolOutput {
+    /// An output at 0, fixed until an event says otherwise.
     pub fn new(config: ToolConfig) -> ToolOutput {
         ToolOutput {
             config,
@@ -38,6 +41,7 @@ impl ToolOutput {
         }
     }
 
+    /// The board output id.
     pub fn output(&self) -> u8 {
         self.config.output
     }

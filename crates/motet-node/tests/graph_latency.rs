@@ -30,18 +30,23 @@ use heapless::Deque;
 use motet_node::graph::*;
 use motet_trajectory::Segment;
 
+/// The graph size the rigs use: 16 components, 32 mappings.
 pub type G = Graph<16, 32>;
 
 /// A graph with its inputs and frame outputs.
 pub struct Rig {
+    /// The graph under test.
     pub g: G,
+    /// The hardware readings the next frame sees.
     pub inputs: Inputs,
     segs: Deque<Segment, 1>,
+    /// What the last frame emitted.
     pub out: FrameOut,
     t: f64,
 }
 
 impl Rig {
+    /// A rig running the graph `b` describes, at time 0.
     pub fn new(b: GraphBuilder<16, 32>) -> Rig {
         Rig {
             g: b.build().expect("graph builds"),
@@ -72,6 +77,7 @@ impl Rig {
             .sum()
     }
 
+    /// Position of channel component `c`, steps.
     pub fn position(&self, c: u8) -> f64 {
         match self.g.component(c) {
             Some(Component::Channel(ch)) => ch.current_position(),
@@ -222,6 +228,7 @@ fn pedal() -> AnalogInput {
 
 /// The mixed-input exactness run: see the module documentation.
 pub struct Mixed {
+    /// The rig running the mixed graph.
     pub rig: Rig,
     /// Channels a, b, z.
     pub ch: [u8; 3],
@@ -230,6 +237,7 @@ pub struct Mixed {
     /// ∫ pedal speed dt, mm.
     travel: f64,
     pedal: AnalogInput,
+    /// Frames run.
     pub frames: u64,
     /// Net steps emitted per channel.
     pub steps: [i64; 3],
@@ -249,8 +257,10 @@ impl Default for Mixed {
 }
 
 impl Mixed {
+    /// The graph's channel names, in the order of `ch`.
     pub const CHANNELS: [&'static str; 3] = ["a", "b", "z"];
 
+    /// The mixed graph: four encoders, a pedal and a velocity generator onto three channels.
     pub fn new() -> Mixed {
         let mut b = GraphBuilder::new();
         let enc: Vec<u8> = (0..4).map(|i| b.add(Encoder::new(i)).unwrap()).collect();
@@ -370,6 +380,8 @@ impl Mixed {
         }
     }
 
+    /// Runs `frames` frames of scripted inputs, keeping each channel's
+    /// worst error against the exact sum.
     pub fn run(&mut self, frames: u64) {
         for _ in 0..frames {
             self.frame();

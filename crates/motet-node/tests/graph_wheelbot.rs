@@ -12,21 +12,31 @@ use motet_node::graph::*;
 use motet_trajectory::Segment;
 use std::f64::consts::{PI, TAU};
 
+/// The graph size Wheelbot needs: 24 components, 32 mappings.
 pub type G = Graph<24, 32>;
 
-// Public so that `examples/wheelbot_frames.rs` measures this very graph.
+/// Wheelbot's graph and the component indices a test drives. Public so that
+/// `examples/wheelbot_frames.rs` measures this very graph.
 pub struct Wheelbot {
+    /// The graph.
     pub g: G,
+    /// The turntable encoder.
     pub enc_r: u8,
+    /// The polar-to-Cartesian component.
     pub polar: u8,
+    /// The x stretch filter (its ratio is the ellipse stretch).
     pub x_stretch: u8,
+    /// The extruder's path-length generator.
     pub e_gen: u8,
+    /// The channels a, b, z and e.
     pub ch: [u8; 4],
 }
 
 const LAYER: f64 = 2.0;
 const NOZZLE: f64 = 4.0;
 
+/// Wheelbot's graph: a pedal, the turntable and z encoders driving four
+/// channels (a, b, z, e).
 pub fn wheelbot() -> Wheelbot {
     let mut b = GraphBuilder::new();
     let pedal = b

@@ -93,12 +93,15 @@ impl Flags {
     pub const fn from_bits(bits: u8) -> Flags {
         Flags(bits & 0x0F)
     }
+    /// The flags as the header's low nibble carries them.
     pub const fn bits(self) -> u8 {
         self.0
     }
+    /// Whether every flag of `other` is set.
     pub const fn contains(self, other: Flags) -> bool {
         self.0 & other.0 == other.0
     }
+    /// Both sets of flags (as `|`).
     pub const fn union(self, other: Flags) -> Flags {
         Flags(self.0 | other.0)
     }
@@ -114,9 +117,15 @@ impl core::ops::BitOr for Flags {
 /// Everything in a frame but its payload.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Header {
+    /// Destination address ([`HOST_ADDRESS`](crate::service::HOST_ADDRESS), a node's, or a
+    /// multicast one).
     pub dst: u16,
+    /// Source address: the sender's.
     pub src: u16,
+    /// Service port of the payload (see [`crate::service::port`]); the link's own frames use port
+    /// 0.
     pub port: u8,
+    /// What the frame carries: data, an acknowledgement, a SYN or an RST.
     pub flags: Flags,
     /// Sequence number of this frame's payload (with [`Flags::DATA`]) or the
     /// initial sequence number (with [`Flags::SYN`]); serial-number arithmetic
@@ -129,7 +138,9 @@ pub struct Header {
 /// A decoded frame; the payload borrows the caller's buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Frame<'a> {
+    /// The frame's header.
     pub header: Header,
+    /// The payload bytes (borrowed from the decode buffer).
     pub payload: &'a [u8],
 }
 
@@ -195,9 +206,11 @@ impl Default for Crc32c {
 }
 
 impl Crc32c {
+    /// A CRC over no bytes yet.
     pub const fn new() -> Crc32c {
         Crc32c(0xFFFF_FFFF)
     }
+    /// Takes `bytes` in, after those already taken.
     pub fn update(&mut self, bytes: &[u8]) {
         let mut c = self.0;
         for &b in bytes {
@@ -205,6 +218,7 @@ impl Crc32c {
         }
         self.0 = c;
     }
+    /// The CRC of every byte taken.
     pub const fn finish(self) -> u32 {
         self.0 ^ 0xFFFF_FFFF
     }
@@ -444,6 +458,7 @@ impl Default for Deframer {
 }
 
 impl Deframer {
+    /// A deframer waiting for the start of a frame.
     pub const fn new() -> Deframer {
         Deframer {
             buf: [0; MAX_ENCODED],

@@ -43,16 +43,20 @@ pub enum ImageError {
     Truncated,
     /// More bytes after the payload than the header says.
     TrailingBytes,
+    /// The file does not start with [`MAGIC`] ("MTFW"): not a firmware image.
     BadMagic,
     /// An image format version this parser does not know.
     UnknownFormat {
+        /// The format byte the image carries.
         format: u8,
     },
     /// The kind is empty, longer than 16 bytes, not ASCII, or not zero-padded.
     BadKind,
     /// The payload does not match the CRC-32C in the header.
     CrcMismatch {
+        /// The CRC-32C the header gives.
         expected: u32,
+        /// The CRC-32C of the payload as read.
         actual: u32,
     },
     /// The output buffer cannot hold the image.
@@ -88,11 +92,15 @@ impl core::fmt::Display for ImageError {
 /// An image's header.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageHeader {
+    /// The node kind the firmware is for (a node of another kind refuses it).
     pub kind: Kind,
     /// The board the payload was built for; None in a format 1 image.
     pub board: Option<Kind>,
+    /// The firmware's version, what the node reports once it runs.
     pub version: Version,
+    /// Payload length, bytes.
     pub payload_len: u32,
+    /// CRC-32C of the payload.
     pub payload_crc: u32,
 }
 
@@ -226,7 +234,9 @@ impl ImageHeader {
 /// A parsed image borrowing its bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Image<'a> {
+    /// The header, parsed and checked.
     pub header: ImageHeader,
+    /// The payload: the bytes written to the node's firmware storage.
     pub payload: &'a [u8],
 }
 

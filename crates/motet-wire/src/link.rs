@@ -46,7 +46,10 @@ const MAX_BACKOFF: u32 = 16;
 /// Link settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Config {
+    /// This side's address (the frames' source).
     pub local: u16,
+    /// The other side's address: frames from anyone else are counted in [`Stats::foreign`] and
+    /// dropped.
     pub peer: u16,
     /// Port used by [`Link::send`].
     pub port: u8,
@@ -54,6 +57,7 @@ pub struct Config {
     pub active: bool,
     /// Lowest and highest link protocol version this side speaks.
     pub version_min: u16,
+    /// See `version_min`; the highest common version is agreed in the handshake.
     pub version_max: u16,
     /// Initial sequence number; should differ across restarts (a boot counter
     /// or a random number) so that a peer recognises a restart.
@@ -62,7 +66,10 @@ pub struct Config {
     pub window: u8,
     /// RTO before any RTT sample, µs.
     pub initial_rto_us: u64,
+    /// Least RTO however small the RTT, µs (RFC 6298 suggests 1 s on the Internet; a serial or USB
+    /// link is far quicker).
     pub min_rto_us: u64,
+    /// Most RTO, backoff included, µs.
     pub max_rto_us: u64,
     /// Clock granularity G of RFC 6298, µs.
     pub granularity_us: u64,
@@ -94,7 +101,9 @@ impl Config {
 pub enum LinkError {
     /// No protocol version both sides speak; no data is accepted.
     VersionMismatch {
+        /// The lowest and highest version this side speaks.
         ours: (u16, u16),
+        /// The lowest and highest version the peer's SYN offered.
         theirs: (u16, u16),
     },
     /// The peer reset the link (RST) or restarted (SYN with a new ISN).
@@ -107,7 +116,10 @@ pub enum State {
     /// Handshake under way; payloads may be queued already.
     Connecting,
     /// Both SYNs acknowledged; `version` agreed.
-    Established { version: u16 },
+    Established {
+        /// The link protocol version agreed: the highest both sides speak.
+        version: u16,
+    },
     /// Stopped; make a new link to start again.
     Failed(LinkError),
 }
@@ -126,31 +138,49 @@ pub enum SendError {
 /// Counters and estimates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
+    /// Frames handed to the transport: data, acks, SYNs, retransmissions.
     pub frames_sent: u64,
+    /// Frames that decoded and were for this link (from the peer, to this side).
     pub frames_received: u64,
+    /// Payloads sent for the first time (resending one counts in `retransmits`).
     pub payloads_sent: u64,
+    /// Payloads handed up in order.
     pub payloads_delivered: u64,
     /// All retransmissions (timeouts, duplicate acks, partial acks, SYNs).
     pub retransmits: u64,
+    /// Retransmissions because the RTO ran out.
     pub timeouts: u64,
+    /// Retransmissions after three duplicate acks (before the RTO).
     pub fast_retransmits: u64,
+    /// Frames dropped for a bad CRC ([`FrameError::BadCrc`]).
     pub crc_errors: u64,
+    /// Frames dropped for a bad COBS encoding.
     pub cobs_errors: u64,
+    /// Frames dropped for being shorter than a header and a CRC.
     pub truncated: u64,
+    /// Frames dropped for being longer than [`MAX_FRAME`].
     pub too_long: u64,
+    /// Frames dropped for a frame format version this side does not know.
     pub unknown_version: u64,
+    /// Payloads received again (already delivered, or already held): dropped, acknowledged again.
     pub duplicates_dropped: u64,
+    /// Payloads too far ahead of the next expected one to hold: dropped.
     pub out_of_window: u64,
     /// Frames for another address or from another peer.
     pub foreign: u64,
     /// Frames ignored because the link failed, or malformed SYNs.
     pub refused: u64,
+    /// RTT samples taken (Karn's rule: none from a retransmitted payload).
     pub rtt_samples: u64,
     /// Latest RTT sample, smoothed RTT, RTT variation, current RTO, µs.
     pub last_rtt_us: u64,
+    /// Least RTT sample, µs.
     pub min_rtt_us: u64,
+    /// Smoothed RTT (RFC 6298's SRTT), µs.
     pub srtt_us: u64,
+    /// RTT variation (RFC 6298's RTTVAR), µs.
     pub rttvar_us: u64,
+    /// Current RTO, backoff included, µs.
     pub rto_us: u64,
 }
 
@@ -174,7 +204,9 @@ struct RxSlot {
 /// A payload delivered in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Delivery<'a> {
+    /// The port the payload was sent to.
     pub port: u8,
+    /// The payload's bytes, as sent.
     pub payload: &'a [u8],
 }
 
@@ -217,6 +249,7 @@ pub struct Link {
 }
 
 impl Link {
+    /// A link on `cfg`, connecting: an active side sends its SYN at the first [`Link::poll`].
     pub fn new(cfg: Config) -> Link {
         let start = cfg.isn.wrapping_add(1);
         let mut link = Link {
@@ -261,10 +294,12 @@ impl Link {
         link
     }
 
+    /// The settings the link was made with.
     pub fn config(&self) -> &Config {
         &self.cfg
     }
 
+    /// Connecting, established (with the agreed version), or failed (and why).
     pub fn state(&self) -> State {
         match self.failed {
             Some(e) => State::Failed(e),
@@ -275,6 +310,7 @@ impl Link {
         }
     }
 
+    /// Counters and RTT estimates since the link was made.
     pub fn stats(&self) -> &Stats {
         &self.stats
     }

@@ -19,8 +19,11 @@ pub const MAX_MESSAGE: usize = 192;
 /// One axis's part of a segment: its value at the start and at the end.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AxisSpan {
+    /// Index of the axis in the trajectory's [`Point`] (x, y, z, …; below [`MAX_AXES`]).
     pub axis: u8,
+    /// The axis's value at the segment's start, in its unit (mm, or degrees for an angle).
     pub from: f64,
+    /// The axis's value at the segment's end, same unit.
     pub to: f64,
 }
 
@@ -31,14 +34,21 @@ pub struct SegmentMsg {
     pub seq: u32,
     /// Start time, µs on the host clock.
     pub t0: f64,
+    /// Speed along the path over the segment's time: length, entry, cruise and exit speeds,
+    /// acceleration, jerk and dwell.
     pub profile: ProfileParams,
+    /// The subscribed axes that are part of the move, each at most once; an axis a node reads but
+    /// the segment leaves out keeps its value.
     pub axes: Vec<AxisSpan, MAX_AXES>,
 }
 
 /// How a node channel turns the trajectory into steps.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ChannelConfig {
+    /// The board channel id the steps go out on (`Board::step`'s channel).
     pub channel: u8,
+    /// Which joint the channel follows: one axis (or a linear mix of axes), or a kinematic joint of
+    /// a plane's axes.
     pub map: JointMap,
     /// Signed: negative inverts the direction output.
     pub steps_per_unit: f64,
@@ -57,6 +67,8 @@ pub const DIR_SETUP_US: core::ops::RangeInclusive<f32> = 0.0..=1000.0;
 /// Pulse width and direction set-up time when a machine file gives none,
 /// µs: what common drivers (A4988, DRV8825) need.
 pub const DEFAULT_PULSE_US: f32 = 2.0;
+/// Direction set-up time when a machine file gives none, µs (as
+/// [`DEFAULT_PULSE_US`]).
 pub const DEFAULT_DIR_SETUP_US: f32 = 1.0;
 
 impl ChannelConfig {
@@ -69,7 +81,9 @@ impl ChannelConfig {
 /// Which event track drives a tool output.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ToolConfig {
+    /// The board's tool output id (`Board::set_tool`'s output).
     pub output: u8,
+    /// The event track whose events set it.
     pub track: u8,
 }
 
@@ -78,26 +92,40 @@ pub struct ToolConfig {
 pub enum HostMessage {
     /// Forget all configuration, segments and events.
     Reset,
+    /// Set up (or replace, by `channel` id) a step channel. Only valid with an empty segment queue
+    /// (`BadConfig` otherwise, as for values out of range).
     ConfigureChannel(ChannelConfig),
+    /// Set up (or replace, by `output` id) a tool output.
     ConfigureTool(ToolConfig),
     /// The machine is at rest at this point: set every channel's step count from
     /// it without stepping. Only valid with an empty segment queue.
     SetPosition {
+        /// The machine-space point, every axis, in axis units.
         position: Point,
     },
+    /// One segment, next in sequence.
     Segment(SegmentMsg),
     /// An event-track change at a time.
     Event {
+        /// The event track the change is on; it sets every tool output driven by this track.
         track: u8,
+        /// When the change takes effect, µs on the host clock.
         time: f64,
+        /// The new value, in the tool's unit (a laser's power, a spindle's speed;
+        /// 0 is off).
         value: f32,
     },
     /// An event-track change whose output follows the path speed: the tool
     /// gives `value × speed / feed`, capped at `value` (laser power per mm).
     EventPerSpeed {
+        /// As in `Event`.
         track: u8,
+        /// As in `Event`, µs on the host clock.
         time: f64,
+        /// The value at or above path speed `feed`, and its cap.
         value: f32,
+        /// Path speed at which the output reaches `value`, units/s; finite and above 0 (`Malformed`
+        /// otherwise).
         feed: f32,
     },
     /// Ask for a [`NodeMessage::Status`].
@@ -106,27 +134,37 @@ pub enum HostMessage {
     /// it aside; the running graph (if any) keeps running until
     /// [`HostMessage::GraphCommit`].
     GraphBegin {
+        /// Core frame period, µs; at least 1.
         frame_us: f64,
     },
     /// Add a component (its index is the count of components added before it).
     /// `params` are the kind's construction values in the order listed on
     /// [`GraphKind`].
     GraphAdd {
+        /// The component kind.
         kind: GraphKind,
+        /// Its construction values (see [`GraphKind`]); trailing ones left out take their defaults.
         params: Vec<f64, MAX_GRAPH_PARAMS>,
     },
     /// `world` world units are `block` units of the port.
     GraphRatio {
+        /// The port whose unit is set.
         port: GraphPort,
+        /// World units (mm, degrees) matching `block` port units.
         world: f64,
+        /// Port units matching `world`.
         block: f64,
     },
     /// Map the output `from` onto the input `to`; with `tap`, the input `to`
     /// pulls from the port `from` (fan-out by pull).
     GraphMap {
+        /// The output port mapped from.
         from: GraphPort,
+        /// The input port mapped onto.
         to: GraphPort,
+        /// Whether changes add onto the input or its value overwrites it.
         mode: GraphMode,
+        /// Pull: `to` reads `from` when it runs, for an output with several readers.
         tap: bool,
     },
     /// Validate the graph described since [`HostMessage::GraphBegin`] and swap it
@@ -134,14 +172,20 @@ pub enum HostMessage {
     GraphCommit,
     /// Change a parameter of a component of the running graph.
     GraphParam {
+        /// Index of the component, in order of [`HostMessage::GraphAdd`].
         component: u8,
+        /// Index of the parameter in the component's declaration.
         param: u8,
+        /// The new value, in the parameter's unit.
         value: f64,
     },
     /// A reading from outside: encoder count, analog value or button level.
     GraphInput {
+        /// Which kind of input.
         kind: GraphInputKind,
+        /// Which input of that kind, below `MAX_HW` (8).
         index: u8,
+        /// The reading, as the kind describes.
         value: f64,
     },
     /// Remove the running graph (and any graph being built).
@@ -153,6 +197,8 @@ pub enum HostMessage {
     /// resuming the run knows the node still holds its position. Only valid
     /// with an empty segment queue.
     Windowed {
+        /// The run's number, reported back in `Status` and `Position`; 0 means
+        /// none, so a host numbers its runs from 1.
         run: u32,
     },
     /// Commit every pending segment and event. `next_seq` is the sequence
@@ -160,6 +206,7 @@ pub enum HostMessage {
     /// (`OutOfOrder`), as is a seal once the committed window's tail has
     /// started (`TailStarted`).
     Seal {
+        /// The sequence number after the last pending segment: the node's `next_seq`.
         next_seq: u32,
     },
     /// The quanta [`HostMessage::Segments`] are rebuilt with. Only valid with
@@ -181,14 +228,18 @@ pub const MAX_GRAPH_PARAMS: usize = 8;
 /// A port of a graph component: component index, port index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct GraphPort {
+    /// Index of the component, in order of [`HostMessage::GraphAdd`].
     pub comp: u8,
+    /// Index of the port on the component (its kind's declaration lists them).
     pub port: u8,
 }
 
 /// Mapping mode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum GraphMode {
+    /// Changes of the output add onto the input (a position the input also moves on its own).
     Incremental,
+    /// The output's value overwrites the input each frame.
     Absolute,
 }
 
@@ -262,6 +313,7 @@ pub enum GraphKind {
 /// Node → host.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum NodeMessage {
+    /// The node's queues and sequence numbers: the answer to `Status` and to a `Seal`.
     Status {
         /// Free places in the segment queue.
         segment_space: u16,
@@ -282,14 +334,19 @@ pub enum NodeMessage {
         run: u32,
     },
     /// A message was refused; nothing in the queues changed.
-    Refused { reason: Refusal },
+    Refused {
+        /// Why, and so what the host does about it.
+        reason: Refusal,
+    },
     /// Where the node is on its run's trajectory (answers
     /// [`HostMessage::Where`]).
     Position {
         /// As in `Status`: 0 when the node holds no run (its position is then
         /// unknown to it).
         run: u32,
+        /// As in `Status`: the sequence number after the last committed segment.
         committed: u32,
+        /// As in `Status`: the node stopped on its committed window's tail.
         stopped: bool,
         /// Segments still queued: nonzero while the node moves.
         queued: u16,
@@ -302,21 +359,37 @@ pub enum NodeMessage {
     /// order (`motet_node::tally`). Equal tallies: the same outputs at the
     /// same times.
     Tally {
+        /// Steps per channel, by board channel id (ids 8 and up are hashed but
+        /// not counted).
         steps: [u32; 8],
+        /// Tool output changes, every output together.
         tool_changes: u32,
+        /// The running hash of every output and its time (see `motet_node::tally`).
         hash: u64,
     },
 }
 
+/// Why a node refused a [`HostMessage`] (in [`NodeMessage::Refused`]); a
+/// refused message changed nothing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Refusal {
+    /// The bytes did not decode as a message, or a value in it is out of range (a NaN time, an axis
+    /// past [`MAX_AXES`], a segment faster than [`MAX_STEP_RATE`]).
     Malformed,
+    /// No room in the segment or event queue: send again once the node reports space.
     QueueFull,
+    /// A segment or seal whose sequence number is not the next expected.
     OutOfOrder {
+        /// The sequence number the node expects next.
         expected: u32,
+        /// The sequence number the message carried.
         got: u32,
     },
+    /// A configuration the node cannot take: a value out of range, no room for another channel or
+    /// tool, a change with segments queued, a tally asked of a node that keeps none.
     BadConfig,
+    /// `Reset`, `SetPosition` or `Windowed` with segments queued: the node is
+    /// moving, or will.
     NotAtRest,
     /// A graph message was refused: a bad component, port, ratio, mapping or
     /// parameter, a graph that does not validate at commit, or a graph message

@@ -26,12 +26,15 @@ use serde::{Deserialize, Serialize};
 pub mod port {
     /// The link's own frames (SYN, RST, pure ACK).
     pub const LINK: u8 = 0;
+    /// Node status ([`super::ServiceRequest::Status`]): state, address, link and clock.
     pub const STATUS: u8 = 1;
+    /// Blinking the node's light, to find it on the bench.
     pub const IDENTIFY: u8 = 2;
     /// Info; a broadcast Info is the host's scan for nodes.
     pub const INFO: u8 = 3;
     /// Pairing and address changes.
     pub const ADDRESS: u8 = 4;
+    /// Restarting the node's link and application.
     pub const RESET: u8 = 5;
     /// The bootloader: firmware upload, read-back, verify, start.
     pub const FIRMWARE: u8 = 6;
@@ -84,8 +87,11 @@ pub mod kind {
     Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
 )]
 pub struct Version {
+    /// Incompatible changes.
     pub major: u16,
+    /// Added features, compatible.
     pub minor: u16,
+    /// Fixes only.
     pub patch: u16,
 }
 
@@ -101,39 +107,62 @@ pub enum ServiceRequest {
     /// Port 1. Answered by [`ServiceReply::Status`].
     Status,
     /// Port 2. Blink for `ms` milliseconds (0 stops); [`ServiceReply::Ack`].
-    Identify { ms: u32 },
+    Identify {
+        /// How long to blink, ms; 0 stops.
+        ms: u32,
+    },
     /// Port 3. Answered by [`ServiceReply::Info`]; broadcast, it is a scan.
     Info,
     /// Port 4, broadcast. Every unpaired node blinks and waits for its
     /// button; the one pressed takes `address` and sends
     /// [`ServiceReply::Paired`]. Paired nodes ignore it.
-    Pair { address: u16 },
+    Pair {
+        /// The address the node pressed takes, [`FIRST_NODE_ADDRESS`]..=[`LAST_NODE_ADDRESS`].
+        address: u16,
+    },
     /// Port 4. Stop waiting for the button and stop blinking.
     PairCancel,
     /// Port 4. The node whose unique id is `uid` takes `address` at once
     /// (a node alone on its link, or one the host already knows) and answers
     /// [`ServiceReply::Paired`]; other nodes ignore a broadcast one.
-    SetAddress { uid: u64, address: u16 },
+    SetAddress {
+        /// The node's unique id ([`Info::uid`]); a node with another ignores (or refuses) the
+        /// request.
+        uid: u64,
+        /// The address it takes, [`FIRST_NODE_ADDRESS`]..=[`LAST_NODE_ADDRESS`].
+        address: u16,
+    },
     /// Port 5. [`ServiceReply::Ack`], then the node restarts its link and its
     /// motion state (and leaves the bootloader, discarding an upload).
     Reset,
     /// Port 6. Start an upload of a whole image file (header included) of
     /// `size` bytes whose CRC-32C is `crc32c`; the node enters the bootloader.
     FirmwareBegin {
+        /// The image's length, bytes.
         size: u32,
+        /// CRC-32C (Castagnoli) of the whole image, checked at `FirmwareVerify`.
         crc32c: u32,
+        /// The node kind the image is for; a node of another kind refuses it.
         kind: Kind,
+        /// The version the image carries, checked at `FirmwareVerify`.
         version: Version,
     },
     /// Port 6. Write image bytes at `offset`; pages come in order (a page may
     /// be sent again). Answered by [`ServiceReply::FirmwareWritten`].
     FirmwarePage {
+        /// Where the page goes in the image, bytes from its start; pages are sent in order.
         offset: u32,
+        /// The page's bytes, at most [`PAGE_SIZE`].
         data: Vec<u8, PAGE_SIZE>,
     },
     /// Port 6. Read back `len` ≤ 128 bytes at `offset`:
     /// [`ServiceReply::FirmwareData`].
-    FirmwareRead { offset: u32, len: u8 },
+    FirmwareRead {
+        /// Where to read, bytes from the image's start.
+        offset: u32,
+        /// How many bytes, at most [`PAGE_SIZE`].
+        len: u8,
+    },
     /// Port 6. Check size, CRC and image header of what was written:
     /// [`ServiceReply::FirmwareVerified`] or an error.
     FirmwareVerify,
@@ -142,10 +171,19 @@ pub enum ServiceRequest {
     FirmwareStart,
     /// Port 7, a datagram. `t1` is the host clock when it was sent, µs.
     /// Answered by [`ServiceReply::Time`].
-    TimeGet { t1: u64 },
+    TimeGet {
+        /// The host clock when the request was sent, µs.
+        t1: u64,
+    },
     /// Port 7. The node's clock model `local = offset + (1 + skew) · host`
     /// (µs), as `motet_wire::sync` estimates it; [`ServiceReply::Ack`].
-    TimeSet { offset: f64, skew: f64 },
+    TimeSet {
+        /// Node clock at host time 0, µs.
+        offset: f64,
+        /// How much faster the node's clock runs than the host's (`local` gains `skew` µs per host
+        /// µs); within ±[`MAX_SKEW`].
+        skew: f64,
+    },
 }
 
 impl ServiceRequest {
@@ -199,8 +237,11 @@ pub enum NodeState {
 /// Answer to [`ServiceRequest::Status`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Status {
+    /// What the node is doing.
     pub state: NodeState,
+    /// The node's address ([`UNPAIRED`] until paired).
     pub address: u16,
+    /// The node has an address it keeps across restarts.
     pub paired: bool,
     /// The reliable link to the host is established.
     pub link_up: bool,
@@ -219,9 +260,11 @@ pub struct Info {
     pub firmware: Version,
     /// Unique id (from the chip, or made once and persisted).
     pub uid: u64,
+    /// The node's address ([`UNPAIRED`] until paired).
     pub address: u16,
     /// Link protocol versions the node speaks.
     pub protocol_min: u16,
+    /// The newest link protocol version it speaks.
     pub protocol_max: u16,
     /// Places in the segment queue.
     pub queue_capacity: u16,
@@ -246,36 +289,50 @@ pub enum ServiceReply {
     Error(ServiceError),
     /// No service routine on this port.
     UnknownPort {
+        /// The port the request came on.
         port: u8,
     },
+    /// Answer to [`ServiceRequest::Status`].
     Status(Status),
+    /// Answer to [`ServiceRequest::Info`].
     Info(Info),
     /// The node now has `address`. The host checks that `uid` is the one it
     /// named (SetAddress) and `address` the one it asked for; a node answering
     /// otherwise is not the one the host meant.
     Paired {
+        /// The node's unique id.
         uid: u64,
+        /// The address it now has.
         address: u16,
     },
     /// A page was written: its `offset` and length echoed for the host to check.
     FirmwareWritten {
+        /// The page's offset, as sent.
         offset: u32,
+        /// How many bytes were written.
         len: u8,
     },
+    /// Answer to [`ServiceRequest::FirmwareRead`]: the bytes at `offset`.
     FirmwareData {
+        /// Where the bytes were read, as asked.
         offset: u32,
+        /// The bytes (fewer than asked at the image's end).
         data: Vec<u8, PAGE_SIZE>,
     },
     /// The uploaded image checks out; it carries this version.
     FirmwareVerified {
+        /// The version in the image's header.
         version: Version,
     },
     /// `t1` echoed; `t2` the node clock when the request arrived, `t3` when
     /// the reply left, µs. With the host's arrival time `t4` this is a
     /// `motet_wire::sync::Exchange`.
     Time {
+        /// The host's send time, echoed, µs on the host clock.
         t1: u64,
+        /// When the request arrived, µs on the node clock.
         t2: u64,
+        /// When the reply left, µs on the node clock.
         t3: u64,
     },
 }
@@ -309,31 +366,64 @@ pub enum ServiceError {
     /// The payload is not a request.
     Malformed,
     /// The request belongs to another port (given).
-    WrongPort { port: u8 },
+    WrongPort {
+        /// The port the request is for.
+        port: u8,
+    },
     /// An address outside 2..=0xFFEF.
-    BadAddress { address: u16 },
+    BadAddress {
+        /// The address asked for.
+        address: u16,
+    },
     /// Pair sent to a node that already has an address (use SetAddress).
     AlreadyPaired,
     /// SetAddress named another node; this node's uid is given.
-    WrongUid { uid: u64 },
+    WrongUid {
+        /// This node's uid.
+        uid: u64,
+    },
     /// A firmware request without an upload begun.
     NoUpload,
     /// The image does not fit the node's firmware storage.
-    TooLarge { capacity: u32 },
+    TooLarge {
+        /// Bytes of firmware storage the node has.
+        capacity: u32,
+    },
     /// Firmware for another kind of node.
     WrongKind,
     /// A page or read outside the image (or the storage).
-    OutOfRange { offset: u32, len: u32 },
+    OutOfRange {
+        /// The request's offset, bytes.
+        offset: u32,
+        /// The request's length, bytes.
+        len: u32,
+    },
     /// A page beyond the bytes written so far: the next one expected is at `expected`.
-    OutOfOrder { expected: u32 },
+    OutOfOrder {
+        /// The offset of the next page expected, bytes.
+        expected: u32,
+    },
     /// Verify: fewer bytes written than announced.
-    SizeMismatch { expected: u32, written: u32 },
+    SizeMismatch {
+        /// The size `FirmwareBegin` announced, bytes.
+        expected: u32,
+        /// The bytes written.
+        written: u32,
+    },
     /// Verify: the written bytes' CRC-32C is not the announced one.
-    CrcMismatch { expected: u32, actual: u32 },
+    CrcMismatch {
+        /// The CRC-32C `FirmwareBegin` announced.
+        expected: u32,
+        /// The CRC-32C of what was written.
+        actual: u32,
+    },
     /// Verify: the image header or payload is bad.
     BadImage(ImageError),
     /// Verify: the image's version is not the one announced.
-    VersionMismatch { image: Version },
+    VersionMismatch {
+        /// The version the image's header carries.
+        image: Version,
+    },
     /// FirmwareStart before a successful FirmwareVerify.
     NotVerified,
     /// Persistent storage or flash failed.

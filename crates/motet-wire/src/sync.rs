@@ -40,9 +40,13 @@
 /// `t3` on the node clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Exchange {
+    /// Host clock when the request left.
     pub t1: u64,
+    /// Node clock when the request arrived.
     pub t2: u64,
+    /// Node clock when the reply left.
     pub t3: u64,
+    /// Host clock when the reply arrived.
     pub t4: u64,
 }
 
@@ -86,7 +90,10 @@ impl Default for SyncConfig {
 /// A node clock model: `local = offset + (1 + skew) · host`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClockModel {
+    /// Node clock at host time 0, µs.
     pub offset: f64,
+    /// Node clock rate minus 1: how many µs the node's clock gains per host µs (within
+    /// ±[`MAX_SKEW`](crate::service::MAX_SKEW)).
     pub skew: f64,
 }
 
@@ -175,6 +182,7 @@ impl Default for ClockSync {
 }
 
 impl ClockSync {
+    /// A synchronizer on `cfg`, with no exchanges yet.
     pub fn new(cfg: SyncConfig) -> ClockSync {
         ClockSync {
             cfg,

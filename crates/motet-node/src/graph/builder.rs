@@ -26,6 +26,7 @@ impl<const C: usize, const M: usize> Default for GraphBuilder<C, M> {
 }
 
 impl<const C: usize, const M: usize> GraphBuilder<C, M> {
+    /// An empty description: no components, mappings or ratios, the default frame period.
     pub fn new() -> Self {
         GraphBuilder {
             blocks: Vec::new(),

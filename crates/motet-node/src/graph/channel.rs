@@ -18,14 +18,18 @@ use super::port::{Port, PortSpec, Unit};
 use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// A graph channel: one actuator's steps toward the sum of its two target inputs (see the module's
+/// description), limited, filtered and rate-capped.
 pub struct GraphChannel {
     /// Filter length N (≤ 1: no filter).
     pub filter: f64,
+    /// Whether the direction output is inverted (the `invert` parameter).
     pub invert: bool,
     /// Steps per second; 0 = only the frame rate limits.
     pub max_pulse_rate: f64,
     /// World units; −∞/+∞ for none.
     pub lower: f64,
+    /// Upper limit, world units; +∞ for none (the `upper` parameter).
     pub upper: f64,
     /// Output port and signal code the steps go to on the wire.
     pub signal: Option<(u8, u8)>,
@@ -42,16 +46,25 @@ impl Default for GraphChannel {
 }
 
 impl GraphChannel {
+    /// Port 0: the `target` input (any quantity).
     pub const TARGET: u8 = 0;
+    /// Port 1: the `target_b` input (any quantity).
     pub const TARGET_B: u8 = 1;
+    /// Port 2: the `position` output (any quantity).
     pub const POSITION: u8 = 2;
 
+    /// `set_param` id of the `filter` parameter (frames): filter length (≤ 1: none).
     pub const FILTER: u8 = 0;
+    /// `set_param` id of the `invert` parameter (nonzero: invert the direction).
     pub const INVERT: u8 = 1;
+    /// `set_param` id of the `max_pulse_rate` parameter (steps/s): 0: the frame rate only.
     pub const MAX_PULSE_RATE: u8 = 2;
+    /// `set_param` id of the `lower` parameter (world units; −∞: none).
     pub const LOWER: u8 = 3;
+    /// `set_param` id of the `upper` parameter (world units; +∞: none).
     pub const UPPER: u8 = 4;
 
+    /// A channel with no filter, no limits and no pulse-rate cap, at 0.
     pub fn new() -> GraphChannel {
         GraphChannel {
             filter: 0.0,
@@ -73,22 +86,26 @@ impl GraphChannel {
         self
     }
 
+    /// Filters the target over `n` frames (≤ 1: none).
     pub fn filtering(mut self, n: f64) -> Self {
         self.filter = n;
         self
     }
 
+    /// Inverts the direction output.
     pub fn inverted(mut self) -> Self {
         self.invert = true;
         self
     }
 
+    /// Steps only between `lower` and `upper`, world units.
     pub fn limits(mut self, lower: f64, upper: f64) -> Self {
         self.lower = lower;
         self.upper = upper;
         self
     }
 
+    /// Steps at most `steps_per_s` per second (0: as often as the frame rate allows).
     pub fn pulse_rate(mut self, steps_per_s: f64) -> Self {
         self.max_pulse_rate = steps_per_s;
         self

@@ -41,7 +41,9 @@ pub enum Phase {
 /// Why a parameter change was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ParamError {
+    /// The component has no parameter with this id.
     Unknown,
+    /// The value is outside what the parameter takes (NaN, a negative speed, …).
     BadValue,
 }
 
@@ -71,9 +73,12 @@ pub(crate) fn non_negative(v: f64) -> Result<f64, ParamError> {
 
 /// Behaviour of one component kind. All values are in the ports' block units.
 pub trait Kind {
+    /// The kind's ports, in index order (its
+    /// [`Declaration::ports`](super::declare::Declaration::ports)).
     const PORTS: &'static [PortSpec];
     /// Everything the host and the wire know of the kind.
     const DECL: Declaration;
+    /// When in the frame the kind runs (default: before the channels).
     const PHASE: Phase = Phase::Pre;
 
     /// One core frame: read the inputs, set the outputs' absolute values.
@@ -87,6 +92,7 @@ pub trait Kind {
         Err(ParamError::Unknown)
     }
 
+    /// The current value of parameter `id`, if the kind reports it.
     fn param(&self, _ports: &[Port], _id: u8) -> Option<f64> {
         None
     }
@@ -123,7 +129,10 @@ macro_rules! components {
         /// A component of the graph.
         #[derive(Clone, Debug, PartialEq)]
         pub enum Component {
-            $($name($ty),)*
+            $(
+                #[doc = concat!("A `", stringify!($name), "`: see [`", stringify!($ty), "`].")]
+                $name($ty),
+            )*
         }
 
         /// Every kind's declaration, in wire order (that of
@@ -137,15 +146,19 @@ macro_rules! components {
         })*
 
         impl Component {
+            /// The component's ports, in index order.
             pub fn ports(&self) -> &'static [PortSpec] {
                 match self { $(Component::$name(_) => <$ty as Kind>::PORTS,)* }
             }
+            /// Its kind's declaration.
             pub fn declaration(&self) -> &'static Declaration {
                 match self { $(Component::$name(_) => &<$ty as Kind>::DECL,)* }
             }
+            /// When in the frame it runs.
             pub fn phase(&self) -> Phase {
                 match self { $(Component::$name(_) => <$ty as Kind>::PHASE,)* }
             }
+            /// Its kind's Rust name (as in [`Component`]'s variants).
             pub fn name(&self) -> &'static str {
                 match self { $(Component::$name(_) => stringify!($name),)* }
             }

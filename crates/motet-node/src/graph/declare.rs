@@ -36,7 +36,12 @@ use super::port::PortSpec;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Domain {
     /// A finite number in `min..=max`.
-    Number { min: f64, max: f64 },
+    Number {
+        /// Least value accepted.
+        min: f64,
+        /// Greatest value accepted.
+        max: f64,
+    },
     /// A finite number above zero.
     Positive,
     /// Any number but NaN; ±∞ allowed (bounds).
@@ -83,7 +88,9 @@ pub struct Param {
     pub unit: &'static str,
     /// `None`: required.
     pub default: Option<f64>,
+    /// The values it takes.
     pub domain: Domain,
+    /// One line for the docs (`""`: none).
     pub doc: &'static str,
 }
 
@@ -121,7 +128,9 @@ impl Param {
 /// [`Kind::set_param`](super::component::Kind::set_param) takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Live {
+    /// Its key in graph files and in `set` stages.
     pub name: &'static str,
+    /// The id [`Kind::set_param`](super::component::Kind::set_param) takes.
     pub id: u8,
 }
 
@@ -134,7 +143,9 @@ pub const fn live(name: &'static str, id: u8) -> Live {
 /// value (port ratios, names for the host).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HostKey {
+    /// The key in graph files.
     pub name: &'static str,
+    /// One line for the docs: what the host does with it.
     pub doc: &'static str,
 }
 
@@ -150,12 +161,15 @@ pub struct Declaration {
     pub input: Option<GraphInputKind>,
     /// Construction parameters in wire order, required ones first.
     pub params: &'static [Param],
+    /// Parameters changeable while the graph runs.
     pub live: &'static [Live],
+    /// Graph-file keys that are not construction values.
     pub host_keys: &'static [HostKey],
     /// Construction values the component keeps in its ports (a velocity
     /// generator's speed): `(parameter index, live id)`, set through
     /// `set_param` once it is in a graph, when given.
     pub in_ports: &'static [(usize, u8)],
+    /// Its ports, in index order.
     pub ports: &'static [PortSpec],
     /// One line: what it does.
     pub doc: &'static str,
@@ -171,12 +185,18 @@ pub enum ParamFault {
     /// Fewer values than the required ones or more than the kind takes
     /// (counting the hardware index of input kinds).
     Count {
+        /// How many values were given.
         given: usize,
+        /// How many the kind requires.
         min: usize,
+        /// How many it takes at most.
         max: usize,
     },
     /// A value outside its parameter's domain.
-    OutOfRange { param: &'static str },
+    OutOfRange {
+        /// The parameter's name.
+        param: &'static str,
+    },
     /// Values that do not go together (lower above upper).
     Inconsistent(&'static str),
 }

@@ -7,13 +7,16 @@ use super::port::PortRef;
 /// Which fixed capacity ran out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Capacity {
+    /// Components ([`super::GraphBuilder`]'s `C`).
     Components,
+    /// Mappings ([`super::GraphBuilder`]'s `M`).
     Mappings,
     /// More channels than a frame's step list holds ([`super::MAX_FRAME_STEPS`]).
     Channels,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Why a graph description or a parameter change was refused (nothing changed).
 pub enum GraphError {
     /// No component with this index.
     UnknownComponent(u8),
@@ -24,27 +27,57 @@ pub enum GraphError {
     /// A mapping's target (or a tap's listener) must be an input.
     NotAnInput(PortRef),
     /// The two ports carry different quantities (e.g. a length into an angle).
-    UnitMismatch { from: PortRef, to: PortRef },
+    UnitMismatch {
+        /// The mapping's source.
+        from: PortRef,
+        /// The mapping's target.
+        to: PortRef,
+    },
     /// An INCREMENTAL mapping touches a level port (analog reading, button,
     /// speed, flag), which only has an absolute meaning.
-    ModeMismatch { from: PortRef, to: PortRef },
+    ModeMismatch {
+        /// The mapping's source.
+        from: PortRef,
+        /// The mapping's target (either end may be the level port).
+        to: PortRef,
+    },
     /// An input receives an ABSOLUTE mapping and any other mapping: the result
     /// would depend on the order of transmission.
     AbsoluteFanIn(PortRef),
     /// The same source is mapped onto the same target twice.
-    DuplicateMapping { from: PortRef, to: PortRef },
+    DuplicateMapping {
+        /// The source.
+        from: PortRef,
+        /// The target.
+        to: PortRef,
+    },
     /// An ABSOLUTE mapping whose target component runs before its source in the
     /// frame (a later component into an earlier one, or a component into
     /// itself). Every cycle contains such a backward mapping; INCREMENTAL ones
     /// are delayed by one frame, ABSOLUTE ones would need the same frame and are
     /// refused.
-    BackwardAbsolute { from: PortRef, to: PortRef },
+    BackwardAbsolute {
+        /// The source (later in the run order).
+        from: PortRef,
+        /// The target (earlier in the run order).
+        to: PortRef,
+    },
     /// A ratio that is zero, infinite or NaN.
     BadRatio(PortRef),
     /// The component has no parameter with this id.
-    UnknownParam { comp: u8, param: u8 },
+    UnknownParam {
+        /// The component, by index.
+        comp: u8,
+        /// The parameter id asked for.
+        param: u8,
+    },
     /// The value is out of range for the parameter (NaN, negative speed, ...).
-    BadValue { comp: u8, param: u8 },
+    BadValue {
+        /// The component, by index.
+        comp: u8,
+        /// The parameter whose value was refused.
+        param: u8,
+    },
     /// A fixed-capacity table is full.
     CapacityExceeded(Capacity),
     /// A reset or read walked further than the graph has components (a cycle).

@@ -12,15 +12,21 @@ use motet_wire::message::GraphKind;
 /// once, e.g. Wheelbot's ellipse stretch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScalingFilter1D {
+    /// Block units out per block unit in (the `ratio` parameter).
     pub ratio: f64,
+    /// Whether changes or the absolute input are scaled (the `mode` parameter).
     pub mode: Mode,
 }
 
 impl ScalingFilter1D {
+    /// Port 0: the `in` input (any quantity).
     pub const IN: u8 = 0;
+    /// Port 1: the `out` output (any quantity).
     pub const OUT: u8 = 1;
+    /// `set_param` id of the `ratio` parameter.
     pub const RATIO: u8 = 0;
 
+    /// A filter scaling by `ratio` in `mode`.
     pub fn new(ratio: f64, mode: Mode) -> ScalingFilter1D {
         ScalingFilter1D { ratio, mode }
     }
@@ -99,17 +105,25 @@ impl Kind for ScalingFilter1D {
 /// Two inputs scaled by the same ratio (see [`ScalingFilter1D`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScalingFilter2D {
+    /// Block units out per block unit in, both axes (the `ratio` parameter).
     pub ratio: f64,
+    /// Whether changes or the absolute inputs are scaled (the `mode` parameter).
     pub mode: Mode,
 }
 
 impl ScalingFilter2D {
+    /// Port 0: the `in_x` input (any quantity).
     pub const IN_X: u8 = 0;
+    /// Port 1: the `in_y` input (any quantity).
     pub const IN_Y: u8 = 1;
+    /// Port 2: the `out_x` output (any quantity).
     pub const OUT_X: u8 = 2;
+    /// Port 3: the `out_y` output (any quantity).
     pub const OUT_Y: u8 = 3;
+    /// `set_param` id of the `ratio` parameter.
     pub const RATIO: u8 = 0;
 
+    /// A filter scaling both inputs by `ratio` in `mode`.
     pub fn new(ratio: f64, mode: Mode) -> ScalingFilter2D {
         ScalingFilter2D { ratio, mode }
     }
@@ -194,18 +208,26 @@ impl Kind for ScalingFilter2D {
 /// changes (the main loop's substitute for callbacks).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ThresholdGenerator {
+    /// The input's lower bound, block units (the `lower` parameter).
     pub lower: f64,
+    /// The input's upper bound, block units (the `upper` parameter).
     pub upper: f64,
     crossings: u32,
 }
 
 impl ThresholdGenerator {
+    /// Port 0: the `in` input (any quantity).
     pub const IN: u8 = 0;
+    /// Port 1: the `out` output (any quantity).
     pub const OUT: u8 = 1;
+    /// Port 2: the `flag` level output (a scalar).
     pub const FLAG: u8 = 2;
+    /// `set_param` id of the `lower` parameter.
     pub const LOWER: u8 = 0;
+    /// `set_param` id of the `upper` parameter.
     pub const UPPER: u8 = 1;
 
+    /// A threshold between `lower` and `upper`, with no crossings counted yet.
     pub fn new(lower: f64, upper: f64) -> ThresholdGenerator {
         ThresholdGenerator {
             lower,
@@ -214,6 +236,7 @@ impl ThresholdGenerator {
         }
     }
 
+    /// How often the flag output changed since the component was made.
     pub fn crossings(&self) -> u32 {
         self.crossings
     }

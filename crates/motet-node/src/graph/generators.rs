@@ -14,7 +14,9 @@ use motet_wire::message::GraphKind;
 pub struct VelocityGenerator;
 
 impl VelocityGenerator {
+    /// Port 0: the `speed` level input (any quantity).
     pub const SPEED: u8 = 0;
+    /// Port 1: the `out` output (any quantity).
     pub const OUT: u8 = 1;
     /// Parameter: the speed (units/s).
     pub const SPEED_PARAM: u8 = 0;
@@ -62,18 +64,25 @@ impl Kind for VelocityGenerator {
 /// (units/s, block units of the output), `STOP`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PositionGenerator {
+    /// Speed toward the target, block units of the output per second (the `speed` parameter).
     pub speed: f64,
     target: f64,
     moving: bool,
 }
 
 impl PositionGenerator {
+    /// Port 0: the `out` output (any quantity).
     pub const OUT: u8 = 0;
+    /// `set_param` id of the `speed` parameter (units/s).
     pub const SPEED: u8 = 0;
+    /// `set_param` id of `go`: moves to the value (absolute target).
     pub const GO_ABSOLUTE: u8 = 1;
+    /// `set_param` id of `go_relative`: moves by the value from where the output is.
     pub const GO_RELATIVE: u8 = 2;
+    /// `set_param` id of `stop`: stops where the output is (any value).
     pub const STOP: u8 = 3;
 
+    /// A generator at rest at 0, moving at `speed` once told to go.
     pub fn new(speed: f64) -> PositionGenerator {
         PositionGenerator {
             speed,
@@ -82,10 +91,12 @@ impl PositionGenerator {
         }
     }
 
+    /// Whether it is on its way to the target.
     pub fn moving(&self) -> bool {
         self.moving
     }
 
+    /// Where it is going (or went), block units.
     pub fn target(&self) -> f64 {
         self.target
     }
@@ -172,21 +183,32 @@ fn advance(cycles: f64, by: f64) -> f64 {
 /// inside the sine, never added to the amplitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WaveGenerator1D {
+    /// Peak of the sine, block units of the output (the `amplitude` parameter).
     pub amplitude: f64,
+    /// Cycles per second added to the phase (the `frequency` parameter).
     pub frequency: f64,
+    /// Angle inside the sine, radians (the `phase` parameter).
     pub phase: f64,
+    /// The `per_input` parameter (cycles/unit): cycles per unit of drive change.
     pub per_input: f64,
     cycles: f64,
 }
 
 impl WaveGenerator1D {
+    /// Port 0: the `drive` input (any quantity).
     pub const DRIVE: u8 = 0;
+    /// Port 1: the `out` output (any quantity).
     pub const OUT: u8 = 1;
+    /// `set_param` id of the `amplitude` parameter (units).
     pub const AMPLITUDE: u8 = 0;
+    /// `set_param` id of the `frequency` parameter (Hz).
     pub const FREQUENCY: u8 = 1;
+    /// `set_param` id of the `phase` parameter (rad).
     pub const PHASE: u8 = 2;
+    /// `set_param` id of the `per_input` parameter (cycles/unit): cycles per unit of drive change.
     pub const PER_INPUT: u8 = 3;
 
+    /// A sine of `amplitude` at `frequency` Hz and `phase` radians, not driven by an input.
     pub fn new(amplitude: f64, frequency: f64, phase: f64) -> WaveGenerator1D {
         WaveGenerator1D {
             amplitude,
@@ -282,24 +304,38 @@ impl Kind for WaveGenerator1D {
 /// the distance travelled (waves per unit length).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WaveGenerator2D {
+    /// Peak of the sine, across the direction of travel (the `amplitude` parameter).
     pub amplitude: f64,
+    /// Cycles per second added to the phase (the `frequency` parameter).
     pub frequency: f64,
+    /// Angle inside the sine, radians (the `phase` parameter).
     pub phase: f64,
+    /// The `per_distance` parameter (cycles/unit): cycles per unit travelled.
     pub per_distance: f64,
     cycles: f64,
     normal: (f64, f64),
 }
 
 impl WaveGenerator2D {
+    /// Port 0: the `in_x` input (any quantity).
     pub const IN_X: u8 = 0;
+    /// Port 1: the `in_y` input (any quantity).
     pub const IN_Y: u8 = 1;
+    /// Port 2: the `out_x` output (any quantity).
     pub const OUT_X: u8 = 2;
+    /// Port 3: the `out_y` output (any quantity).
     pub const OUT_Y: u8 = 3;
+    /// `set_param` id of the `amplitude` parameter (units).
     pub const AMPLITUDE: u8 = 0;
+    /// `set_param` id of the `frequency` parameter (Hz).
     pub const FREQUENCY: u8 = 1;
+    /// `set_param` id of the `phase` parameter (rad).
     pub const PHASE: u8 = 2;
+    /// `set_param` id of the `per_distance` parameter (cycles/unit): cycles per unit travelled.
     pub const PER_DISTANCE: u8 = 3;
 
+    /// A sine of `amplitude` at `frequency` Hz and `phase` radians plus `per_distance` cycles per
+    /// unit travelled.
     pub fn new(amplitude: f64, frequency: f64, phase: f64, per_distance: f64) -> WaveGenerator2D {
         WaveGenerator2D {
             amplitude,
@@ -378,17 +414,24 @@ impl Kind for WaveGenerator2D {
 /// revolutions (revolutions throughout; radians only inside the trigonometry).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CircleGenerator {
+    /// Radius of the circle, block units of the outputs (the `radius` parameter).
     pub radius: f64,
+    /// Revolutions per second; the sign is the direction (the `rev_per_s` parameter).
     pub rev_per_s: f64,
     revs: f64,
 }
 
 impl CircleGenerator {
+    /// Port 0: the `x` output (any quantity).
     pub const X: u8 = 0;
+    /// Port 1: the `y` output (any quantity).
     pub const Y: u8 = 1;
+    /// `set_param` id of the `radius` parameter (units).
     pub const RADIUS: u8 = 0;
+    /// `set_param` id of the `rev_per_s` parameter (rev/s).
     pub const REV_PER_S: u8 = 1;
 
+    /// A circle of `radius` at `rev_per_s`.
     pub fn new(radius: f64, rev_per_s: f64) -> CircleGenerator {
         CircleGenerator {
             radius,
@@ -445,15 +488,21 @@ impl Kind for CircleGenerator {
 /// extruders).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathLength2D {
+    /// Output units per unit of distance travelled (the `ratio` parameter).
     pub ratio: f64,
 }
 
 impl PathLength2D {
+    /// Port 0: the `in_x` input (any quantity).
     pub const IN_X: u8 = 0;
+    /// Port 1: the `in_y` input (any quantity).
     pub const IN_Y: u8 = 1;
+    /// Port 2: the `out` output (any quantity).
     pub const OUT: u8 = 2;
+    /// `set_param` id of the `ratio` parameter (output per distance).
     pub const RATIO: u8 = 0;
 
+    /// Path length times `ratio`.
     pub fn new(ratio: f64) -> PathLength2D {
         PathLength2D { ratio }
     }
@@ -504,16 +553,23 @@ impl Kind for PathLength2D {
 /// [`PathLength2D`] in three dimensions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathLength3D {
+    /// Output units per unit of distance travelled (the `ratio` parameter).
     pub ratio: f64,
 }
 
 impl PathLength3D {
+    /// Port 0: the `in_x` input (any quantity).
     pub const IN_X: u8 = 0;
+    /// Port 1: the `in_y` input (any quantity).
     pub const IN_Y: u8 = 1;
+    /// Port 2: the `in_z` input (any quantity).
     pub const IN_Z: u8 = 2;
+    /// Port 3: the `out` output (any quantity).
     pub const OUT: u8 = 3;
+    /// `set_param` id of the `ratio` parameter (output per distance).
     pub const RATIO: u8 = 0;
 
+    /// Path length times `ratio`.
     pub fn new(ratio: f64) -> PathLength3D {
         PathLength3D { ratio }
     }

@@ -59,7 +59,9 @@ pub(crate) fn set_block_param(
 /// A component with its ports and the ranges of its mappings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Block {
+    /// The component.
     pub comp: Component,
+    /// Its ports' state, in index order.
     pub ports: Vec<Port, MAX_PORTS>,
     /// Push mappings from this block's outputs: `maps[push.0..push.1]`.
     pub(crate) push: (u16, u16),
@@ -101,18 +103,22 @@ impl<const C: usize, const M: usize> Graph<C, M> {
         self.frame_us
     }
 
+    /// Components in the graph.
     pub fn len(&self) -> usize {
         self.blocks.len()
     }
 
+    /// Whether the graph has no component.
     pub fn is_empty(&self) -> bool {
         self.blocks.is_empty()
     }
 
+    /// Component `i`, by index in the order added.
     pub fn component(&self, i: u8) -> Option<&Component> {
         self.blocks.get(i as usize).map(|b| &b.comp)
     }
 
+    /// The port `p`'s state (value in block units, ratio, direction).
     pub fn port(&self, p: PortRef) -> Option<&Port> {
         self.blocks.get(p.comp as usize)?.ports.get(p.port as usize)
     }
@@ -151,6 +157,7 @@ impl<const C: usize, const M: usize> Graph<C, M> {
         set_block_param(&mut self.blocks, comp, param, value)
     }
 
+    /// Parameter `param` of component `comp`, if the kind reports it.
     pub fn param(&self, comp: u8, param: u8) -> Option<f64> {
         let b = self.blocks.get(comp as usize)?;
         b.comp.param(&b.ports, param)

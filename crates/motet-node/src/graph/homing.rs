@@ -8,11 +8,15 @@ use super::port::{Port, PortSpec, Unit};
 use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// Where a homing cycle is.
 pub enum HomingState {
+    /// Not homing (before the first `start`).
     Idle,
+    /// Moving at `speed` toward the limit.
     Seeking,
     /// Backing off; distance still to go (block units).
     BackingOff(f64),
+    /// Homed: the chain reads `home`.
     Done,
 }
 
@@ -24,7 +28,9 @@ pub enum HomingState {
 /// Parameter `START` (any value) starts a cycle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Homing {
+    /// The `speed` parameter (units/s): signed: the direction of the seek.
     pub speed: f64,
+    /// How far to move back off the limit, block units (the `backoff` parameter).
     pub backoff: f64,
     /// Home position, world units of the output port.
     pub home: f64,
@@ -33,13 +39,20 @@ pub struct Homing {
 }
 
 impl Homing {
+    /// Port 0: the `limit` level input (a scalar).
     pub const LIMIT: u8 = 0;
+    /// Port 1: the `out` output (any quantity).
     pub const OUT: u8 = 1;
+    /// `set_param` id of `start`: starts a cycle (any value).
     pub const START: u8 = 0;
+    /// `set_param` id of the `speed` parameter (units/s): signed: the direction of the seek.
     pub const SPEED: u8 = 1;
+    /// `set_param` id of the `backoff` parameter.
     pub const BACKOFF: u8 = 2;
+    /// `set_param` id of the `home` parameter (units): the position the chain is reset to.
     pub const HOME: u8 = 3;
 
+    /// Homing at `speed` (signed), backing off by `backoff`, reset to `home`; idle until started.
     pub fn new(speed: f64, backoff: f64, home: f64) -> Homing {
         Homing {
             speed,
@@ -50,6 +63,7 @@ impl Homing {
         }
     }
 
+    /// Where the cycle is.
     pub fn state(&self) -> HomingState {
         self.state
     }

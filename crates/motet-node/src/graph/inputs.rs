@@ -18,25 +18,41 @@ fn hw_index(hw: u8) -> usize {
 /// within `deadband_width` of `deadband_center` read as the centre).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalogInput {
+    /// Which analog input it reads, below [`MAX_HW`] (the first construction value).
     pub hw: u8,
+    /// The `floor_value` parameter: value at `floor_raw`.
     pub floor_value: f64,
+    /// The raw reading that maps to `floor_value`.
     pub floor_raw: f64,
+    /// The `ceiling_value` parameter: value at `ceiling_raw`.
     pub ceiling_value: f64,
+    /// The raw reading that maps to `ceiling_value`.
     pub ceiling_raw: f64,
+    /// Raw readings within `deadband_width` of this read as it.
     pub deadband_center: f64,
+    /// Width of the deadband, raw units (0: none).
     pub deadband_width: f64,
+    /// Samples the exponential average spans (1: none).
     pub average: f64,
     avg: Option<f64>,
 }
 
 impl AnalogInput {
+    /// Port 0: the `value` level output (any quantity).
     pub const OUT: u8 = 0;
+    /// `set_param` id of the `floor_value` parameter: value at `floor_raw`.
     pub const FLOOR_VALUE: u8 = 0;
+    /// `set_param` id of the `floor_raw` parameter.
     pub const FLOOR_RAW: u8 = 1;
+    /// `set_param` id of the `ceiling_value` parameter: value at `ceiling_raw`.
     pub const CEILING_VALUE: u8 = 2;
+    /// `set_param` id of the `ceiling_raw` parameter.
     pub const CEILING_RAW: u8 = 3;
+    /// `set_param` id of the `deadband_center` parameter.
     pub const DEADBAND_CENTER: u8 = 4;
+    /// `set_param` id of the `deadband_width` parameter.
     pub const DEADBAND_WIDTH: u8 = 5;
+    /// `set_param` id of the `average` parameter (samples).
     pub const AVERAGE: u8 = 6;
 
     /// Raw 0..1023 read as 0..1, no deadband, no averaging.
@@ -54,24 +70,28 @@ impl AnalogInput {
         }
     }
 
+    /// Raw reading `raw` maps to `value`.
     pub fn floor(mut self, value: f64, raw: f64) -> Self {
         self.floor_value = value;
         self.floor_raw = raw;
         self
     }
 
+    /// Raw reading `raw` maps to `value`.
     pub fn ceiling(mut self, value: f64, raw: f64) -> Self {
         self.ceiling_value = value;
         self.ceiling_raw = raw;
         self
     }
 
+    /// Raw readings within `width_raw` of `center_raw` read as `center_raw`.
     pub fn deadband(mut self, center_raw: f64, width_raw: f64) -> Self {
         self.deadband_center = center_raw;
         self.deadband_width = width_raw;
         self
     }
 
+    /// Averages over `samples` readings (at least 1).
     pub fn averaging(mut self, samples: f64) -> Self {
         self.average = samples.max(1.0);
         self
@@ -180,6 +200,7 @@ impl Kind for AnalogInput {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What a button's output follows.
 pub enum ButtonMode {
     /// Output 1 while pressed.
     Standard,
@@ -191,8 +212,11 @@ pub enum ButtonMode {
 /// accepted after it has been stable for `debounce_ms` slow frames.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Button {
+    /// Which digital input it reads, below [`MAX_HW`] (the first construction value).
     pub hw: u8,
+    /// Whether the output follows the level or flips on each press.
     pub mode: ButtonMode,
+    /// Slow frames (ms) a new level must hold before it is taken (the `debounce_ms` parameter).
     pub debounce_ms: u16,
     stable: bool,
     count: u16,
@@ -202,9 +226,12 @@ pub struct Button {
 }
 
 impl Button {
+    /// Port 0: the `state` level output (a scalar).
     pub const OUT: u8 = 0;
+    /// `set_param` id of the `debounce_ms` parameter.
     pub const DEBOUNCE_MS: u8 = 0;
 
+    /// A button on digital input `hw`, debounced over 5 ms.
     pub fn new(hw: u8, mode: ButtonMode) -> Button {
         Button {
             hw,
@@ -226,6 +253,7 @@ impl Button {
         }
     }
 
+    /// Debounces over `ms` slow frames (0: none).
     pub fn debounce(mut self, ms: u16) -> Self {
         self.debounce_ms = ms;
         self
@@ -322,16 +350,21 @@ impl Kind for Button {
 /// port's ratio for world units), optionally inverted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Encoder {
+    /// Which encoder it reads, below [`MAX_HW`] (the first construction value).
     pub hw: u8,
+    /// Whether the count is negated (the `invert` parameter).
     pub invert: bool,
     offset: f64,
     count: i64,
 }
 
 impl Encoder {
+    /// Port 0: the `count` output (any quantity).
     pub const OUT: u8 = 0;
+    /// `set_param` id of the `invert` parameter (nonzero: negate).
     pub const INVERT: u8 = 0;
 
+    /// The encoder `hw`, counting as wired.
     pub fn new(hw: u8) -> Encoder {
         Encoder {
             hw,
@@ -341,6 +374,7 @@ impl Encoder {
         }
     }
 
+    /// Negates the count.
     pub fn inverted(mut self) -> Self {
         self.invert = true;
         self
@@ -405,10 +439,12 @@ impl Kind for Encoder {
 /// one block unit (set the outputs' ratios for world units).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StreamInput {
+    /// Which motion-stream input port it decodes, below [`MAX_HW`] (the first construction value).
     pub hw: u8,
 }
 
 impl StreamInput {
+    /// The stream input `hw`.
     pub fn new(hw: u8) -> StreamInput {
         StreamInput { hw }
     }

@@ -49,11 +49,14 @@ pub struct StepOut {
 /// the wire ([`super::wire::encode`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameOut {
+    /// The steps of the frame's channels, in run order.
     pub steps: Vec<StepOut, MAX_FRAME_STEPS>,
+    /// Per motion-stream output port (by hardware index), the steps to encode this frame.
     pub ports: [Signals; MAX_HW],
 }
 
 impl FrameOut {
+    /// Empties it for the next frame.
     pub fn clear(&mut self) {
         self.steps.clear();
         self.ports = [Signals::NONE; MAX_HW];
@@ -62,13 +65,18 @@ impl FrameOut {
 
 /// Everything a component may look at while it runs.
 pub struct Ctx<'a, 'b, const Q: usize> {
+    /// The running component's index.
     pub comp: u8,
     /// Frame time, µs (host clock).
     pub now_us: f64,
     /// Frame period, seconds.
     pub dt: f64,
+    /// This frame's hardware readings.
     pub inputs: &'a Inputs,
+    /// The node's segment queue, for a trajectory reader.
     pub segments: &'a Deque<Segment, Q>,
+    /// Where the frame's steps and stream outputs go.
     pub out: &'a mut FrameOut,
+    /// The recording tape, for a recorder or player.
     pub tape: &'a mut Tape<'b>,
 }

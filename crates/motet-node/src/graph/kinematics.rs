@@ -15,15 +15,21 @@ use motet_wire::message::GraphKind;
 pub struct CoreXY;
 
 impl CoreXY {
+    /// Port 0: the `x` input (a length).
     pub const X: u8 = 0;
+    /// Port 1: the `y` input (a length).
     pub const Y: u8 = 1;
+    /// Port 2: the `a` output (a length).
     pub const A: u8 = 2;
+    /// Port 3: the `b` output (a length).
     pub const B: u8 = 3;
 
+    /// Motor positions `(a, b)` of the carriage position `(x, y)`.
     pub fn forward(x: f64, y: f64) -> (f64, f64) {
         (x + y, x - y)
     }
 
+    /// The carriage position `(x, y)` of motor positions `(a, b)`.
     pub fn inverse(a: f64, b: f64) -> (f64, f64) {
         ((a + b) * 0.5, (a - b) * 0.5)
     }
@@ -80,11 +86,16 @@ impl Kind for CoreXY {
 pub struct PolarToCartesian;
 
 impl PolarToCartesian {
+    /// Port 0: the `r` input (a length).
     pub const R: u8 = 0;
+    /// Port 1: the `theta` input (an angle).
     pub const THETA: u8 = 1;
+    /// Port 2: the `x` output (a length).
     pub const X: u8 = 2;
+    /// Port 3: the `y` output (a length).
     pub const Y: u8 = 3;
 
+    /// The point `(x, y)` at radius `r` and angle `theta` (radians).
     pub fn forward(r: f64, theta: f64) -> (f64, f64) {
         (r * cos(theta), r * sin(theta))
     }
@@ -147,26 +158,44 @@ impl Kind for PolarToCartesian {
 /// the stylus sits on the left distal link extended by `ext` beyond the joint.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FiveBarForward {
+    /// The `s` parameter (length): distance between the pivots.
     pub s: f64,
+    /// The `l1` parameter (length): left proximal link.
     pub l1: f64,
+    /// The `l2` parameter (length): right proximal link.
     pub l2: f64,
+    /// The `l3` parameter (length): left distal link.
     pub l3: f64,
+    /// The `l4` parameter (length): right distal link.
     pub l4: f64,
+    /// The `ext` parameter (length): stylus beyond the joint, along the left distal link.
     pub ext: f64,
 }
 
 impl FiveBarForward {
+    /// Port 0: the `theta1` input (an angle).
     pub const THETA1: u8 = 0;
+    /// Port 1: the `theta2` input (an angle).
     pub const THETA2: u8 = 1;
+    /// Port 2: the `x` output (a length).
     pub const X: u8 = 2;
+    /// Port 3: the `y` output (a length).
     pub const Y: u8 = 3;
+    /// `set_param` id of the `s` parameter (length): distance between the pivots.
     pub const S: u8 = 0;
+    /// `set_param` id of the `l1` parameter (length): left proximal link.
     pub const L1: u8 = 1;
+    /// `set_param` id of the `l2` parameter (length): right proximal link.
     pub const L2: u8 = 2;
+    /// `set_param` id of the `l3` parameter (length): left distal link.
     pub const L3: u8 = 3;
+    /// `set_param` id of the `l4` parameter (length): right distal link.
     pub const L4: u8 = 4;
+    /// `set_param` id of the `ext` parameter (length): stylus beyond the joint, along the left
+    /// distal link.
     pub const EXT: u8 = 5;
 
+    /// A linkage of these lengths, the stylus at the joint (`ext` 0).
     pub fn new(s: f64, l1: f64, l2: f64, l3: f64, l4: f64) -> FiveBarForward {
         FiveBarForward {
             s,

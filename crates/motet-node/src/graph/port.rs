@@ -23,11 +23,14 @@
 /// Address of a port: component index and port index within the component.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct PortRef {
+    /// Index of the component in the graph, in the order added.
     pub comp: u8,
+    /// Index of the port in its component's port list (its kind's declaration).
     pub port: u8,
 }
 
 impl PortRef {
+    /// The port `port` of component `comp`.
     pub const fn new(comp: u8, port: u8) -> PortRef {
         PortRef { comp, port }
     }
@@ -39,8 +42,11 @@ pub const fn port(comp: u8, port: u8) -> PortRef {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Whether a port is read or written by its component.
 pub enum Dir {
+    /// An input: written by mappings, read by its component.
     In,
+    /// An output: written by its component, read by mappings.
     Out,
 }
 
@@ -48,8 +54,11 @@ pub enum Dir {
 /// everything.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Unit {
+    /// Matches any quantity (a generic pass-through).
     Any,
+    /// A length, mm in world units.
     Length,
+    /// An angle, radians in world units.
     Angle,
     /// A rate: units per second.
     Speed,
@@ -58,6 +67,8 @@ pub enum Unit {
 }
 
 impl Unit {
+    /// Whether a port carrying `self` may be mapped to or from one carrying `other`: equal, or
+    /// either is `Any`.
     pub fn compatible(self, other: Unit) -> bool {
         self == Unit::Any || other == Unit::Any || self == other
     }
@@ -76,8 +87,11 @@ pub enum Mode {
 /// Static description of one port of a component kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PortSpec {
+    /// The port's name in graph files.
     pub name: &'static str,
+    /// Input or output.
     pub dir: Dir,
+    /// The quantity it carries, checked when mapping.
     pub unit: Unit,
     /// A level (parameter-like) port: it only makes sense in ABSOLUTE mappings
     /// (analog readings, button states, speeds, flags).
@@ -85,6 +99,7 @@ pub struct PortSpec {
 }
 
 impl PortSpec {
+    /// An input that accumulates changes (incremental or absolute mappings).
     pub const fn input(name: &'static str, unit: Unit) -> PortSpec {
         PortSpec {
             name,
@@ -93,6 +108,7 @@ impl PortSpec {
             level: false,
         }
     }
+    /// An output whose changes incremental mappings carry.
     pub const fn output(name: &'static str, unit: Unit) -> PortSpec {
         PortSpec {
             name,
@@ -101,6 +117,7 @@ impl PortSpec {
             level: false,
         }
     }
+    /// A level input: absolute mappings only.
     pub const fn level_in(name: &'static str, unit: Unit) -> PortSpec {
         PortSpec {
             name,
@@ -109,6 +126,7 @@ impl PortSpec {
             level: true,
         }
     }
+    /// A level output: absolute mappings only.
     pub const fn level_out(name: &'static str, unit: Unit) -> PortSpec {
         PortSpec {
             name,
@@ -128,12 +146,16 @@ pub struct Port {
     pub last: f64,
     world: f64,
     block: f64,
+    /// Input or output, as declared.
     pub dir: Dir,
+    /// The quantity it carries, as declared.
     pub unit: Unit,
+    /// Absolute mappings only, as declared.
     pub level: bool,
 }
 
 impl Port {
+    /// A port as `spec` declares it, at 0, with a 1:1 ratio.
     pub fn new(spec: &PortSpec) -> Port {
         Port {
             value: 0.0,
@@ -195,16 +217,22 @@ impl Port {
 /// component runs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapKind {
+    /// Run when the source's component has run.
     Push,
+    /// Run when the tapping (target) component runs.
     Tap,
 }
 
 /// A mapping from `from` to the input `to`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mapping {
+    /// The source port.
     pub from: PortRef,
+    /// The target input port.
     pub to: PortRef,
+    /// Whether the target gets the change (added) or the value (overwritten).
     pub mode: Mode,
+    /// Push or pull.
     pub kind: MapKind,
     /// Source value (block units) when the mapping last transmitted.
     pub last: f64,

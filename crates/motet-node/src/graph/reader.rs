@@ -17,13 +17,17 @@ use super::port::{Port, PortSpec, Unit};
 /// end; with an empty queue it holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrajectoryReader {
+    /// The machine axis it reads, an index into the trajectory's point (the `axis` parameter).
     pub axis: u8,
 }
 
 impl TrajectoryReader {
+    /// Port 0: the `position` output (any quantity).
     pub const OUT: u8 = 0;
+    /// `set_param` id of the `axis` parameter.
     pub const AXIS: u8 = 0;
 
+    /// A reader of `axis` (clamped to the last axis).
     pub fn new(axis: u8) -> TrajectoryReader {
         TrajectoryReader {
             axis: axis.min(MAX_AXES as u8 - 1),

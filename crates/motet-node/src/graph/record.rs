@@ -65,10 +65,12 @@ impl<'a> Tape<'a> {
         self.len
     }
 
+    /// Whether the tape holds no sample.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
+    /// The most samples it holds (its buffer's size).
     pub fn capacity(&self) -> usize {
         self.buf.len()
     }
@@ -88,10 +90,12 @@ impl<'a> Tape<'a> {
         true
     }
 
+    /// Sample `i`, if recorded.
     pub fn get(&self, i: usize) -> Option<u8> {
         (i < self.len).then(|| self.buf[i])
     }
 
+    /// Forgets the samples (the buffer is kept).
     pub fn clear(&mut self) {
         self.len = 0;
     }

@@ -21,12 +21,15 @@ pub struct FourTrackRecorder {
 }
 
 impl FourTrackRecorder {
+    /// `set_param` id of `record`: nonzero starts a new recording, zero stops.
     pub const RECORD: u8 = 0;
 
+    /// A recorder, not recording.
     pub fn new() -> FourTrackRecorder {
         FourTrackRecorder::default()
     }
 
+    /// Whether it is recording.
     pub fn recording(&self) -> bool {
         self.recording
     }
@@ -111,17 +114,22 @@ pub struct FourTrackPlayer {
 }
 
 impl FourTrackPlayer {
+    /// `set_param` id of `play`: nonzero plays from the start, zero stops.
     pub const PLAY: u8 = 0;
+    /// `set_param` id of `loop`: nonzero loops.
     pub const LOOP: u8 = 1;
 
+    /// A player, stopped, at the start of the tape.
     pub fn new() -> FourTrackPlayer {
         FourTrackPlayer::default()
     }
 
+    /// Whether it is playing.
     pub fn playing(&self) -> bool {
         self.playing
     }
 
+    /// The next sample it plays, an index into the tape.
     pub fn cursor(&self) -> usize {
         self.cursor
     }

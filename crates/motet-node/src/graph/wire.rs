@@ -34,11 +34,17 @@ pub const CODES: usize = 6;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Signal {
+    /// The x axis: a 2 µs pulse.
     X = 0,
+    /// The y axis: a 3 µs pulse.
     Y = 1,
+    /// The radius of a polar pair: a 4 µs pulse.
     R = 2,
+    /// The angle θ of a polar pair: a 5 µs pulse.
     T = 3,
+    /// The z axis: a 6 µs pulse.
     Z = 4,
+    /// The extruder (or a seventh axis): a 7 µs pulse, dropped when all six are active.
     E = 5,
 }
 
@@ -51,16 +57,20 @@ pub const fn pulse_width(code: u8) -> usize {
 /// steps, bit `c` of `forward` gives its direction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Signals {
+    /// Bit `c` set: code `c` steps this frame.
     pub active: u8,
+    /// Bit `c` set: code `c` steps forward (meaningful only where `active` is set).
     pub forward: u8,
 }
 
 impl Signals {
+    /// No code steps.
     pub const NONE: Signals = Signals {
         active: 0,
         forward: 0,
     };
 
+    /// Code `c` steps, forward or back (a second call for the same code replaces the first).
     pub fn set(&mut self, code: u8, forward: bool) {
         let bit = 1u8 << code;
         self.active |= bit;
@@ -89,7 +99,9 @@ impl Signals {
 /// Step and direction lines over one frame at 1 µs resolution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Lines {
+    /// The step line's level in each µs of the frame.
     pub step: [bool; FRAME_US],
+    /// The direction line's level in each µs of the frame.
     pub dir: [bool; FRAME_US],
 }
 
@@ -105,7 +117,9 @@ impl Default for Lines {
 /// An encoded frame: the lines, what was sent and which codes were dropped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Encoded {
+    /// The lines to drive.
     pub lines: Lines,
+    /// The codes that fit the window: what the receiver will decode.
     pub sent: Signals,
     /// Bit `c` set when code `c` was active but did not fit the window.
     pub dropped: u8,
@@ -170,16 +184,22 @@ fn accept(out: &mut Signals, width_us: f64, dir: bool) {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// One of the two lines of a motion stream.
 pub enum Line {
+    /// The step line: pulse widths carry the codes.
     Step,
+    /// The direction line: high around a forward step's pulse.
     Dir,
 }
 
 /// A level change on a line at `t_us` from the frame start.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Edge {
+    /// When the level changes, µs from the frame start.
     pub t_us: f64,
+    /// Which line changes.
     pub line: Line,
+    /// Low to high (true) or high to low.
     pub rising: bool,
 }
 

@@ -11,8 +11,11 @@ use motet_trajectory::{Point, Segment, MAX_AXES};
 /// A finished batch and the number of segments in it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Batch {
+    /// Sequence number of the batch's first segment.
     pub first_seq: u32,
+    /// How many segments it holds.
     pub segments: usize,
+    /// The encoded bytes, ready for [`crate::HostMessage::Segments`].
     pub batch: SegmentBatch,
 }
 

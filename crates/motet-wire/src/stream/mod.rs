@@ -19,7 +19,8 @@
 //! |---|---|---|
 //! | flags | always | u8, bits below |
 //! | moving axes | `MASK` | u8 bit mask; otherwise the previous segment's |
-//! | t0, v0 | `START` | f64 µs, varint speed quanta; otherwise the previous end time and exit speed |
+//! | t0, v0 | `START` | f64 µs, varint speed quanta; otherwise the previous end time and exit speed
+//! |
 //! | length | `LENGTH` | varint position quanta; 0 = a dwell, its seconds follow as f64 |
 //! | accel | `ACCEL` | varint accel quanta; otherwise the previous segment's |
 //! | jerk | `JERK` | varint accel quanta; otherwise the previous segment's |
@@ -111,6 +112,7 @@ impl StreamConfig {
 /// The segments of one [`crate::HostMessage::Segments`], encoded.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SegmentBatch {
+    /// The batch's encoding (see this module's description), at most [`BATCH_BYTES`].
     pub bytes: Vec<u8, BATCH_BYTES>,
 }
 
@@ -121,11 +123,18 @@ pub struct StreamState {
     /// End of the previous segment (the machine's position at rest after a
     /// `SetPosition`).
     pub tail: Point,
+    /// End time of the previous segment, µs on the host clock: the next one starts there unless it
+    /// says otherwise.
     pub t1: f64,
+    /// Exit speed of the previous segment, units/s: the next one's entry speed.
     pub v1: f64,
+    /// Cruise speed of the previous segment, units/s, which the next may repeat.
     pub vc: f64,
+    /// Acceleration of the previous segment, units/s², which the next may repeat.
     pub accel: f64,
+    /// Jerk of the previous segment, units/s³, which the next may repeat.
     pub jerk: f64,
+    /// The axes the previous segment moved (bit per axis), which the next may repeat.
     pub mask: u8,
     /// A previous segment exists: without one, the next segment carries its
     /// start time and speed.

@@ -35,6 +35,7 @@ impl Quantizer {
         }
     }
 
+    /// The quanta segments are rounded to.
     pub fn config(&self) -> &StreamConfig {
         &self.cfg
     }

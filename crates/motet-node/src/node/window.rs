@@ -1,0 +1,94 @@
+//! Windowed mode: segments and events held pending until a seal commits
+//! them, and the committed window's contingency tail, on which the node
+//! stops by itself when no seal follows.
+
+use super::Node;
+use crate::board::Board;
+use motet_trajectory::Contingency;
+use motet_wire::Refusal;
+
+impl<const Q: usize, const T: usize> Node<Q, T> {
+    /// Windowed mode for the run `run`, from rest: what is sent from now on
+    /// waits for a seal.
+    pub(super) fn open_window(&mut self, run: u32) -> Result<(), Refusal> {
+        if self.segments.is_empty() {
+            self.windowed = true;
+            self.run = run;
+            Ok(())
+        } else {
+            Err(Refusal::NotAtRest)
+        }
+    }
+
+    /// Segments that run: all but the pending ones.
+    pub(super) fn committed_len(&self) -> usize {
+        self.segments.len() - self.pending
+    }
+
+    /// Commits the pending segments and events, if the window they close can
+    /// still stop on its tail.
+    pub(super) fn seal(&mut self, next_seq: u32) -> Result<(), Refusal> {
+        if !self.windowed {
+            return Err(Refusal::BadConfig);
+        }
+        if self.stopped {
+            return Err(Refusal::TailStarted);
+        }
+        if next_seq != self.next_seq {
+            return Err(Refusal::OutOfOrder {
+                expected: self.next_seq,
+                got: next_seq,
+            });
+        }
+        if self.pending > 0 {
+            // The queue may have retired the window's head; the tail is found
+            // from the end, so a tail still ahead of `now` is found the same.
+            let c = Contingency::of(self.segments.iter()).map_err(|_| Refusal::TailStarted)?;
+            if c.start_time < self.now {
+                return Err(Refusal::TailStarted);
+            }
+            let first = self.segments.get(self.committed_len()).map(|s| s.t0);
+            self.tail_start = Some(c.start_time);
+            self.pending = 0;
+            self.starved = false;
+            if let Some(t0) = first {
+                for t in self.tools.iter_mut() {
+                    t.wake(t0.max(self.now));
+                }
+            }
+        }
+        self.pending_events = 0;
+        Ok(())
+    }
+
+    /// The committed window's tail takes over at `at`: the tail's profiles
+    /// replace the planned ones, anything not yet committed or due later is
+    /// dropped, every tool goes to 0, and the node stops taking segments.
+    pub(super) fn stop_on_tail<B: Board>(&mut self, at: f64, board: &mut B) {
+        for _ in 0..self.pending {
+            self.segments.pop_back();
+        }
+        self.next_seq = self.next_seq.wrapping_sub(self.pending as u32);
+        self.pending = 0;
+        self.pending_events = 0;
+        self.events.clear();
+        if let Ok(c) = Contingency::of(self.segments.iter()) {
+            let mut walk = c.walk();
+            for j in c.start..c.len {
+                if let Some(s) = self.segments.get_mut(j) {
+                    *s = walk.next(s);
+                }
+            }
+            for ch in self.channels.iter_mut() {
+                ch.retime(&self.segments, c.start);
+            }
+            self.tail = c.stop;
+        }
+        for t in self.tools.iter_mut() {
+            t.set(0.0, 0.0, at, None);
+            board.set_tool(t.output(), 0.0, at);
+        }
+        self.tail_start = None;
+        self.stopped = true;
+    }
+}
