@@ -64,9 +64,9 @@ fn corexy_round_trip() {
         (1e3, -1e3),
         (0.1, 0.2),
     ] {
-        let (a, b) = CoreXY::forward(x, y);
+        let (a, b) = CoreXY::motors(x, y);
         assert_eq!((a, b), (x + y, x - y));
-        let (x2, y2) = CoreXY::inverse(a, b);
+        let (x2, y2) = CoreXY::cartesian(a, b);
         assert!((x2 - x).abs() < 1e-12 && (y2 - y).abs() < 1e-12);
     }
 }
@@ -80,10 +80,10 @@ fn polar_round_trip() {
         (10.0, 7.0),
         (3.0, -20.0),
     ] {
-        let (x, y) = PolarToCartesian::forward(r, t);
+        let (x, y) = PolarToCartesian::cartesian(r, t);
         assert!((x - r * t.cos()).abs() < 1e-12 && (y - r * t.sin()).abs() < 1e-12);
         // The inverse unwraps θ to the turn nearest a reference.
-        let (r2, t2) = PolarToCartesian::inverse(x, y, t + 0.1);
+        let (r2, t2) = PolarToCartesian::polar(x, y, t + 0.1);
         assert!((r2 - r).abs() < 1e-12, "{r} {r2}");
         assert!((t2 - t).abs() < 1e-9, "{t} {t2}");
     }
@@ -107,8 +107,8 @@ fn fivebar_round_trip() {
             (140.0, 100.0),
         ] {
             let (t1, t2) = (t1.to_radians(), t2.to_radians());
-            let (x, y) = fb.forward(t1, t2).expect("reachable");
-            let (u1, u2) = fb.inverse(x, y).expect("invertible");
+            let (x, y) = fb.stylus(t1, t2).expect("reachable");
+            let (u1, u2) = fb.angles(x, y).expect("invertible");
             assert!(
                 (u1 - t1).abs() < 1e-9 && (u2 - t2).abs() < 1e-9,
                 "{fb:?} {t1} {t2} -> {u1} {u2}"
@@ -117,7 +117,7 @@ fn fivebar_round_trip() {
     }
     // Symmetric linkage, symmetric angles: the stylus is on the centre line.
     let fb = FiveBarForward::new(50.0, 100.0, 100.0, 150.0, 150.0);
-    let (x, y) = fb.forward(PI - 1.2, 1.2).unwrap();
+    let (x, y) = fb.stylus(PI - 1.2, 1.2).unwrap();
     assert!((x - 25.0).abs() < 1e-9 && y > 0.0);
 }
 

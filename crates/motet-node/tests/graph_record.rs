@@ -26,7 +26,7 @@ fn byte_format() {
 
 #[test]
 fn quantiser_at_most_one_step_per_frame() {
-    let mut q = Quantiser::start(0.3);
+    let mut q = StepQuantizer::start(0.3);
     let steps: Vec<i8> = [0.7, 0.81, 3.0, 3.0, 3.0, 3.0, -1.0]
         .iter()
         .map(|&v| q.step(v))

@@ -62,7 +62,7 @@ fn check(m: &Machine, g: &GraphFile, trace: &CsvTrace, job: &PlannedJob, seconds
     let mut v = [0.0; 2];
     let mut at = |ts: f64| {
         t.values(ts, &mut v);
-        arm.forward(v[0].round() * RAD, v[1].round() * RAD).unwrap()
+        arm.stylus(v[0].round() * RAD, v[1].round() * RAD).unwrap()
     };
     let rest = at(0.0);
     let now = at(last * 1e-6);

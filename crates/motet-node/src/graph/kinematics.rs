@@ -25,12 +25,12 @@ impl CoreXY {
     pub const B: u8 = 3;
 
     /// Motor positions `(a, b)` of the carriage position `(x, y)`.
-    pub fn forward(x: f64, y: f64) -> (f64, f64) {
+    pub fn motors(x: f64, y: f64) -> (f64, f64) {
         (x + y, x - y)
     }
 
     /// The carriage position `(x, y)` of motor positions `(a, b)`.
-    pub fn inverse(a: f64, b: f64) -> (f64, f64) {
+    pub fn cartesian(a: f64, b: f64) -> (f64, f64) {
         ((a + b) * 0.5, (a - b) * 0.5)
     }
 }
@@ -58,13 +58,13 @@ impl Kind for CoreXY {
 
     #[inline]
     fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
-        let (a, b) = CoreXY::forward(ports[0].value, ports[1].value);
+        let (a, b) = CoreXY::motors(ports[0].value, ports[1].value);
         ports[2].value = a;
         ports[3].value = b;
     }
 
     fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
-        let (a, b) = CoreXY::forward(ports[0].value, ports[1].value);
+        let (a, b) = CoreXY::motors(ports[0].value, ports[1].value);
         ports[2].value = a;
         ports[3].value = b;
         true
@@ -75,7 +75,7 @@ impl Kind for CoreXY {
     }
 
     fn inverse(&self, _ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
-        let (x, y) = CoreXY::inverse(outs[2], outs[3]);
+        let (x, y) = CoreXY::cartesian(outs[2], outs[3]);
         Some(if input == 0 { x } else { y })
     }
 }
@@ -96,12 +96,12 @@ impl PolarToCartesian {
     pub const Y: u8 = 3;
 
     /// The point `(x, y)` at radius `r` and angle `theta` (radians).
-    pub fn forward(r: f64, theta: f64) -> (f64, f64) {
+    pub fn cartesian(r: f64, theta: f64) -> (f64, f64) {
         (r * cos(theta), r * sin(theta))
     }
 
     /// `(r, θ)` with θ the turn nearest `theta_ref`.
-    pub fn inverse(x: f64, y: f64, theta_ref: f64) -> (f64, f64) {
+    pub fn polar(x: f64, y: f64, theta_ref: f64) -> (f64, f64) {
         (hypot(x, y), unwrap_near(atan2(y, x), theta_ref))
     }
 }
@@ -129,13 +129,13 @@ impl Kind for PolarToCartesian {
 
     #[inline]
     fn run<const Q: usize>(&mut self, ports: &mut [Port], _ctx: &mut Ctx<'_, '_, Q>) {
-        let (x, y) = PolarToCartesian::forward(ports[0].value, ports[1].value);
+        let (x, y) = PolarToCartesian::cartesian(ports[0].value, ports[1].value);
         ports[2].value = x;
         ports[3].value = y;
     }
 
     fn reset_input(&mut self, ports: &mut [Port], _port: usize) -> bool {
-        let (x, y) = PolarToCartesian::forward(ports[0].value, ports[1].value);
+        let (x, y) = PolarToCartesian::cartesian(ports[0].value, ports[1].value);
         ports[2].value = x;
         ports[3].value = y;
         true
@@ -146,7 +146,7 @@ impl Kind for PolarToCartesian {
     }
 
     fn inverse(&self, ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
-        let (r, t) = PolarToCartesian::inverse(outs[2], outs[3], ports[1].value);
+        let (r, t) = PolarToCartesian::polar(outs[2], outs[3], ports[1].value);
         Some(if input == 0 { r } else { t })
     }
 }
@@ -221,18 +221,18 @@ impl FiveBarForward {
     }
 
     /// The stylus point; `None` when the distal links cannot meet.
-    pub fn forward(&self, t1: f64, t2: f64) -> Option<(f64, f64)> {
+    pub fn stylus(&self, t1: f64, t2: f64) -> Option<(f64, f64)> {
         self.linkage().point(t1, t2)
     }
 
     /// Joint angles for a stylus point, elbows outward (left elbow
     /// counter-clockwise of the left pivot→joint line, right elbow clockwise).
-    pub fn inverse(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+    pub fn angles(&self, x: f64, y: f64) -> Option<(f64, f64)> {
         self.linkage().angles(x, y)
     }
 
     fn write(&self, ports: &mut [Port]) {
-        if let Some((x, y)) = self.forward(ports[0].value, ports[1].value) {
+        if let Some((x, y)) = self.stylus(ports[0].value, ports[1].value) {
             ports[2].value = x;
             ports[3].value = y;
         }
@@ -316,7 +316,7 @@ impl Kind for FiveBarForward {
     }
 
     fn inverse(&self, _ports: &[Port], input: usize, outs: &[f64]) -> Option<f64> {
-        let (t1, t2) = FiveBarForward::inverse(self, outs[2], outs[3])?;
+        let (t1, t2) = self.angles(outs[2], outs[3])?;
         Some(if input == 0 { t1 } else { t2 })
     }
 }

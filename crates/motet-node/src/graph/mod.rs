@@ -52,6 +52,6 @@ pub use io::{FrameOut, Inputs, StepOut, MAX_FRAME_STEPS, MAX_HW};
 pub use kinematics::{CoreXY, FiveBarForward, PolarToCartesian};
 pub use port::{port, Mode, Port, PortRef, Unit};
 pub use reader::TrajectoryReader;
-pub use record::{Quantiser, Tape, DEFAULT_RESOLUTION};
+pub use record::{StepQuantizer, Tape, DEFAULT_RESOLUTION};
 pub use recorder::{FourTrackPlayer, FourTrackRecorder};
 pub use spec::BuildError;

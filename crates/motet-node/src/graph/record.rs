@@ -5,7 +5,7 @@
 //! * the length (sample count) is kept apart from the bytes ([`Tape::len`]),
 //!   like the paper's companion file;
 //! * each track is quantised to at most one step per frame at its resolution
-//!   (default [`DEFAULT_RESOLUTION`] = 0.01 mm per step) by [`Quantiser`].
+//!   (default [`DEFAULT_RESOLUTION`] = 0.01 mm per step) by [`StepQuantizer`].
 //!
 //! Storage is a caller-provided byte buffer: nothing is allocated.
 
@@ -101,19 +101,20 @@ impl<'a> Tape<'a> {
     }
 }
 
-/// Quantises one track to whole steps, at most one per frame, by the half-step
-/// rule: a step is taken when the value is more than half a step away from the
-/// steps already recorded.
+/// Quantizes one recorded track to whole steps, at most one per frame, by
+/// the half-step rule: a step is taken when the value is more than half a
+/// step away from the steps already recorded. (The wire's
+/// `motet_wire::stream::Quantizer` is another thing: it quantizes segments.)
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Quantiser {
+pub struct StepQuantizer {
     base: f64,
     count: i64,
 }
 
-impl Quantiser {
+impl StepQuantizer {
     /// Starts counting from `value` (in steps).
-    pub fn start(value: f64) -> Quantiser {
-        Quantiser {
+    pub fn start(value: f64) -> StepQuantizer {
+        StepQuantizer {
             base: value,
             count: 0,
         }

@@ -6,7 +6,7 @@ use super::component::{Kind, ParamError, Phase};
 use super::declare::{live, Declaration, Domain, Param};
 use super::io::Ctx;
 use super::port::{Port, PortSpec, Unit};
-use super::record::{pack, unpack, Quantiser, TRACKS};
+use super::record::{pack, unpack, StepQuantizer, TRACKS};
 use motet_wire::message::GraphKind;
 
 /// Records four streams, one byte per frame, after the channels ran. Parameter
@@ -17,7 +17,7 @@ pub struct FourTrackRecorder {
     recording: bool,
     start: bool,
     full: bool,
-    q: [Quantiser; TRACKS],
+    q: [StepQuantizer; TRACKS],
 }
 
 impl FourTrackRecorder {
@@ -68,7 +68,7 @@ impl Kind for FourTrackRecorder {
             self.start = false;
             ctx.tape.clear();
             for (q, p) in self.q.iter_mut().zip(ports.iter()) {
-                *q = Quantiser::start(p.value);
+                *q = StepQuantizer::start(p.value);
             }
         }
         if !self.recording {

@@ -37,7 +37,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // At rest where the node is: a new or changed channel takes its step
         // count from the current point instead of stepping there.
         let mut ch = Channel::new(c);
-        ch.set_position(&self.tail);
+        ch.set_position(&self.queue_end);
         match self
             .channels
             .iter_mut()
@@ -77,7 +77,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         for ch in self.channels.iter_mut() {
             ch.set_position(p);
         }
-        self.tail = *p;
+        self.queue_end = *p;
         self.stopped = false;
         self.pending_events = 0;
         self.events.clear();

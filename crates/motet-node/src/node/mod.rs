@@ -85,7 +85,7 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// Time up to which the node has run, µs.
     now: f64,
     /// Where the last queued segment ends (for subscribed axes).
-    tail: Point,
+    queue_end: Point,
     underruns: u32,
     starved: bool,
     hosted: Option<Hosted>,
@@ -133,7 +133,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             events: Deque::new(),
             next_seq: 0,
             now: f64::NEG_INFINITY,
-            tail: [0.0; MAX_AXES],
+            queue_end: [0.0; MAX_AXES],
             underruns: 0,
             starved: false,
             hosted: None,
@@ -188,7 +188,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             committed: self.status().committed,
             stopped: self.stopped,
             queued: self.segments.len() as u16,
-            at: self.tail,
+            at: self.queue_end,
         }
     }
 

@@ -20,8 +20,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         if self.segments.is_full() {
             return Err(Refusal::QueueFull);
         }
-        let mut start = self.tail;
-        let mut end = self.tail;
+        let mut start = self.queue_end;
+        let mut end = self.queue_end;
         for span in &m.axes {
             let i = span.axis as usize;
             if i >= MAX_AXES || !span.from.is_finite() || !span.to.is_finite() {
@@ -46,7 +46,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.check_segment(&seg)?;
         // Checked above: the queue has room.
         let _ = self.segments.push_back(seg);
-        self.tail = end;
+        self.queue_end = end;
         self.next_seq = self.next_seq.wrapping_add(1);
         if self.windowed {
             // Runs only once sealed.
@@ -65,7 +65,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// checks every segment as [`Node::push_segment`] will, the second pushes.
     pub(super) fn push_batch(&mut self, b: &SegmentBatch) -> Result<(), Refusal> {
         let start = StreamState {
-            tail: self.tail,
+            tail: self.queue_end,
             ..self.stream_state
         };
         let mut reader = BatchReader::new(self.stream, b).map_err(|_| Refusal::Malformed)?;
@@ -82,8 +82,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             if !segment_is_finite(&m) {
                 return Err(Refusal::Malformed);
             }
-            // Axes a batch does not carry keep the node's tail throughout.
-            let (mut start, mut end) = (self.tail, self.tail);
+            // Axes a batch does not carry keep the queue end's values throughout.
+            let (mut start, mut end) = (self.queue_end, self.queue_end);
             for span in &m.axes {
                 start[span.axis as usize] = span.from;
                 end[span.axis as usize] = span.to;

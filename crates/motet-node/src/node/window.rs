@@ -82,7 +82,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             for ch in self.channels.iter_mut() {
                 ch.retime(&self.segments, c.start);
             }
-            self.tail = c.stop;
+            self.queue_end = c.stop;
         }
         for t in self.tools.iter_mut() {
             t.set(0.0, 0.0, at, None);
