@@ -165,7 +165,7 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, JobError> {
 /// Reads, parses, checks and plans a job file for `machine` (the plan is
 /// only checked, and its duration kept), keeping every command. Nothing moves
 /// on error. A run that need not hold the job reads it with a
-/// [`JobReader`](crate::reader::JobReader) instead.
+/// [`JobReader`] instead.
 pub fn load_job(machine: &Machine, path: &Path, opts: &JobOptions) -> Result<Job, JobError> {
     let kind = JobKind::of(path)?;
     let reader = JobReader::open(machine, path, opts)?;

@@ -1,9 +1,9 @@
 //! Graph files: what a validated file holds, and its compilation by stage:
-//! [`crate::raw`] parses the TOML, [`crate::resolve`] resolves names against
-//! the component declarations, [`crate::ports`] resolves and checks ports and
+//! `raw` parses the TOML, `resolve` resolves names against
+//! the component declarations, `ports` resolves and checks ports and
 //! mappings through the node's own builder, [`crate::stage`] and
-//! [`crate::simulation`] read the workflow and simulation sections, and
-//! [`crate::emit`] turns the result into messages.
+//! `simulation` read the workflow and simulation sections, and
+//! `emit` turns the result into messages.
 
 use crate::emit::Op;
 use crate::raw::RawFile;

@@ -4,10 +4,11 @@
 
 use motet_node::graph::declare::{Declaration, Domain, Param};
 use motet_node::graph::port::Dir;
-use motet_node::graph::COMPONENTS;
 use motet_wire::message::GraphInputKind;
 
-pub use motet_node::graph::COMPONENTS as KINDS;
+/// Every component kind the node has, in wire order (the node's table,
+/// under its own name).
+pub use motet_node::graph::COMPONENTS;
 
 /// The kind named `name` in a graph file.
 pub fn kind(name: &str) -> Option<&'static Declaration> {

@@ -71,5 +71,5 @@ pub mod stage;
 pub use file::{
     ChannelDef, ComponentDef, FileError, GraphFile, InputDef, LiveError, Loc, Pendulum, RenderDef,
 };
-pub use kinds::{markdown_table, KINDS};
+pub use kinds::{markdown_table, COMPONENTS};
 pub use stage::{finished, Stage, StageMachine, StageView, Until};

@@ -42,7 +42,7 @@
 //!    [`DEFAULT_MARGIN_MM`] margin, keeping its aspect ratio, and centred.
 //! 10. **Emit** the same shape of output as the SVG source: for each
 //!     polyline a pen-up (tool 0.0), a rapid to its start, a pen-down (the
-//!     primary tool's `on_value`), [`MoveKind::Feed`] moves at
+//!     primary tool's `on_value`), [`MoveKind::Feed`](motet_planner::MoveKind::Feed) moves at
 //!     [`JobTarget::draw_feed`]; a pen-up at the end. The pen is not lifted
 //!     between polylines that meet, and no move has zero length. Axes other
 //!     than x and y keep the start position (clamped into their travel).

@@ -101,7 +101,7 @@ impl PlantSink for PlantLink {
 
 impl PlantLink {
     /// Hands what is gathered to the plant's thread (waiting while
-    /// [`IN_FLIGHT`] batches are ahead of it).
+    /// `IN_FLIGHT` batches are ahead of it).
     pub fn flush(&mut self) {
         if self.planned.is_empty() && self.outputs.is_empty() {
             return;

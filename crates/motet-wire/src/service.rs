@@ -1,7 +1,7 @@
 //! Base service routines every node answers, whatever its kind: status,
 //! identify, info, addressing, reset, firmware and time.
 //!
-//! Each request belongs to one [port](port) ([`ServiceRequest::port`]); the
+//! Each request belongs to one [port] ([`ServiceRequest::port`]); the
 //! reply goes back on the same port, the same way the request came (as a
 //! datagram, a frame without flags, or through the reliable link). Payloads
 //! are postcard like every other message (see docs/wire.md for the bytes).

@@ -4,7 +4,7 @@
 //! tables, indices instead of references, no allocation), so it can be rebuilt
 //! at run time from a description and swapped in only when it validates.
 //!
-//! * [`port`]: ports, units, mapping modes and mappings.
+//! * [`port`](mod@port): ports, units, mapping modes and mappings.
 //! * [`component`]: the [`Component`] enum; one file per family:
 //!   [`inputs`], [`filters`], [`kinematics`], [`generators`], [`homing`],
 //!   [`reader`], [`recorder`], [`channel`].
