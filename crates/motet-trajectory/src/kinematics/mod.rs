@@ -1,7 +1,7 @@
 //! Kinematics: how joints (what actuators move) follow from machine-space points.
 //!
 //! A kinematics is one type implementing [`Kinematics`], in a file of its
-//! own, listed once in `table.rs`'s `kinematics!` invocation, which makes it
+//! own, listed once in the `kinematics!` table below, which makes it
 //! a variant of [`KinematicsKind`]: the value machine files name, the wire
 //! carries and every layer dispatches through. The planner, the nodes, the
 //! host and the simulator only ever see a [`JointMap`] per joint and a
@@ -16,13 +16,16 @@
 //!    [`Kinematics::linear`] and is stepped in closed form; any other joint
 //!    is stepped by bracketing its crossing along the segment, exact to the
 //!    nanosecond, unless the kinematics gives a closed form
-//!    ([`Kinematics::closed_form`], as polar does).
-//! 2. Add one line to the `kinematics!` table in `table.rs`.
+//!    ([`Kinematics::closed_form`], as polar and delta do).
+//! 2. Add one line, `<name>::<Type>`, to the `kinematics!` table in this
+//!    file: it declares the module and makes the kind a variant of
+//!    [`KinematicsKind`].
 //!
 //! Nothing else changes: machine files accept the name and its geometry,
 //! the wire encodes it (docs/wire.md), the planner bounds its joints'
 //! rates, the simulator checks its steps. `tests/kinematics_props.rs` runs
-//! its round trip and rate bounds with the others.
+//! its round trip, solve, turns and rate and gradient bounds with the
+//! others once a geometry is added to its list.
 //!
 //! A kinematics works on the tool point `[x, y, z]` ([`Xyz`]). Its joints
 //! replace the first of the machine's x, y and z axes: planar kinds (two
@@ -30,25 +33,24 @@
 //! all three; every other axis stays a joint of its own. Angles are in
 //! degrees.
 
-mod cartesian;
-mod corexy;
-mod delta;
-mod five_bar;
-mod hbot;
-mod path;
-mod polar;
-mod scara;
+#[macro_use]
 mod table;
+mod path;
 
-pub use cartesian::Cartesian;
-pub use corexy::CoreXY;
-pub use delta::{Carriage, Delta};
-pub use five_bar::FiveBar;
-pub use hbot::HBot;
+// The table of kinematics: each kind's file (a module of this one) and its
+// type, once. The order is the wire's (docs/wire.md).
+kinematics! {
+    cartesian::Cartesian,
+    corexy::CoreXY,
+    hbot::HBot,
+    polar::Polar,
+    five_bar::FiveBar,
+    scara::Scara,
+    delta::Delta,
+}
+
+pub use delta::Carriage;
 pub use path::{ClosedForm, JointPath};
-pub use polar::Polar;
-pub use scara::Scara;
-pub use table::KinematicsKind;
 
 use crate::point::{Point, MAX_AXES};
 use core::fmt;

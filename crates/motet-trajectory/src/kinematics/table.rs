@@ -1,16 +1,19 @@
-//! The table of kinematics: one line per kind (see the module
-//! documentation). The macro makes [`KinematicsKind`] with a variant per
-//! kind, and the dispatch every layer goes through.
+//! The `kinematics!` macro behind the table of kinematics in the module's
+//! `mod.rs` (one line per kind: its file and its type; see the module
+//! documentation): it declares each kind's module, and makes
+//! [`KinematicsKind`] with a variant per kind and the dispatch every layer
+//! goes through.
 
-use super::{
-    Cartesian, ClosedForm, CoreXY, Delta, FiveBar, GeometryError, HBot, JointMap, JointSpec,
-    Kinematics, Param, Polar, Scara, Unreachable, Xyz, MAX_PARAMS, NO_AXIS,
-};
+use super::{Cartesian, CoreXY, HBot, JointMap, KinematicsKind, Polar, Xyz, NO_AXIS};
 use crate::point::MAX_AXES;
-use serde::{Deserialize, Serialize};
 
 macro_rules! kinematics {
-    ($($kind:ident),* $(,)?) => {
+    ($($module:ident :: $kind:ident),* $(,)?) => {
+        $(
+            mod $module;
+            pub use $module::$kind;
+        )*
+
         /// A machine's kinematics with its geometry: one variant per kind in
         /// the table.
         #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -99,8 +102,6 @@ macro_rules! kinematics {
     };
 }
 
-kinematics!(Cartesian, CoreXY, HBot, Polar, FiveBar, Scara, Delta);
-
 impl KinematicsKind {
     /// Cartesian: x and y are joints of their own (no geometry).
     pub const CARTESIAN: KinematicsKind = KinematicsKind::Cartesian(Cartesian);
@@ -147,7 +148,7 @@ impl KinematicsKind {
         }
     }
 
-    /// The tool point from the joints (see [`Kinematics::forward`]); NaN
+    /// The tool point from the joints (see [`super::Kinematics::forward`]); NaN
     /// where they cannot meet.
     pub fn forward_or_nan(&self, joints: Xyz) -> Xyz {
         self.forward(joints).unwrap_or([f64::NAN; 3])
