@@ -9,11 +9,12 @@ use crate::kinds::{self, input_prefix, COMMON_KEYS};
 use crate::ports::resolve_port;
 use crate::raw::{RawComponent, RawFile};
 use crate::source::Source;
+use motet_node::graph::component::Kind;
 use motet_node::graph::declare::{Declaration, Domain, Param};
-use motet_node::graph::PortRef;
 use motet_node::graph::{spec, MAX_HW};
+use motet_node::graph::{GraphChannel, PortRef};
 use motet_node::GRAPH_COMPONENTS;
-use motet_wire::message::{GraphInputKind, GraphKind, MAX_GRAPH_PARAMS};
+use motet_wire::message::{GraphInputKind, MAX_GRAPH_PARAMS};
 use std::collections::BTreeMap;
 use std::ops::Range;
 use toml::Spanned;
@@ -135,7 +136,15 @@ fn component(
     }
     debug_assert!(params.len() <= MAX_GRAPH_PARAMS);
     let loc = src.loc(name.span());
-    if let Err(e) = spec::component(decl.kind, &params) {
+    // Every declaration found by name is in the node's table.
+    let Some(kind) = decl.kind() else {
+        return Err(src.err(
+            name.span(),
+            &key,
+            format!("`{}` is not in this node's component table", decl.name),
+        ));
+    };
+    if let Err(e) = spec::component(kind, &params) {
         return Err(src.err(
             name.span(),
             &key,
@@ -143,7 +152,7 @@ fn component(
         ));
     }
     out.ops
-        .push((Op::Add(decl.kind, params.clone()), loc, key.clone()));
+        .push((Op::Add(kind, params.clone()), loc, key.clone()));
     let mut def = ComponentDef {
         name: cname,
         info: decl,
@@ -400,7 +409,7 @@ fn component_ratios(
     channels: u8,
 ) -> Result<(), FileError> {
     let (idx, loc) = (def.index, def.loc);
-    if def.info.kind == GraphKind::Channel {
+    if def.info.name == <GraphChannel as Kind>::DECL.name {
         let (u, s) = (keys.units.unwrap_or(1.0), keys.steps.unwrap_or(1.0));
         if u == 0.0 || s == 0.0 {
             return Err(src.err(name.span(), key, "`units` and `steps` must be nonzero"));

@@ -55,16 +55,23 @@ fn graph_file(d: &Declaration, explicit: bool) -> String {
 #[test]
 fn every_kind_is_declared_in_wire_order() {
     for (i, d) in COMPONENTS.iter().enumerate() {
-        // postcard encodes an enum's variant index as its first byte (< 128).
+        // A kind is found by its name: names are unique.
+        assert_eq!(
+            COMPONENTS.iter().filter(|o| o.name == d.name).count(),
+            1,
+            "`{}` is declared twice",
+            d.name
+        );
+        // On the wire a kind is one byte: its place in the table.
         let mut buf = [0u8; 8];
-        let bytes = encode(&d.kind, &mut buf).unwrap();
+        let bytes = encode(&d.kind().unwrap(), &mut buf).unwrap();
         assert_eq!(
             bytes,
             [i as u8],
             "`{}` is declared out of wire order",
             d.name
         );
-        assert_eq!(spec::declaration(d.kind).unwrap().name, d.name);
+        assert_eq!(spec::declaration(d.kind().unwrap()).unwrap().name, d.name);
         let (min, max) = d.arity();
         assert!(
             max <= MAX_GRAPH_PARAMS,
@@ -115,19 +122,22 @@ fn defaults_are_accepted_by_the_node_the_compiler_and_the_wire() {
         let short = required_values(d);
         // The node: the defaults written out build the same component as
         // the defaults left out, and the builder takes it.
-        let a = spec::component(d.kind, &full).unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
-        let b = spec::component(d.kind, &short).unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
+        let a = spec::component(d.kind().unwrap(), &full)
+            .unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
+        let b = spec::component(d.kind().unwrap(), &short)
+            .unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
         assert_eq!(a, b, "`{}`: defaults differ from the ones left out", d.name);
         assert_eq!(a.declaration().name, d.name);
         assert_eq!(a.ports(), d.ports);
         let mut builder: GraphBuilder<GRAPH_COMPONENTS, GRAPH_MAPPINGS> = GraphBuilder::new();
-        spec::add(&mut builder, d.kind, &full).unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
+        spec::add(&mut builder, d.kind().unwrap(), &full)
+            .unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
         builder
             .build()
             .unwrap_or_else(|e| panic!("`{}`: {e}", d.name));
         // The wire: the message round-trips.
         let m = HostMessage::GraphAdd {
-            kind: d.kind,
+            kind: d.kind().unwrap(),
             params: heapless::Vec::from_slice(&full).unwrap(),
         };
         let mut buf = [0u8; MAX_MESSAGE];
@@ -151,7 +161,7 @@ fn out_of_range_values_are_refused_with_their_name() {
         for (i, p) in d.params.iter().enumerate() {
             let mut values = full_values(d);
             values[d.offset() + i] = f64::NAN;
-            let e = spec::component(d.kind, &values).expect_err(p.name);
+            let e = spec::component(d.kind().unwrap(), &values).expect_err(p.name);
             assert!(e.to_string().contains(p.name), "`{}`: {e}", d.name);
         }
     }

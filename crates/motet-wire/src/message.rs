@@ -257,58 +257,17 @@ pub enum GraphInputKind {
     Stream,
 }
 
-/// Component kinds, in wire order. The construction values of
-/// [`HostMessage::GraphAdd`] each takes (names, defaults for trailing ones
-/// left out, ranges) are declared with the kind in `motet-node`
-/// (`graph::declare`; `examples/dance/README.md` renders them): a flag is
-/// nonzero for true, an input kind's first value is its hardware index.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum GraphKind {
-    /// `analog` in graph files.
-    AnalogInput,
-    /// `button` in graph files.
-    Button,
-    /// `encoder` in graph files.
-    Encoder,
-    /// `stream_input` in graph files.
-    StreamInput,
-    /// `scale` in graph files.
-    ScalingFilter1D,
-    /// `scale2d` in graph files.
-    ScalingFilter2D,
-    /// `threshold` in graph files.
-    ThresholdGenerator,
-    /// `corexy` in graph files.
-    CoreXY,
-    /// `polar` in graph files.
-    PolarToCartesian,
-    /// `fivebar` in graph files.
-    FiveBarForward,
-    /// `velocity` in graph files.
-    VelocityGenerator,
-    /// `position` in graph files.
-    PositionGenerator,
-    /// `wave` in graph files.
-    WaveGenerator1D,
-    /// `wave2d` in graph files.
-    WaveGenerator2D,
-    /// `circle` in graph files.
-    CircleGenerator,
-    /// `path_length` in graph files.
-    PathLength2D,
-    /// `path_length3d` in graph files.
-    PathLength3D,
-    /// `recorder` in graph files.
-    FourTrackRecorder,
-    /// `player` in graph files.
-    FourTrackPlayer,
-    /// `homing` in graph files.
-    Homing,
-    /// `trajectory_reader` in graph files.
-    TrajectoryReader,
-    /// `channel` in graph files.
-    Channel,
-}
+/// A component kind: its position in the node's table of components
+/// (`motet_node::graph::COMPONENTS`, the `components!` table in
+/// `motet-node/src/graph/component.rs`), one byte on the wire. The
+/// construction values of [`HostMessage::GraphAdd`] each kind takes (names,
+/// defaults for trailing ones left out, ranges) are declared with the kind in
+/// `motet-node` (`graph::declare`; `examples/dance/README.md` renders them):
+/// a flag is nonzero for true, an input kind's first value is its hardware
+/// index. A node refuses a kind beyond its table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct GraphKind(pub u8);
 
 /// Node → host.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -454,7 +413,7 @@ mod tests {
             HostMessage::Status,
             HostMessage::GraphBegin { frame_us: 40.0 },
             HostMessage::GraphAdd {
-                kind: GraphKind::AnalogInput,
+                kind: GraphKind(0),
                 params: Vec::from_slice(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]).unwrap(),
             },
             HostMessage::GraphRatio {

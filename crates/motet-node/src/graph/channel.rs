@@ -15,7 +15,6 @@ use super::declare::{live, Declaration, Domain, HostKey, Param, ParamFault};
 use super::io::{Ctx, StepOut, MAX_HW};
 use super::math::round;
 use super::port::{Port, PortSpec, Unit};
-use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 /// A graph channel: one actuator's steps toward the sum of its two target inputs (see the module's
@@ -125,7 +124,6 @@ impl GraphChannel {
 impl Kind for GraphChannel {
     const DECL: Declaration = Declaration {
         name: "channel",
-        kind: GraphKind::Channel,
         input: None,
         params: &[
             Param::new("filter", "frames", 0.0, Domain::NON_NEGATIVE)

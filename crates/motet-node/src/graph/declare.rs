@@ -17,9 +17,8 @@
 //!    first; live parameters by the ids `set_param` takes; a `build` function
 //!    from [`Args`]).
 //! 2. Add one line to the `components!` table in
-//!    [`super::component`]; its position is the kind's wire order.
-//! 3. Add the variant to [`GraphKind`] in `motet-wire` at the same position
-//!    (the wire's identity of the kind).
+//!    [`super::component`]; its position is the kind's [`GraphKind`] on the
+//!    wire (so new kinds go last).
 //!
 //! Then run `cargo test -p motet-graph`: it checks the declaration (defaults
 //! accepted by the node and the compiler, round trip through the wire) and
@@ -154,8 +153,6 @@ pub struct HostKey {
 pub struct Declaration {
     /// `kind = "..."` in graph files.
     pub name: &'static str,
-    /// Its identity on the wire.
-    pub kind: GraphKind,
     /// The hardware input it reads (its index is the first construction
     /// value, before [`Declaration::params`]).
     pub input: Option<GraphInputKind>,
@@ -215,6 +212,16 @@ impl fmt::Display for ParamFault {
 }
 
 impl Declaration {
+    /// Its identity on the wire: its position in the `components!` table
+    /// (`None` for a declaration not in it).
+    pub fn kind(&self) -> Option<GraphKind> {
+        super::component::COMPONENTS
+            .iter()
+            .position(|d| d.name == self.name)
+            .and_then(|i| u8::try_from(i).ok())
+            .map(GraphKind)
+    }
+
     /// Values before the parameters (the hardware index).
     pub fn offset(&self) -> usize {
         self.input.is_some() as usize

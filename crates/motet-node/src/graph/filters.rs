@@ -4,7 +4,6 @@ use super::component::{finite, Kind, ParamError};
 use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::port::{Mode, Port, PortSpec, Unit};
-use motet_wire::message::GraphKind;
 
 /// `out = in × ratio`. In INCREMENTAL mode each frame's change of the input is
 /// scaled (a live ratio change affects only later motion); in ABSOLUTE mode the
@@ -35,7 +34,6 @@ impl ScalingFilter1D {
 impl Kind for ScalingFilter1D {
     const DECL: Declaration = Declaration {
         name: "scale",
-        kind: GraphKind::ScalingFilter1D,
         input: None,
         params: &[
             Param::new("ratio", "", 1.0, Domain::REAL),
@@ -132,7 +130,6 @@ impl ScalingFilter2D {
 impl Kind for ScalingFilter2D {
     const DECL: Declaration = Declaration {
         name: "scale2d",
-        kind: GraphKind::ScalingFilter2D,
         input: None,
         params: &[
             Param::new("ratio", "", 1.0, Domain::REAL),
@@ -245,7 +242,6 @@ impl ThresholdGenerator {
 impl Kind for ThresholdGenerator {
     const DECL: Declaration = Declaration {
         name: "threshold",
-        kind: GraphKind::ThresholdGenerator,
         input: None,
         params: &[
             Param::required("lower", "", Domain::Bound),

@@ -5,7 +5,6 @@ use super::declare::{live, Declaration, Domain, Param};
 use super::io::Ctx;
 use super::math::{cos, floor, hypot, sin, sqrt, TAU};
 use super::port::{Port, PortSpec, Unit};
-use motet_wire::message::GraphKind;
 
 /// Integrates a speed: each frame the output moves by `speed × dt`. The speed
 /// is its level input (units/s, e.g. from an analog input in ABSOLUTE mode) or
@@ -25,7 +24,6 @@ impl VelocityGenerator {
 impl Kind for VelocityGenerator {
     const DECL: Declaration = Declaration {
         name: "velocity",
-        kind: GraphKind::VelocityGenerator,
         input: None,
         params: &[Param::new("speed", "units/s", 0.0, Domain::REAL)],
         live: &[live("speed", Self::SPEED_PARAM)],
@@ -105,7 +103,6 @@ impl PositionGenerator {
 impl Kind for PositionGenerator {
     const DECL: Declaration = Declaration {
         name: "position",
-        kind: GraphKind::PositionGenerator,
         input: None,
         params: &[Param::new("speed", "units/s", 0.0, Domain::NON_NEGATIVE)],
         live: &[
@@ -248,7 +245,6 @@ fn wave_params(
 impl Kind for WaveGenerator1D {
     const DECL: Declaration = Declaration {
         name: "wave",
-        kind: GraphKind::WaveGenerator1D,
         input: None,
         params: &[
             Param::required("amplitude", "units", Domain::REAL),
@@ -351,7 +347,6 @@ impl WaveGenerator2D {
 impl Kind for WaveGenerator2D {
     const DECL: Declaration = Declaration {
         name: "wave2d",
-        kind: GraphKind::WaveGenerator2D,
         input: None,
         params: &[
             Param::required("amplitude", "units", Domain::REAL),
@@ -444,7 +439,6 @@ impl CircleGenerator {
 impl Kind for CircleGenerator {
     const DECL: Declaration = Declaration {
         name: "circle",
-        kind: GraphKind::CircleGenerator,
         input: None,
         params: &[
             Param::required("radius", "units", Domain::REAL),
@@ -511,7 +505,6 @@ impl PathLength2D {
 impl Kind for PathLength2D {
     const DECL: Declaration = Declaration {
         name: "path_length",
-        kind: GraphKind::PathLength2D,
         input: None,
         params: &[Param::new("ratio", "", 1.0, Domain::REAL)],
         live: &[live("ratio", Self::RATIO)],
@@ -578,7 +571,6 @@ impl PathLength3D {
 impl Kind for PathLength3D {
     const DECL: Declaration = Declaration {
         name: "path_length3d",
-        kind: GraphKind::PathLength3D,
         input: None,
         params: &[Param::new("ratio", "", 1.0, Domain::REAL)],
         live: &[live("ratio", Self::RATIO)],

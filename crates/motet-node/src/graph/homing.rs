@@ -5,7 +5,6 @@ use super::component::{finite, non_negative, positive, Kind, ParamError};
 use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::port::{Port, PortSpec, Unit};
-use motet_wire::message::GraphKind;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 /// Where a homing cycle is.
@@ -72,7 +71,6 @@ impl Homing {
 impl Kind for Homing {
     const DECL: Declaration = Declaration {
         name: "homing",
-        kind: GraphKind::Homing,
         input: None,
         params: &[
             Param::required("speed", "units/s", Domain::REAL)

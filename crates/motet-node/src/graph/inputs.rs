@@ -6,7 +6,7 @@ use super::declare::{live, Declaration, Domain, HostKey, Param};
 use super::io::{Ctx, Inputs, MAX_HW};
 use super::port::{Port, PortSpec, Unit};
 use super::wire::CODES;
-use motet_wire::message::{GraphInputKind, GraphKind};
+use motet_wire::message::GraphInputKind;
 
 fn hw_index(hw: u8) -> usize {
     (hw as usize).min(MAX_HW - 1)
@@ -123,7 +123,6 @@ impl AnalogInput {
 impl Kind for AnalogInput {
     const DECL: Declaration = Declaration {
         name: "analog",
-        kind: GraphKind::AnalogInput,
         input: Some(GraphInputKind::Analog),
         params: &[
             Param::new("floor_value", "", 0.0, Domain::REAL).doc("value at `floor_raw`"),
@@ -273,7 +272,6 @@ impl Button {
 impl Kind for Button {
     const DECL: Declaration = Declaration {
         name: "button",
-        kind: GraphKind::Button,
         input: Some(GraphInputKind::Digital),
         params: &[
             Param::new("toggle", "", 0.0, Domain::Flag).doc("each press flips the state"),
@@ -392,7 +390,6 @@ impl Encoder {
 impl Kind for Encoder {
     const DECL: Declaration = Declaration {
         name: "encoder",
-        kind: GraphKind::Encoder,
         input: Some(GraphInputKind::Encoder),
         params: &[Param::new("invert", "", 0.0, Domain::Flag)],
         live: &[live("invert", Self::INVERT)],
@@ -453,7 +450,6 @@ impl StreamInput {
 impl Kind for StreamInput {
     const DECL: Declaration = Declaration {
         name: "stream_input",
-        kind: GraphKind::StreamInput,
         input: Some(GraphInputKind::Stream),
         params: &[],
         live: &[],

@@ -8,7 +8,6 @@ use super::io::Ctx;
 use super::math::{atan2, cos, hypot, sin, unwrap_near};
 use super::port::{Port, PortSpec, Unit};
 use motet_trajectory::kinematics::FiveBar;
-use motet_wire::message::GraphKind;
 
 /// CoreXY: `a = x + y`, `b = x − y`; inverse `x = (a + b)/2`, `y = (a − b)/2`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -38,7 +37,6 @@ impl CoreXY {
 impl Kind for CoreXY {
     const DECL: Declaration = Declaration {
         name: "corexy",
-        kind: GraphKind::CoreXY,
         input: None,
         params: &[],
         live: &[],
@@ -109,7 +107,6 @@ impl PolarToCartesian {
 impl Kind for PolarToCartesian {
     const DECL: Declaration = Declaration {
         name: "polar",
-        kind: GraphKind::PolarToCartesian,
         input: None,
         params: &[],
         live: &[],
@@ -242,7 +239,6 @@ impl FiveBarForward {
 impl Kind for FiveBarForward {
     const DECL: Declaration = Declaration {
         name: "fivebar",
-        kind: GraphKind::FiveBarForward,
         input: None,
         params: &[
             Param::required("s", "length", Domain::REAL).doc("distance between the pivots"),

@@ -3,7 +3,6 @@
 use super::declare::{live, Declaration, Domain, Param};
 use heapless::Deque;
 use motet_trajectory::{Segment, MAX_AXES};
-use motet_wire::message::GraphKind;
 
 use super::component::{Kind, ParamError};
 use super::io::Ctx;
@@ -57,7 +56,6 @@ impl TrajectoryReader {
 impl Kind for TrajectoryReader {
     const DECL: Declaration = Declaration {
         name: "trajectory_reader",
-        kind: GraphKind::TrajectoryReader,
         input: None,
         params: &[Param::new(
             "axis",

@@ -7,7 +7,6 @@ use super::declare::{live, Declaration, Domain, Param};
 use super::io::Ctx;
 use super::port::{Port, PortSpec, Unit};
 use super::record::{pack, unpack, StepQuantizer, TRACKS};
-use motet_wire::message::GraphKind;
 
 /// Records four streams, one byte per frame, after the channels ran. Parameter
 /// `RECORD`: nonzero starts a new recording (clearing the tape), zero stops.
@@ -43,7 +42,6 @@ impl FourTrackRecorder {
 impl Kind for FourTrackRecorder {
     const DECL: Declaration = Declaration {
         name: "recorder",
-        kind: GraphKind::FourTrackRecorder,
         input: None,
         params: &[],
         live: &[live("record", Self::RECORD)],
@@ -138,7 +136,6 @@ impl FourTrackPlayer {
 impl Kind for FourTrackPlayer {
     const DECL: Declaration = Declaration {
         name: "player",
-        kind: GraphKind::FourTrackPlayer,
         input: None,
         params: &[Param::new("loop", "", 0.0, Domain::Flag)],
         live: &[live("play", Self::PLAY), live("loop", Self::LOOP)],

@@ -13,7 +13,7 @@ use super::error::GraphError;
 
 /// The declaration of a wire kind.
 pub fn declaration(kind: GraphKind) -> Option<&'static Declaration> {
-    COMPONENTS.iter().copied().find(|d| d.kind == kind)
+    COMPONENTS.get(usize::from(kind.0)).copied()
 }
 
 /// Builds a component from its kind and construction values (see
