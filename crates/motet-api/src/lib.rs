@@ -21,6 +21,7 @@
 //! stop such a call (Ctrl-C in the Python bindings) without losing or
 //! repeating anything already accepted.
 
+mod drawing;
 pub mod job;
 mod machine;
 pub mod reader;
@@ -28,5 +29,5 @@ pub mod reader;
 pub use job::{job_name, load_job, plan_check, Job, JobError, JobKind, JobOptions};
 pub use machine::{ApiError, Event, Machine};
 pub use motet_planner::PlanError;
-pub use motet_sim::Report;
+pub use motet_sim::{Held, Report};
 pub use reader::{scan_job, JobReader, JobScan};

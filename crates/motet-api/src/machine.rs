@@ -1,10 +1,11 @@
 //! The scriptable machine.
 
+use crate::drawing::{Drawing, DrawingError};
 use motet_host::{check_move, clamp_move, Clamps, MachineError};
 use motet_planner::ranges::{self, number};
 use motet_planner::{Command, Move, MoveKind, PlanError, Planned, Planner};
-use motet_render::{render_png, render_svg, RenderSpec, Stroke};
-use motet_sim::{Report, SimError, SimMachine};
+use motet_render::RenderSpec;
+use motet_sim::{Held, Report, SimError, SimMachine};
 use motet_trajectory::Point;
 use std::path::Path;
 use std::time::Instant;
@@ -49,10 +50,12 @@ pub enum ApiError {
     /// The simulated machine refused what was streamed to it.
     #[error(transparent)]
     Sim(#[from] SimError),
-    /// [`Machine::save`] could not create the folder or write a file in it.
+    /// [`Machine::save`] could not create the folder or write a file in it,
+    /// or opening the machine could not make the temporary file its SVG is
+    /// written to as it runs.
     #[error("cannot write {path}: {error}")]
     Io {
-        /// The folder being saved into.
+        /// The folder being saved into, or the temporary folder.
         path: String,
         /// What the operating system said.
         error: std::io::Error,
@@ -66,7 +69,7 @@ pub enum ApiError {
         /// Its missing ancestor nearest the root.
         parent: String,
     },
-    /// The executed path could not be drawn as PNG.
+    /// The executed path could not be drawn.
     #[error("render failed: {0}")]
     Render(String),
     /// A job file given to the machine could not be read or does not fit it.
@@ -117,7 +120,8 @@ pub struct Machine {
     /// Trajectory end time of everything planned so far, µs.
     end: f64,
     started: Instant,
-    strokes: Vec<Stroke>,
+    /// The executed path, drawn as it runs.
+    drawing: Drawing,
     /// Targets within half a step beyond travel, clamped onto it.
     clamps: Clamps,
 }
@@ -132,6 +136,13 @@ impl Machine {
 
     /// A machine from an already validated description.
     pub fn new(machine: motet_host::Machine) -> Result<Machine, ApiError> {
+        let drawing = Drawing::new(&render_spec(&machine)).map_err(|e| match e {
+            DrawingError::Io(error) => ApiError::Io {
+                path: std::env::temp_dir().display().to_string(),
+                error,
+            },
+            DrawingError::Render(e) => ApiError::Render(e.to_string()),
+        })?;
         let mut sim = SimMachine::new(&machine)?;
         sim.watch_tools(true);
         let planner = Planner::new(machine.limits(), machine.start, 0.0);
@@ -146,7 +157,7 @@ impl Machine {
             calls: 0,
             end: 0.0,
             started: Instant::now(),
-            strokes: Vec::new(),
+            drawing,
             clamps: Clamps::default(),
         })
     }
@@ -280,6 +291,7 @@ impl Machine {
         self.drain()?;
         self.sim.run_until(self.end);
         self.sim.run_to_rest();
+        self.draw_finished();
         self.notify_tools();
         let now = self.sim.now();
         // A fresh lookahead starts from rest, on the clock as it is now.
@@ -349,23 +361,31 @@ impl Machine {
             }
             std::fs::create_dir(dir).map_err(io)?;
         }
-        self.strokes.extend(self.sim.take_strokes());
-        let m = self.description();
-        let (x, y) = (m.axis("x").unwrap_or(0), m.axis("y").unwrap_or(0));
-        let mut bounds = [
-            [m.axes[x].travel[0], m.axes[y].travel[0]],
-            [m.axes[x].travel[1], m.axes[y].travel[1]],
-        ];
-        if !bounds.iter().flatten().all(|v| v.is_finite()) {
-            bounds = [[-100.0, -100.0], [100.0, 100.0]];
-        }
-        let spec = RenderSpec::new(bounds, format!("script on {}", m.name));
-        let png = render_png(&self.strokes, &spec).map_err(|e| ApiError::Render(e.to_string()))?;
-        std::fs::write(dir.join("path.png"), png).map_err(io)?;
-        std::fs::write(dir.join("path.svg"), render_svg(&self.strokes, &spec)).map_err(io)?;
+        // The stroke being drawn ends here, and the next starts here.
+        let strokes = self.sim.take_strokes();
+        self.drawing.draw(&strokes);
+        self.drawing.save(dir).map_err(|e| match e {
+            DrawingError::Io(e) => io(e),
+            DrawingError::Render(e) => ApiError::Render(e.to_string()),
+        })?;
         let report = serde_json::to_string_pretty(&self.report()).expect("reports serialise");
         std::fs::write(dir.join("report.json"), report + "\n").map_err(io)?;
         Ok(())
+    }
+
+    /// What the session holds that depends on its length, as counts; each
+    /// stays bounded however many calls it makes (ARCHITECTURE.md,
+    /// "Constant memory"): the executed path is drawn as it runs.
+    pub fn held(&self) -> Held {
+        self.sim.held()
+    }
+
+    /// Draws the strokes of the executed path finished so far.
+    fn draw_finished(&mut self) {
+        let strokes = self.sim.take_finished_strokes();
+        if !strokes.is_empty() {
+            self.drawing.draw(&strokes);
+        }
     }
 
     fn named(&self, p: &Point) -> Vec<(String, f64)> {
@@ -442,6 +462,7 @@ impl Machine {
                 self.end = s.t1();
             }
             self.sim.submit(item)?;
+            self.draw_finished();
             if self.interrupt.as_mut().is_some_and(|f| f()) {
                 return Err(ApiError::Interrupted);
             }
@@ -469,4 +490,18 @@ impl Machine {
             l(e);
         }
     }
+}
+
+/// The drawing's size and title: the machine's x/y travel (a default square
+/// where it is unbounded).
+fn render_spec(m: &motet_host::Machine) -> RenderSpec {
+    let (x, y) = (m.axis("x").unwrap_or(0), m.axis("y").unwrap_or(0));
+    let mut bounds = [
+        [m.axes[x].travel[0], m.axes[y].travel[0]],
+        [m.axes[x].travel[1], m.axes[y].travel[1]],
+    ];
+    if !bounds.iter().flatten().all(|v| v.is_finite()) {
+        bounds = [[-100.0, -100.0], [100.0, 100.0]];
+    }
+    RenderSpec::new(bounds, format!("script on {}", m.name))
 }

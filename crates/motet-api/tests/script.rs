@@ -416,3 +416,87 @@ fn targets_within_half_a_step_of_travel_are_clamped_and_counted() {
         r.max_clamp_mm
     );
 }
+
+/// Calls `k` of a long drawing session on the plotter: short moves round a
+/// circle, the pen lowered and lifted every `pen_every` calls.
+fn circling(m: &mut Machine, k: usize, pen_every: usize) -> Result<(), ApiError> {
+    if k.is_multiple_of(pen_every) {
+        let down = (k / pen_every).is_multiple_of(2);
+        return m.set_tool("pen", if down { 1.0 } else { 0.0 });
+    }
+    let a = k as f64 * 0.02;
+    m.move_to(
+        &[("x", 150.0 + 60.0 * a.cos()), ("y", 109.0 + 60.0 * a.sin())],
+        Some(200.0),
+    )
+}
+
+fn polylines(svg: &str) -> usize {
+    svg.matches("<polyline").count()
+}
+
+#[test]
+fn a_long_session_holds_no_more_of_its_path_than_one_stroke() {
+    // (calls, pen lowered and lifted every so many calls): many short
+    // strokes, and long ones over many turns.
+    for (calls, pen_every) in [(30_000, 7), (12_000, 5_000)] {
+        let mut m = machine("plotter.toml");
+        let mut most = m.held();
+        for k in 0..calls {
+            circling(&mut m, k, pen_every).unwrap();
+            most = most.max(m.held());
+        }
+        m.wait().unwrap();
+        // Every stroke finished is drawn at once; only the one being drawn
+        // is held, and it is cut into pieces of at most this many points.
+        assert!(
+            most.path_points <= motet_sim::path::MAX_STROKE_POINTS,
+            "pen every {pen_every}: {most:?}"
+        );
+        assert!(
+            most.node_segments <= motet_sim::NODE_QUEUE,
+            "pen every {pen_every}: {most:?}"
+        );
+        // And nothing of the path was lost on the way.
+        let tmp = tempfile::Builder::new()
+            .prefix("motet-api-long-")
+            .tempdir()
+            .unwrap();
+        m.save(tmp.path()).unwrap();
+        let svg = std::fs::read_to_string(tmp.path().join("path.svg")).unwrap();
+        let strokes = calls / pen_every;
+        assert!(
+            polylines(&svg) >= strokes,
+            "pen every {pen_every}: {} polylines for {strokes} pen changes",
+            polylines(&svg)
+        );
+    }
+}
+
+#[test]
+fn each_save_writes_the_whole_drawing_so_far() {
+    let mut m = machine("plotter.toml");
+    let tmp = tempfile::Builder::new()
+        .prefix("motet-api-saves-")
+        .tempdir()
+        .unwrap();
+    let mut before: Option<(String, Vec<u8>)> = None;
+    for (part, calls) in [0..300, 300..600, 600..900].into_iter().enumerate() {
+        for k in calls {
+            circling(&mut m, k, 40).unwrap();
+        }
+        let dir = tmp.path().join(format!("save-{part}"));
+        m.save(&dir).unwrap();
+        let svg = std::fs::read_to_string(dir.join("path.svg")).unwrap();
+        let png = std::fs::read(dir.join("path.png")).unwrap();
+        assert!(svg.ends_with(motet_render::SVG_END), "save {part}");
+        if let Some((svg0, png0)) = before {
+            // The earlier drawing, then what was drawn since.
+            let head = svg0.strip_suffix(motet_render::SVG_END).unwrap();
+            assert!(svg.starts_with(head), "save {part}");
+            assert!(polylines(&svg) > polylines(&svg0), "save {part}");
+            assert_ne!(png, png0, "save {part}");
+        }
+        before = Some((svg, png));
+    }
+}

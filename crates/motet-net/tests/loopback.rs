@@ -116,7 +116,7 @@ fn a_node_that_stops_answering_stops_the_others_with_it() {
         info.reason
     );
     // The host's record follows the tail to the same rest.
-    assert_eq!(lb.run.position_at(info.rest_time + 1e6), info.point);
+    assert_eq!(lb.run.position_at(info.rest_time + 1e6), Some(info.point));
     // Let every node finish its tail.
     lb.host_alive = false;
     lb.run_until_settled(10_000_000).unwrap();
@@ -141,7 +141,7 @@ fn traced_at(lb: &Loopback, node: usize, ch: u8, t: f64) -> i64 {
 }
 
 #[test]
-fn the_host_knows_where_the_machine_was_at_any_time() {
+fn the_host_knows_where_the_machine_was_in_the_last_second_and_will_be() {
     let (m, cmds) = load(
         "examples/gestalt-3axis.toml",
         "examples/jobs/gestalt-3d.gcode",
@@ -156,21 +156,117 @@ fn the_host_knows_where_the_machine_was_at_any_time() {
         &[Crystal::default(); 3],
         NetConfig::default(),
     );
-    assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
-    let end = lb.run.committed_end();
-    for k in 1..40 {
-        let t = end * k as f64 / 40.0;
-        let want = steps_at(&m, &lb.run.position_at(t));
+    // Asked as the run streams, half a second of host time apart: just
+    // under a second ago, now, and ahead within the committed window.
+    let mut asked = Vec::new();
+    let mut next = 0;
+    while lb.now < 3_600_000_000 {
+        lb.step().unwrap();
+        if matches!(lb.run.phase(), Phase::Done | Phase::Stopped(_)) {
+            break;
+        }
+        if lb.run.phase() == &Phase::Streaming && lb.now >= next {
+            let now = lb.now as f64;
+            for t in [now - 0.9e6, now, 0.5 * (now + lb.run.committed_end())] {
+                let p = lb.run.position_at(t);
+                asked.push((t, p.unwrap_or_else(|| panic!("t={t} at {now}: forgotten"))));
+            }
+            next = lb.now + 500_000;
+        }
+    }
+    assert_eq!(lb.run.phase(), &Phase::Done);
+    assert!(asked.len() > 30, "{} questions", asked.len());
+    // Long before the end is no longer kept.
+    assert_eq!(lb.run.position_at(0.0), None);
+    for (t, p) in asked {
+        let want = steps_at(&m, &p);
         for (node, spec) in m.nodes.iter().enumerate() {
             for (ch, &a) in spec.actuators.iter().enumerate() {
                 let got = start[a] + traced_at(&lb, node, ch as u8, t);
                 assert!(
                     (got - want[a]).abs() <= 1,
-                    "t={t} actuator {a}: steps {got}, history says {}",
+                    "t={t} actuator {a}: steps {got}, the host says {}",
                     want[a]
                 );
             }
         }
+    }
+}
+
+/// The host's record of the trajectory holds the segments of the last
+/// second and those queued, whatever the job's length: `moves` chords of
+/// `chord` mm round a circle at `feed` mm/s, each a segment no shorter than
+/// `chord / feed`.
+#[test]
+fn the_host_keeps_a_window_of_the_trajectory_not_the_job() {
+    // (machine, centre, radius, moves, chord mm, feed mm/s)
+    let cases = [
+        (
+            "examples/plotter.toml",
+            [150.0, 109.0],
+            60.0,
+            3000,
+            1.0,
+            100.0,
+        ),
+        (
+            "examples/printer.toml",
+            [110.0, 110.0],
+            80.0,
+            2000,
+            2.0,
+            150.0,
+        ),
+    ];
+    for (machine, centre, radius, moves, chord, feed) in cases {
+        let m = Machine::load(&root().join(machine)).unwrap();
+        let step = chord / radius;
+        let mut cmds = Vec::new();
+        for k in 0..moves {
+            let a = k as f64 * step;
+            let mut target = m.start;
+            target[0] = centre[0] + radius * a.cos();
+            target[1] = centre[1] + radius * a.sin();
+            cmds.push(Located {
+                loc: motet_planner::SourceLoc {
+                    line: k + 1,
+                    column: 0,
+                },
+                item: Command::Move(motet_planner::Move {
+                    target,
+                    feed,
+                    kind: motet_planner::MoveKind::Feed,
+                }),
+            });
+        }
+        let n = m.nodes.len();
+        let mut lb = Loopback::new(
+            &m,
+            cmds,
+            m.start,
+            clean_links(n),
+            &clocks(n),
+            NetConfig::default(),
+        );
+        let mut most = 0;
+        while lb.now < 3_600_000_000 {
+            lb.step().unwrap();
+            most = most.max(lb.run.history_len());
+            if matches!(lb.run.phase(), Phase::Done | Phase::Stopped(_)) {
+                break;
+            }
+        }
+        assert_eq!(lb.run.phase(), &Phase::Done, "{machine}");
+        // A second's segments, a queue's, and one more of each for the
+        // polls between.
+        let queue = m.nodes.iter().map(|n| n.queue).max().unwrap();
+        let bound = (1.0 / (chord / feed)) as usize + queue + 2;
+        assert!(
+            most <= bound,
+            "{machine}: {most} segments kept of {} (bound {bound})",
+            lb.run.segments_sent
+        );
+        assert!(lb.run.segments_sent >= moves as u64, "{machine}");
     }
 }
 

@@ -24,7 +24,7 @@ mod png;
 mod svg;
 
 pub use png::{render_png, PngCanvas};
-pub use svg::{render_svg, SvgWriter};
+pub use svg::{render_svg, SvgWriter, SVG_END};
 
 /// Default for [`RenderSpec::max_px`].
 pub const DEFAULT_MAX_PX: u32 = 1600;

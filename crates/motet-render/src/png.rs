@@ -245,34 +245,51 @@ impl PngCanvas {
 
     /// The finished picture: the tool-on coverage laid over the travel.
     pub fn finish(mut self) -> Pixmap {
-        let (w, h) = (self.pixmap.width() as f32, self.pixmap.height() as f32);
-        if let Some(all) = Rect::from_xywh(0.0, 0.0, w, h) {
-            let tool_paint = paint(20, 20, 20, 255);
-            self.pixmap
-                .fill_rect(all, &tool_paint, Transform::identity(), Some(&self.tool));
-        }
+        lay_tool(&mut self.pixmap, &self.tool);
         self.pixmap
     }
 
     /// The finished picture as the bytes of a PNG file.
     pub fn encode(self) -> Result<Vec<u8>, RenderError> {
-        let pixmap = self.finish();
-        let (w, h) = (pixmap.width(), pixmap.height());
-        let rgba = pixmap.take_demultiplied();
-        let err = |e: png::EncodingError| RenderError::Encode(e.to_string());
-        let mut out = Vec::new();
-        let mut encoder = png::Encoder::new(&mut out, w, h);
-        encoder.set_color(png::ColorType::Rgba);
-        encoder.set_depth(png::BitDepth::Eight);
-        // The encoder's fast level: a render of a few megapixels is written
-        // in a fraction of the default's time (it comes after the run,
-        // when nothing else is left to do), for a slightly larger file.
-        encoder.set_compression(png::Compression::Fast);
-        let mut writer = encoder.write_header().map_err(err)?;
-        writer.write_image_data(&rgba).map_err(err)?;
-        writer.finish().map_err(err)?;
-        Ok(out)
+        encode(self.finish())
     }
+
+    /// The picture drawn so far as the bytes of a PNG file, the same as
+    /// [`PngCanvas::encode`] would give now; the canvas goes on drawing.
+    /// Needs a copy of the image while it encodes.
+    pub fn snapshot(&self) -> Result<Vec<u8>, RenderError> {
+        let mut pixmap = self.pixmap.clone();
+        lay_tool(&mut pixmap, &self.tool);
+        encode(pixmap)
+    }
+}
+
+/// Lays the tool-on coverage over the picture, in the work's colour.
+fn lay_tool(pixmap: &mut Pixmap, tool: &Mask) {
+    let (w, h) = (pixmap.width() as f32, pixmap.height() as f32);
+    if let Some(all) = Rect::from_xywh(0.0, 0.0, w, h) {
+        let tool_paint = paint(20, 20, 20, 255);
+        pixmap.fill_rect(all, &tool_paint, Transform::identity(), Some(tool));
+    }
+}
+
+/// The picture as the bytes of a PNG file.
+fn encode(pixmap: Pixmap) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (pixmap.width(), pixmap.height());
+    let rgba = pixmap.take_demultiplied();
+    let err = |e: png::EncodingError| RenderError::Encode(e.to_string());
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, w, h);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    // The encoder's fast level: a render of a few megapixels is written
+    // in a fraction of the default's time (it comes after the run,
+    // when nothing else is left to do), for a slightly larger file.
+    encoder.set_compression(png::Compression::Fast);
+    let mut writer = encoder.write_header().map_err(err)?;
+    writer.write_image_data(&rgba).map_err(err)?;
+    writer.finish().map_err(err)?;
+    Ok(out)
 }
 
 /// Renders the strokes as a PNG image (bytes of a PNG file), through a

@@ -32,6 +32,10 @@ fn finite(p: &[f64; 2]) -> bool {
     p[0].is_finite() && p[1].is_finite()
 }
 
+/// What [`SvgWriter::finish`] ends the document with: the output written so
+/// far followed by this is a whole document.
+pub const SVG_END: &str = "</g>\n</svg>\n";
+
 /// Writes the tool path as SVG text (user units = mm) as it is executed:
 /// the header when made, each stroke when given, the end on
 /// [`SvgWriter::finish`]. Holds one stroke's text, nothing more.
@@ -161,9 +165,17 @@ impl<W: Write> SvgWriter<W> {
         self.flush_buf()
     }
 
+    /// The output. Each stroke has been written to it in full when
+    /// [`SvgWriter::stroke`] returns, so it can be read back or copied
+    /// between strokes: followed by [`SVG_END`], a whole document of the
+    /// strokes so far.
+    pub fn get_mut(&mut self) -> &mut W {
+        &mut self.out
+    }
+
     /// Ends the document; returns the output.
     pub fn finish(mut self) -> std::io::Result<W> {
-        self.buf.push_str("</g>\n</svg>\n");
+        self.buf.push_str(SVG_END);
         self.flush_buf()?;
         self.out.flush()?;
         Ok(self.out)

@@ -106,14 +106,25 @@ impl NetRun {
 
     /// Where the machine was (or will be, within the committed window) at
     /// host time `t`, µs: on the committed trajectory, with the tail after a
-    /// stop, at rest between segments and after the last.
-    pub fn position_at(&self, t: f64) -> Point {
+    /// stop, at rest between segments and after the last. `None` for a time
+    /// the host no longer keeps: more than a second before now, while the
+    /// run streams (the journal keeps the whole run).
+    pub fn position_at(&self, t: f64) -> Option<Point> {
+        if t < self.forgotten_until {
+            return None;
+        }
         let i = self.history.partition_point(|s| s.t0 <= t);
-        match i.checked_sub(1).map(|i| &self.history[i]) {
-            None => self.start_point,
+        Some(match i.checked_sub(1).map(|i| &self.history[i]) {
+            None => self.before,
             Some(s) if t < s.t1() => s.position_at(t),
             Some(s) => s.end,
-        }
+        })
+    }
+
+    /// How many segments the host keeps for [`NetRun::position_at`] and a
+    /// stop's tail: bounded whatever the job's length (see [`NetRun`]).
+    pub fn history_len(&self) -> usize {
+        self.history.len()
     }
 
     /// The committed segments the host still keeps, with their indices.

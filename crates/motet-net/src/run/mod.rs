@@ -162,6 +162,12 @@ pub enum Phase {
 /// synchronised, journals every seal before sending it, and stops safely
 /// on its contingency tails when a node is lost. Driven by polling with the
 /// time as an argument.
+///
+/// Of the trajectory it keeps only a window that does not grow with the
+/// job: the segments sealed and not yet run (at most a node's queue) and
+/// those that ended less than a second of host time ago, the record
+/// [`NetRun::position_at`] answers from and a stop's tail is computed on.
+/// The journal, on disk, keeps the whole run.
 pub struct NetRun {
     machine: Machine,
     cfg: NetConfig,
@@ -176,9 +182,15 @@ pub struct NetRun {
     pending: Vec<(Committed, usize)>,
     pending_events: usize,
     committed: VecDeque<Committed>,
-    /// Every committed segment as run (tails included after a stop), for
-    /// "where was the machine at time t".
-    history: Vec<Segment>,
+    /// The committed segments as run (tails included after a stop), for
+    /// "where was the machine at time t": the same window as `committed`,
+    /// forgotten with it.
+    history: VecDeque<Segment>,
+    /// End time of the last segment forgotten, µs: where the machine was
+    /// before it is no longer known.
+    forgotten_until: f64,
+    /// Where the machine was before the oldest segment in `history`.
+    before: Point,
     next_index: u32,
     /// End time of the last committed segment, µs.
     committed_end: f64,
@@ -239,7 +251,9 @@ impl NetRun {
             pending: Vec::new(),
             pending_events: 0,
             committed: VecDeque::new(),
-            history: Vec::new(),
+            history: VecDeque::new(),
+            forgotten_until: f64::NEG_INFINITY,
+            before: start,
             next_index: 0,
             committed_end: f64::NEG_INFINITY,
             deadline: f64::NEG_INFINITY,

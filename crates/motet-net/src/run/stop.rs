@@ -75,9 +75,9 @@ impl NetRun {
         // From here the nodes run the tail: so does the record.
         let n = self.committed.len().min(self.history.len());
         let from = self.history.len() - n;
-        if let Ok(c) = motet_trajectory::contingency::Contingency::of(self.history[from..].iter()) {
+        if let Ok(c) = motet_trajectory::contingency::Contingency::of(self.history.range(from..)) {
             let mut walk = c.walk();
-            for s in self.history[from + c.start..].iter_mut() {
+            for s in self.history.range_mut(from + c.start..) {
                 *s = walk.next(s);
             }
         }

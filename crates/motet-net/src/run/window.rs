@@ -12,6 +12,10 @@ use motet_wire::{HostMessage, NodeMessage};
 /// How long after a segment's end a node may still hold it, µs.
 const RETIRE_SLACK_US: f64 = 50_000.0;
 
+/// How long after a segment's end, on the host's clock, the host still
+/// keeps it, µs: how far back [`NetRun::position_at`] answers.
+pub(super) const KEEP_PAST_US: f64 = 1e6;
+
 /// A sealed segment the host keeps until the machine is past it.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Committed {
@@ -89,9 +93,15 @@ impl NetRun {
     pub(super) fn fill(&mut self, now: u64) -> Result<(), NetError> {
         let lead = self.lead_us() as f64;
         let t = now as f64;
-        // Forget what the machine is well past.
-        while self.committed.len() > 1 && self.committed[0].seg.t1() < t - 1e6 {
+        // Forget what the machine is well past; the record of where it was
+        // goes with it (the segments the nodes still hold stay, and the
+        // last one, for where the machine rests).
+        while self.committed.len() > 1 && self.committed[0].seg.t1() < t - KEEP_PAST_US {
             self.committed.pop_front();
+            if let Some(s) = self.history.pop_front() {
+                self.forgotten_until = s.t1();
+                self.before = s.end;
+            }
         }
         while self.deadline < t + lead {
             // One seal in flight at a time: a node that missed a seal can then
@@ -205,7 +215,7 @@ impl NetRun {
         }
         for (c, _) in &pending {
             self.committed.push_back(*c);
-            self.history.push(c.seg);
+            self.history.push_back(c.seg);
             self.committed_end = c.seg.t1();
         }
         let segs: Vec<&Segment> = self.committed.iter().map(|c| &c.seg).collect();
