@@ -6,7 +6,7 @@ use super::{NetError, NetRun, Phase};
 use crate::journal::{JournalSeal, JournalStop};
 use motet_trajectory::Point;
 use motet_wire::link::State;
-use motet_wire::{HostMessage, NodeMessage};
+use motet_wire::HostMessage;
 
 /// Stopping nodes are asked where they are µs apart.
 const WHERE_INTERVAL_US: u64 = 100_000;
@@ -199,18 +199,7 @@ impl NetRun {
     pub(super) fn update_done(&mut self) {
         let reported = (0..self.peers.len())
             .filter(|&k| self.dist.next_seq(k).is_some())
-            .map(|k| match self.status[k] {
-                Some(NodeMessage::Status {
-                    segment_space,
-                    next_seq,
-                    ..
-                }) => {
-                    let held =
-                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
-                    next_seq.saturating_sub(held)
-                }
-                _ => 0,
-            })
+            .map(|k| self.finished_by(k).unwrap_or(0))
             .min()
             .unwrap_or(0);
         self.done = self.done.max(reported.min(self.next_index_committed()));

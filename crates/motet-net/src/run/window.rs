@@ -61,21 +61,26 @@ impl NetRun {
             .map_or(sent - self.pending.len() as u32, |c| c.index);
         let by_status = (0..self.peers.len())
             .filter(|&k| self.dist.next_seq(k).is_some())
-            .filter_map(|k| match self.status[k] {
-                Some(NodeMessage::Status {
-                    segment_space,
-                    next_seq,
-                    ..
-                }) => {
-                    let held =
-                        (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
-                    Some(next_seq.saturating_sub(held))
-                }
-                _ => None,
-            })
+            .filter_map(|k| self.finished_by(k))
             .min();
         let retired = by_status.map_or(by_time, |s| s.max(by_time)).min(sent);
         (sent - retired) as usize
+    }
+
+    /// How many segments node `k` has finished, as its last status tells:
+    /// those it was sent less those still in its queue.
+    pub(super) fn finished_by(&self, k: usize) -> Option<u32> {
+        match self.status[k] {
+            Some(NodeMessage::Status {
+                segment_space,
+                next_seq,
+                ..
+            }) => {
+                let held = (motet_node::DEFAULT_QUEUE as u32).saturating_sub(segment_space as u32);
+                Some(next_seq.saturating_sub(held))
+            }
+            _ => None,
+        }
     }
 
     pub(super) fn capacity(&self) -> usize {
