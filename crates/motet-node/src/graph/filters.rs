@@ -5,6 +5,27 @@ use super::declare::{live, Declaration, Domain, Param, ParamFault};
 use super::io::Ctx;
 use super::port::{Mode, Port, PortSpec, Unit};
 
+/// The scaling filters' construction parameters: the ratio, then the mode.
+const SCALING_PARAMS: &[Param] = &[
+    Param::new("ratio", "", 1.0, Domain::REAL),
+    Param::new(
+        "mode",
+        "",
+        0.0,
+        Domain::Choice(&["incremental", "absolute"]),
+    )
+    .doc("incremental: changes scaled; absolute: values"),
+];
+
+/// A scaling filter's mode from its `mode` flag.
+fn scaling_mode(absolute: bool) -> Mode {
+    if absolute {
+        Mode::Absolute
+    } else {
+        Mode::Incremental
+    }
+}
+
 /// `out = in × ratio`. In INCREMENTAL mode each frame's change of the input is
 /// scaled (a live ratio change affects only later motion); in ABSOLUTE mode the
 /// output is the scaled absolute input (a ratio change moves the output at
@@ -35,29 +56,13 @@ impl Kind for ScalingFilter1D {
     const DECL: Declaration = Declaration {
         name: "scale",
         input: None,
-        params: &[
-            Param::new("ratio", "", 1.0, Domain::REAL),
-            Param::new(
-                "mode",
-                "",
-                0.0,
-                Domain::Choice(&["incremental", "absolute"]),
-            )
-            .doc("incremental: changes scaled; absolute: values"),
-        ],
+        params: SCALING_PARAMS,
         live: &[live("ratio", Self::RATIO)],
         host_keys: &[],
         in_ports: &[],
         ports: Self::PORTS,
         doc: "out = in × ratio",
-        build: |a| {
-            let mode = if a.flag(1) {
-                Mode::Absolute
-            } else {
-                Mode::Incremental
-            };
-            Ok(ScalingFilter1D::new(a.get(0), mode).into())
-        },
+        build: |a| Ok(ScalingFilter1D::new(a.get(0), scaling_mode(a.flag(1))).into()),
     };
 
     const PORTS: &'static [PortSpec] = &[
@@ -131,29 +136,13 @@ impl Kind for ScalingFilter2D {
     const DECL: Declaration = Declaration {
         name: "scale2d",
         input: None,
-        params: &[
-            Param::new("ratio", "", 1.0, Domain::REAL),
-            Param::new(
-                "mode",
-                "",
-                0.0,
-                Domain::Choice(&["incremental", "absolute"]),
-            )
-            .doc("incremental: changes scaled; absolute: values"),
-        ],
+        params: SCALING_PARAMS,
         live: &[live("ratio", Self::RATIO)],
         host_keys: &[],
         in_ports: &[],
         ports: Self::PORTS,
         doc: "two inputs scaled alike",
-        build: |a| {
-            let mode = if a.flag(1) {
-                Mode::Absolute
-            } else {
-                Mode::Incremental
-            };
-            Ok(ScalingFilter2D::new(a.get(0), mode).into())
-        },
+        build: |a| Ok(ScalingFilter2D::new(a.get(0), scaling_mode(a.flag(1))).into()),
     };
 
     const PORTS: &'static [PortSpec] = &[
