@@ -150,6 +150,39 @@ fn line_in_reach(kin: KinematicsKind, p: Xyz, q: Xyz, polar_clearance: f64) -> b
     })
 }
 
+/// A straight line between two drawn points of machine `k`, within reach
+/// all along (clear of a polar centre by `clearance`) and not too short to
+/// measure: the lines the host lets through.
+#[derive(Clone, Copy)]
+struct Line {
+    kin: KinematicsKind,
+    p: Xyz,
+    q: Xyz,
+    length: f64,
+}
+
+fn line(k: usize, a: (f64, f64, f64), b: (f64, f64, f64), clearance: f64) -> Option<Line> {
+    let (kin, bx) = machines()[k];
+    let (p, q) = (reachable(kin, bx, a)?, reachable(kin, bx, b)?);
+    let length = distance(p, q);
+    (line_in_reach(kin, p, q, clearance) && length >= 1e-3).then_some(Line { kin, p, q, length })
+}
+
+impl Line {
+    /// Each joint: its index, map, value at the start and path along the line.
+    fn paths(&self) -> Vec<(usize, JointMap, f64, JointPath)> {
+        (0..self.kin.joints().len())
+            .map(|j| {
+                let map = self.kin.joint_map(j, [0, 1, 2]);
+                let start = map.value(&point(self.p), 0.0);
+                let path =
+                    JointPath::between(&map, &point(self.p), &point(self.q), self.length, start);
+                (j, map, start, path)
+            })
+            .collect()
+    }
+}
+
 fn unit() -> impl Strategy<Value = (f64, f64, f64)> {
     (0.0f64..1.0, 0.0f64..1.0, 0.0f64..1.0)
 }
@@ -201,21 +234,9 @@ proptest! {
     /// distance, leg by leg between turns, as a node steps it.
     #[test]
     fn paths_solve_back(k in 0usize..KINDS, a in unit(), b in unit()) {
-        let (kin, bx) = machines()[k];
-        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
-            return Ok(());
-        };
-        if !line_in_reach(kin, p, q, 0.0) {
-            return Ok(());
-        }
-        let length = distance(p, q);
-        if length < 1e-3 {
-            return Ok(());
-        }
-        for j in 0..kin.joints().len() {
-            let map = kin.joint_map(j, [0, 1, 2]);
-            let start = map.value(&point(p), 0.0);
-            let path = JointPath::between(&map, &point(p), &point(q), length, start);
+        let Some(line) = line(k, a, b, 0.0) else { return Ok(()) };
+        let Line { kin, length, .. } = line;
+        for (j, _, _, path) in line.paths() {
             let mut lo = 0.0;
             while lo < length {
                 let hi = path.next_turn(lo).unwrap_or(length);
@@ -238,21 +259,9 @@ proptest! {
     /// turning: each sampled extremum has a turn within a sample of it.
     #[test]
     fn paths_follow_the_inverse_and_turn_where_it_turns(k in 0usize..KINDS, a in unit(), b in unit()) {
-        let (kin, bx) = machines()[k];
-        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
-            return Ok(());
-        };
-        if !line_in_reach(kin, p, q, 1.0) {
-            return Ok(());
-        }
-        let length = distance(p, q);
-        if length < 1e-3 {
-            return Ok(());
-        }
-        for j in 0..kin.joints().len() {
-            let map = kin.joint_map(j, [0, 1, 2]);
-            let start = map.value(&point(p), 0.0);
-            let path = JointPath::between(&map, &point(p), &point(q), length, start);
+        let Some(line) = line(k, a, b, 1.0) else { return Ok(()) };
+        let Line { kin, p, q, length } = line;
+        for (j, map, start, path) in line.paths() {
             let n = 2000;
             let h = length / n as f64;
             let values: Vec<f64> = (0..=n).map(|i| path.value_at(h * i as f64)).collect();
@@ -286,21 +295,9 @@ proptest! {
     /// far more finely than the bound itself was.
     #[test]
     fn rate_bounds_hold(k in 0usize..KINDS, a in unit(), b in unit()) {
-        let (kin, bx) = machines()[k];
-        let (Some(p), Some(q)) = (reachable(kin, bx, a), reachable(kin, bx, b)) else {
-            return Ok(());
-        };
-        if !line_in_reach(kin, p, q, 1.0) {
-            return Ok(());
-        }
-        let length = distance(p, q);
-        if length < 1e-3 {
-            return Ok(());
-        }
-        for j in 0..kin.joints().len() {
-            let map: JointMap = kin.joint_map(j, [0, 1, 2]);
-            let start = map.value(&point(p), 0.0);
-            let path = JointPath::between(&map, &point(p), &point(q), length, start);
+        let Some(line) = line(k, a, b, 1.0) else { return Ok(()) };
+        let Line { kin, length, .. } = line;
+        for (j, _, _, path) in line.paths() {
             let bound = path.max_rate(0.0, length);
             let n = 4000;
             let h = length / n as f64;
