@@ -15,6 +15,9 @@ pub(super) struct Drawing<'a> {
     /// without named joints); none when the machine lacks them, and the
     /// render stays at the origin.
     xy_joints: Option<(usize, usize)>,
+    /// The machine joint that is the kinematics' third (a delta's), which
+    /// the pen's x and y depend on too.
+    third_joint: Option<usize>,
     /// The graph channel whose position puts the pen down.
     pen: Option<usize>,
     /// Below this position, steps, the pen channel's pen is down.
@@ -48,6 +51,11 @@ impl<'a> Drawing<'a> {
             let f = |n: &str| machine.joints.iter().position(|j| j.name == n);
             f(a).zip(f(b))
         };
+        let third_joint = machine
+            .kinematics
+            .joints()
+            .get(2)
+            .and_then(|c| machine.joints.iter().position(|j| j.name == c.name));
         let pen = graph
             .render
             .pen_channel
@@ -64,6 +72,7 @@ impl<'a> Drawing<'a> {
         Drawing {
             machine,
             xy_joints,
+            third_joint,
             pen,
             pen_down_below: graph.render.pen_down_below,
             job_pen: job.filter(|j| j.has_tool_events()),
@@ -75,14 +84,11 @@ impl<'a> Drawing<'a> {
     pub fn xy(&self, joints: &[f64]) -> [f64; 2] {
         match self.xy_joints {
             Some((a, b)) => {
-                // A delta's third joint: the tool's plane point depends on it.
-                let kin = self.machine.kinematics;
-                let c = kin
-                    .joints()
-                    .get(2)
-                    .and_then(|c| self.machine.joints.iter().position(|j| j.name == c.name));
-                let [x, y, _] =
-                    kin.forward_or_nan([joints[a], joints[b], c.map_or(0.0, |c| joints[c])]);
+                let c = self.third_joint.map_or(0.0, |c| joints[c]);
+                let [x, y, _] = self
+                    .machine
+                    .kinematics
+                    .forward_or_nan([joints[a], joints[b], c]);
                 [x, y]
             }
             None => [0.0, 0.0],
