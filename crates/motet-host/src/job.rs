@@ -213,9 +213,9 @@ const REACH_MAX_POINTS: usize = 4096;
 
 /// Whether every point of the straight move from `a` to `b` is within the
 /// kinematics' reach, clear of singularities (every kinematics whose joints
-/// are not linear: arms, linkages, deltas).
+/// are not linear and whose reach is limited: arms, linkages, deltas).
 fn check_reach(kin: KinematicsKind, a: Xyz, b: Xyz) -> Result<(), MoveError> {
-    if kin.joints().is_empty() || kin.linear(0).is_some() {
+    if kin.joints().is_empty() || kin.linear(0).is_some() || !kin.limited_reach() {
         return Ok(());
     }
     let length = (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt();

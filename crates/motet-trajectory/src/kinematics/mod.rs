@@ -175,6 +175,11 @@ pub trait Kinematics: Copy + fmt::Debug + PartialEq {
         None
     }
 
+    /// Whether [`Kinematics::reach`] can refuse a point: false for a
+    /// kinematics that reaches everywhere, whose moves the host then does
+    /// not sample.
+    const LIMITED_REACH: bool = true;
+
     /// Whether `p` can be reached with a margin from every singularity.
     fn reach(&self, p: Xyz) -> Result<(), Unreachable> {
         match (0..Self::JOINTS.len()).all(|j| self.inverse(j, p, 0.0).is_some()) {

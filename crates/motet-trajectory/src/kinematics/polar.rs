@@ -54,12 +54,14 @@ impl Kinematics for Polar {
         })
     }
 
-    /// The centre is reachable; how close a path may pass is the machine's
-    /// `min_radius`, checked by the host.
     fn gradient_bound(&self, j: usize) -> Option<f64> {
         // |∇r| = 1 everywhere; the angle's grows without bound at the centre.
         (j == 0).then_some(1.0)
     }
+
+    /// Everywhere: the centre is reachable, and how close a path may pass
+    /// is the machine's `min_radius`, checked by the host.
+    const LIMITED_REACH: bool = false;
 
     fn reach(&self, _: Xyz) -> Result<(), super::Unreachable> {
         Ok(())

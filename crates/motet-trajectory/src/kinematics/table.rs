@@ -94,6 +94,11 @@ macro_rules! kinematics {
                 match self { $(KinematicsKind::$kind(k) => k.gradient_bound(j)),* }
             }
 
+            /// [`Kinematics::LIMITED_REACH`].
+            pub fn limited_reach(&self) -> bool {
+                match self { $(KinematicsKind::$kind(_) => <$kind as Kinematics>::LIMITED_REACH),* }
+            }
+
             /// [`Kinematics::reach`].
             pub fn reach(&self, p: Xyz) -> Result<(), Unreachable> {
                 match self { $(KinematicsKind::$kind(k) => k.reach(p)),* }
