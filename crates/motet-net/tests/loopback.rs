@@ -24,15 +24,7 @@ fn clean_run_steps_like_the_simulator() {
     ] {
         let (m, cmds) = load(machine, job);
         let want = simulated(&m, &cmds);
-        let n = m.nodes.len();
-        let mut lb = Loopback::new(
-            &m,
-            cmds,
-            m.start,
-            clean_links(n),
-            &clocks(n),
-            NetConfig::default(),
-        );
+        let mut lb = clean_loopback(&m, cmds);
         let phase = lb.run_until_settled(3_600_000_000).unwrap();
         assert_eq!(phase, Phase::Done, "{machine} {job}");
         assert_eq!(executed(&m, &lb), want, "{machine} {job}");
@@ -90,15 +82,7 @@ fn a_node_that_stops_answering_stops_the_others_with_it() {
         "examples/gestalt-3axis.toml",
         "examples/jobs/gestalt-3d.gcode",
     );
-    let n = m.nodes.len();
-    let mut lb = Loopback::new(
-        &m,
-        cmds,
-        m.start,
-        clean_links(n),
-        &clocks(n),
-        NetConfig::default(),
-    );
+    let mut lb = clean_loopback(&m, cmds);
     while lb.now < 9_000_000 {
         lb.step().unwrap();
     }
@@ -239,15 +223,7 @@ fn the_host_keeps_a_window_of_the_trajectory_not_the_job() {
                 }),
             });
         }
-        let n = m.nodes.len();
-        let mut lb = Loopback::new(
-            &m,
-            cmds,
-            m.start,
-            clean_links(n),
-            &clocks(n),
-            NetConfig::default(),
-        );
+        let mut lb = clean_loopback(&m, cmds);
         let mut most = 0;
         while lb.now < 3_600_000_000 {
             lb.step().unwrap();
@@ -293,15 +269,7 @@ fn tiny_fast_moves_slow_down_instead_of_stopping_the_network() {
         })
         .collect();
     let want = simulated(&m, &cmds);
-    let n = m.nodes.len();
-    let mut lb = Loopback::new(
-        &m,
-        cmds,
-        m.start,
-        clean_links(n),
-        &clocks(n),
-        NetConfig::default(),
-    );
+    let mut lb = clean_loopback(&m, cmds);
     assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
     assert_eq!(executed(&m, &lb), want);
     assert_eq!(lb.nodes[0].node.endpoint.node().status().underruns, 0);

@@ -74,6 +74,20 @@ pub fn faulty_links(n: usize, clock: &SimClock, p: f64, seed: u64) -> Links {
         .collect()
 }
 
+/// A loopback run of `cmds` on `m` from its start, over clean links, its
+/// nodes' crystals as [`clocks`] gives them, with the default settings.
+pub fn clean_loopback(m: &Machine, cmds: Vec<Located<Command>>) -> Loopback {
+    let n = m.nodes.len();
+    Loopback::new(
+        m,
+        cmds,
+        m.start,
+        clean_links(n),
+        &clocks(n),
+        motet_net::NetConfig::default(),
+    )
+}
+
 pub fn clocks(n: usize) -> Vec<Crystal> {
     // Crystals off by up to ±200 ppm, clocks started anywhere.
     (0..n)
