@@ -153,6 +153,20 @@ impl Loopback {
         self.host_alive = true;
     }
 
+    /// Replaces a run that finished or stopped by the next on the same
+    /// links and nodes, as a server does for each motion: the links and the
+    /// clock estimates carry over.
+    pub fn next_run(
+        &mut self,
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        cfg: NetConfig,
+    ) {
+        let peers = self.run.take_peers();
+        self.run = NetRun::new(machine, commands, peers, start, cfg, None);
+    }
+
     /// Node `k` restarts (power cycled, or its process killed and started
     /// again from its store): same identity, nothing else kept.
     pub fn restart_node(&mut self, k: usize) {
@@ -193,6 +207,22 @@ impl Loopback {
     /// One round of the host and every live node, then time moves on to the
     /// next thing any of them has to do (at least 10 µs, at most [`Loopback::max_step_us`]).
     pub fn step(&mut self) -> Result<(), NetError> {
+        let next = self.round()?;
+        self.now = next.clamp(self.now + 10, self.now + self.max_step_us);
+        Ok(())
+    }
+
+    /// One round at `now` (µs, never earlier than the last): how a host
+    /// drives loopback nodes on the wall clock instead of a simulated one.
+    /// Returns when any of them has something to do next.
+    pub fn advance_to(&mut self, now: u64) -> Result<u64, NetError> {
+        self.now = self.now.max(now);
+        self.round()
+    }
+
+    /// The host, every live node, and the host again (replies are taken at
+    /// once, as on a link without delay); returns the earliest wakeup.
+    fn round(&mut self) -> Result<u64, NetError> {
         if self.host_alive {
             self.run.poll(self.now)?;
         }
@@ -209,13 +239,10 @@ impl Loopback {
             }
         }
         if self.host_alive {
-            // Replies are taken at once, as on a link without delay: time
-            // moves only when the links are quiet.
             self.run.poll(self.now)?;
             next = next.min(self.run.next_wakeup(self.now));
         }
-        self.now = next.clamp(self.now + 10, self.now + self.max_step_us);
-        Ok(())
+        Ok(next)
     }
 
     /// Steps until the run is done or stopped, the host is dead and the nodes

@@ -15,6 +15,7 @@ mod node;
 mod nodes;
 mod peak;
 mod run;
+mod serve;
 
 use clap::{Parser, Subcommand};
 use motet_planner::ranges;
@@ -233,6 +234,9 @@ enum Cmd {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Serve the machine over HTTP: a browser page, a JSON API and a
+    /// WebSocket to upload jobs, start, pause, stop and jog.
+    Serve(serve::ServeArgs),
     /// Measure parsing, planning and simulation speed on a real slicer's G-code.
     Bench {
         #[arg(long, default_value = "examples/printer.toml")]
@@ -395,6 +399,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             long.map_or(0, |n| n as usize),
             instructions.map(|n| n as usize),
         ),
+        Cmd::Serve(args) => serve::serve(args),
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }

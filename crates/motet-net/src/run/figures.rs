@@ -132,6 +132,13 @@ impl NetRun {
         self.committed.iter().map(|c| (c.index, &c.seg))
     }
 
+    /// The job command whose motion runs at host time `t`, µs, among the
+    /// committed segments the host keeps (the last one's after the window).
+    pub fn command_at(&self, t: f64) -> Option<usize> {
+        let i = self.committed.partition_point(|c| c.seg.t0 <= t);
+        self.committed.get(i.checked_sub(1)?).map(|c| c.command)
+    }
+
     /// The last status each node sent.
     pub fn node_status(&self, k: usize) -> Option<&NodeMessage> {
         self.status[k].as_ref()

@@ -179,7 +179,7 @@ pub struct NetRun {
     feed: Option<PlanFeed>,
     start_point: Point,
     /// Routed to the nodes but not sealed.
-    pending: Vec<(Committed, usize)>,
+    pending: Vec<Committed>,
     pending_events: usize,
     committed: VecDeque<Committed>,
     /// The committed segments as run (tails included after a stop), for
@@ -304,6 +304,13 @@ impl NetRun {
     /// The links to the nodes, in the machine's order.
     pub fn peers(&self) -> &[Peer] {
         &self.peers
+    }
+
+    /// Takes the links to the nodes, for the next run on the same nodes
+    /// (their clock estimates carry over, so it starts at once); this run
+    /// is left with none and must not be polled again.
+    pub fn take_peers(&mut self) -> Vec<Peer> {
+        std::mem::take(&mut self.peers)
     }
 
     /// Commands planned so far and in all.

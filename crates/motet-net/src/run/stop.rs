@@ -4,6 +4,8 @@
 
 use super::{NetError, NetRun, Phase};
 use crate::journal::{JournalSeal, JournalStop};
+use crate::source::Sourced;
+use motet_planner::Planned;
 use motet_trajectory::Point;
 use motet_wire::link::State;
 use motet_wire::HostMessage;
@@ -23,6 +25,10 @@ pub struct StopInfo {
     pub tail_start: u32,
     /// Segments every node had reported finished.
     pub done: u32,
+    /// The job command the first segment past the committed window came
+    /// from (the job's length when no motion was left): where a job held
+    /// on its path continues, from `point`.
+    pub next_command: usize,
     /// Where the nodes that kept running come to rest.
     pub point: Point,
     /// Host time at which the machine is at rest, µs.
@@ -65,6 +71,7 @@ impl NetRun {
         for p in self.peers.iter_mut() {
             p.drop_unsealed();
         }
+        let next_command = self.first_unsealed_command();
         self.pending.clear();
         self.pending_events = 0;
         let point = self
@@ -89,12 +96,35 @@ impl NetRun {
             window_end: self.next_index_committed(),
             tail_start: self.tail_start,
             done: self.done,
+            next_command,
             point,
             rest_time,
             lost: self.lost.clone(),
             confirmed: Vec::new(),
         });
         self.next_where = now;
+    }
+
+    /// The command of the first segment not sealed: the first pending one,
+    /// or the next the planner gives (the feed is dropped with the stop).
+    fn first_unsealed_command(&mut self) -> usize {
+        if let Some(c) = self.pending.first() {
+            return c.command;
+        }
+        if self.feed.is_none() {
+            return 0;
+        }
+        loop {
+            match self.next_item() {
+                Ok(Some(Sourced {
+                    item: Planned::Segment(_),
+                    command,
+                })) => return command,
+                Ok(Some(_)) => {}
+                Ok(None) => return self.progress().1,
+                Err(_) => return self.progress().0,
+            }
+        }
     }
 
     /// Node `k` stopped answering or its link failed: the run stops, and

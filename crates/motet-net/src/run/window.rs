@@ -21,6 +21,8 @@ pub(super) const KEEP_PAST_US: f64 = 1e6;
 pub(super) struct Committed {
     pub(super) index: u32,
     pub(super) seg: Segment,
+    /// The job command it came from.
+    pub(super) command: usize,
 }
 
 impl NetRun {
@@ -145,16 +147,17 @@ impl NetRun {
                     let c = Committed {
                         index: self.next_index,
                         seg,
+                        command: item.command,
                     };
                     self.next_index += 1;
                     self.route(&item.item)?;
-                    self.pending.push((c, item.command));
+                    self.pending.push(c);
                     self.segments_sent += 1;
                     let (start, _) = crate::tail::deadline(
                         self.committed
                             .iter()
                             .map(|c| &c.seg)
-                            .chain(self.pending.iter().map(|(c, _)| &c.seg)),
+                            .chain(self.pending.iter().map(|c| &c.seg)),
                     );
                     if start >= target && self.pending.len() >= 2 {
                         break;
@@ -207,10 +210,10 @@ impl NetRun {
         let pending = std::mem::take(&mut self.pending);
         self.pending_events = 0;
         if let Some(j) = self.journal.as_mut() {
-            for (c, command) in &pending {
+            for c in &pending {
                 j.segment(&JournalSegment {
                     index: c.index,
-                    command: *command,
+                    command: c.command,
                     t0: c.seg.t0,
                     t1: c.seg.t1(),
                     start: c.seg.start,
@@ -218,7 +221,7 @@ impl NetRun {
                 })?;
             }
         }
-        for (c, _) in &pending {
+        for c in &pending {
             self.committed.push_back(*c);
             self.history.push_back(c.seg);
             self.committed_end = c.seg.t1();

@@ -1,0 +1,102 @@
+//! Where the machine's nodes are, for a server: every motion a server
+//! starts (a job, its continuation after a hold, a jog) is one networked run
+//! ([`NetRun`]) on the same nodes, so a hold, a cancel and an emergency stop
+//! are the run's coordinated stop: every node brakes on its contingency tail
+//! and rests on the path, where the host knows it is.
+
+use motet_host::Machine;
+use motet_net::loopback::{Crystal, Loopback};
+use motet_net::run::PeerFigures;
+use motet_net::{NetConfig, NetError, NetRun};
+use motet_planner::{Command, Located};
+use motet_trajectory::Point;
+
+/// The nodes a server drives, each motion one [`NetRun`] on them, polled on
+/// the server's clock (µs since it started).
+///
+/// To put a server on other nodes, implement this over their links: `begin`
+/// makes a new run with the current run's peers
+/// ([`NetRun::take_peers`]); `advance` polls it and the links.
+pub trait Nodes: Send {
+    /// Replaces the current run (which has finished or stopped) by a run of
+    /// `commands` from rest at `start`, on the same links: the clock
+    /// estimates carry over, so it starts at once.
+    fn begin(&mut self, machine: &Machine, commands: Vec<Located<Command>>, start: Point);
+    /// Polls the run and the nodes at `now`; returns when to poll next at
+    /// the latest, µs.
+    fn advance(&mut self, now: u64) -> Result<u64, NetError>;
+    /// The current run.
+    fn run(&self) -> &NetRun;
+    /// The current run, to stop it.
+    fn run_mut(&mut self) -> &mut NetRun;
+    /// Each node's link figures (round trip, retransmits, clock error).
+    fn figures(&self, now: u64) -> Vec<PeerFigures> {
+        self.run().figures(now)
+    }
+    /// Where the nodes are, for the person: `sim` (in this process).
+    fn kind(&self) -> &'static str;
+}
+
+/// Settings of a server's runs: a short lead and short windows, because a
+/// hold or a stop brakes on the tail of the committed window and a person
+/// waits for it; in-process nodes have no link delay to cover.
+pub fn serve_config() -> NetConfig {
+    NetConfig {
+        lead_min_us: 30_000,
+        window_us: 60_000,
+        ..NetConfig::default()
+    }
+}
+
+/// The machine's nodes simulated in this process, stepped on the server's
+/// clock: the node firmware's own code, joined to the host by in-memory
+/// links.
+pub struct SimNodes {
+    net: Loopback,
+    cfg: NetConfig,
+}
+
+impl SimNodes {
+    /// One simulated node per machine node, connected and idle at `start`.
+    pub fn new(machine: &Machine, start: Point, cfg: NetConfig) -> SimNodes {
+        let links = (0..machine.nodes.len())
+            .map(|k| {
+                let (a, b) = motet_link::pair(&format!("host{k}"), &format!("node{k}"));
+                (
+                    Box::new(a) as Box<dyn motet_link::Transport + Send>,
+                    Box::new(b) as Box<dyn motet_link::Transport + Send>,
+                )
+            })
+            .collect();
+        let clocks = vec![Crystal::default(); machine.nodes.len()];
+        let mut net = Loopback::new(machine, Vec::new(), start, links, &clocks, cfg);
+        for n in &mut net.nodes {
+            // A server runs for days: nothing may grow with its motion.
+            n.node.board.trace = None;
+            n.node.board.tool_trace = None;
+        }
+        SimNodes { net, cfg }
+    }
+}
+
+impl Nodes for SimNodes {
+    fn begin(&mut self, machine: &Machine, commands: Vec<Located<Command>>, start: Point) {
+        self.net.next_run(machine, commands, start, self.cfg);
+    }
+
+    fn advance(&mut self, now: u64) -> Result<u64, NetError> {
+        self.net.advance_to(now)
+    }
+
+    fn run(&self) -> &NetRun {
+        &self.net.run
+    }
+
+    fn run_mut(&mut self) -> &mut NetRun {
+        &mut self.net.run
+    }
+
+    fn kind(&self) -> &'static str {
+        "sim"
+    }
+}

@@ -1,0 +1,291 @@
+//! The API's handlers: each takes the lock, acts or reads, and answers in
+//! JSON; a refused action answers with its reason and changes nothing.
+
+use super::ApiError;
+use crate::jobs::{read_upload, StoredJob, UploadError};
+use crate::server::Shared;
+use crate::session::Client;
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, JsonRejection, QueryRejection};
+use axum::extract::{Path, Query, State};
+use axum::http::{HeaderMap, StatusCode};
+use axum::Json;
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+type Shared_ = State<Arc<Shared>>;
+type Answer = Result<Json<Value>, ApiError>;
+
+/// The header a client names itself in (any string it chose), for control.
+pub(crate) const CLIENT_HEADER: &str = "x-motet-client";
+
+fn client(headers: &HeaderMap) -> Option<String> {
+    headers
+        .get(CLIENT_HEADER)
+        .and_then(|v| v.to_str().ok())
+        .map(|s| s.chars().take(64).collect())
+}
+
+fn bad_json(e: JsonRejection) -> ApiError {
+    ApiError(StatusCode::BAD_REQUEST, e.body_text())
+}
+
+fn done() -> Answer {
+    Ok(Json(json!({ "ok": true })))
+}
+
+pub(super) async fn machine(State(sh): Shared_) -> Json<Value> {
+    let m = &sh.machine;
+    Json(json!({
+        "name": m.name,
+        "description": m.description,
+        "kinematics": m.kinematics.name(),
+        "axes": m.axes.iter().map(|a| json!({
+            "name": a.name,
+            "travel": a.travel,
+            "max_velocity": a.max_velocity,
+            "max_acceleration": a.max_acceleration,
+            "path": a.path,
+        })).collect::<Vec<_>>(),
+        "tools": m.tools.iter().map(|t| json!({
+            "name": t.name,
+            "kind": format!("{:?}", t.kind).to_lowercase(),
+        })).collect::<Vec<_>>(),
+        "nodes": m.nodes.iter().map(|n| n.name.clone()).collect::<Vec<_>>(),
+        "start": m.start[..m.axes.len()].to_vec(),
+        "draw_feed": m.draw_feed,
+    }))
+}
+
+pub(super) async fn status(State(sh): Shared_) -> Json<Value> {
+    Json(json!(sh.session().status()))
+}
+
+pub(super) async fn nodes(State(sh): Shared_) -> Json<Value> {
+    let now = sh.now();
+    let s = sh.session();
+    let figures = s.nodes().figures(now);
+    let run = s.nodes().run();
+    let fw = motet_net::sim_node::sim_firmware();
+    let m = s.machine();
+    let list: Vec<Value> = m
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(k, n)| {
+            let f = figures.get(k);
+            json!({
+                "name": n.name,
+                "kind": s.nodes().kind(),
+                "link": run.peers().get(k).map(|p| format!("{:?}", p.link_state())),
+                "actuators": n.actuators.iter().map(|&a| m.actuators[a].name.clone()).collect::<Vec<_>>(),
+                "tools": n.tools.iter().map(|&t| m.tools[t].name.clone()).collect::<Vec<_>>(),
+                "firmware": format!("{}.{}.{}", fw.major, fw.minor, fw.patch),
+                "rtt_us": f.map(|f| f.rtt_us),
+                "retransmits": f.map(|f| f.retransmits),
+                "crc_errors": f.map(|f| f.crc_errors),
+                "clock_error_us": f.map(|f| f.sync_error_us),
+                "skew_ppm": f.map(|f| f.skew_ppm),
+                "bytes_out": f.map(|f| f.bytes_out),
+                "bytes_in": f.map(|f| f.bytes_in),
+            })
+        })
+        .collect();
+    Json(json!(list))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Since {
+    #[serde(default)]
+    since: u64,
+}
+
+pub(super) async fn events(State(sh): Shared_, q: Result<Query<Since>, QueryRejection>) -> Answer {
+    let q = q.map_err(|e| ApiError(StatusCode::BAD_REQUEST, e.body_text()))?;
+    Ok(Json(json!(sh.session().events.since(q.since))))
+}
+
+fn job_json(j: &StoredJob) -> Value {
+    let mut v = json!(j);
+    v["bounds"] = json!(j.preview.bounds);
+    v["preview_points"] = json!(j.preview.points());
+    v
+}
+
+pub(super) async fn jobs(State(sh): Shared_) -> Json<Value> {
+    let list: Vec<Value> = sh.jobs().list().iter().map(|j| job_json(j)).collect();
+    Json(json!(list))
+}
+
+fn find(sh: &Shared, id: &str) -> Result<Arc<StoredJob>, ApiError> {
+    let n: u64 = id
+        .parse()
+        .map_err(|_| ApiError(StatusCode::NOT_FOUND, format!("no job {id:?}")))?;
+    sh.jobs()
+        .get(n)
+        .ok_or_else(|| ApiError(StatusCode::NOT_FOUND, format!("no job {n}")))
+}
+
+pub(super) async fn job(State(sh): Shared_, Path(id): Path<String>) -> Answer {
+    Ok(Json(job_json(find(&sh, &id)?.as_ref())))
+}
+
+pub(super) async fn preview(State(sh): Shared_, Path(id): Path<String>) -> Answer {
+    Ok(Json(json!(find(&sh, &id)?.preview)))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct UploadQuery {
+    /// The file's name: its extension says what kind of job it is.
+    name: String,
+    #[serde(default)]
+    allow_unknown: bool,
+}
+
+pub(super) async fn upload(
+    State(sh): Shared_,
+    q: Result<Query<UploadQuery>, QueryRejection>,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<(StatusCode, Json<Value>), ApiError> {
+    let q = q.map_err(|e| ApiError(StatusCode::BAD_REQUEST, e.body_text()))?;
+    // Too large, or the client went away mid-upload: nothing is stored.
+    let body = body.map_err(|e| ApiError(e.status(), e.body_text()))?;
+    let (id, dir) = sh.jobs().reserve();
+    let machine = sh.machine.clone();
+    let opts = motet_api::JobOptions {
+        allow_unknown: q.allow_unknown,
+    };
+    let read = tokio::task::spawn_blocking(move || {
+        read_upload(&machine, &dir.clone(), id, &q.name, &body, &opts)
+    })
+    .await
+    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
+    let job = read.map_err(|e| {
+        let code = match e {
+            UploadError::TooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
+            UploadError::Io(_) => StatusCode::INTERNAL_SERVER_ERROR,
+            UploadError::Job(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            UploadError::Name(_) | UploadError::Kind { .. } | UploadError::Empty => {
+                StatusCode::BAD_REQUEST
+            }
+        };
+        ApiError(code, e.to_string())
+    })?;
+    let running = sh.session().job_id();
+    let job = sh.jobs().insert(job, |id| running == Some(id));
+    Ok((StatusCode::CREATED, Json(job_json(&job))))
+}
+
+pub(super) async fn start(State(sh): Shared_, Path(id): Path<String>, h: HeaderMap) -> Answer {
+    let job = find(&sh, &id)?;
+    let me = client(&h);
+    sh.session().start(job, me.as_deref())?;
+    sh.wake();
+    done()
+}
+
+/// An action that takes only the client.
+async fn act(
+    sh: Arc<Shared>,
+    h: HeaderMap,
+    f: impl FnOnce(&mut crate::session::Session, Client) -> Result<(), crate::session::ActionError>,
+) -> Answer {
+    let me = client(&h);
+    f(&mut sh.session(), me.as_deref())?;
+    sh.wake();
+    done()
+}
+
+pub(super) async fn pause(State(sh): Shared_, h: HeaderMap) -> Answer {
+    act(sh, h, |s, c| s.pause(c)).await
+}
+
+pub(super) async fn resume(State(sh): Shared_, h: HeaderMap) -> Answer {
+    act(sh, h, |s, c| s.resume(c)).await
+}
+
+pub(super) async fn cancel(State(sh): Shared_, h: HeaderMap) -> Answer {
+    act(sh, h, |s, c| s.cancel(c)).await
+}
+
+pub(super) async fn estop(State(sh): Shared_, h: HeaderMap) -> Answer {
+    act(sh, h, |s, _| {
+        s.estop();
+        Ok(())
+    })
+    .await
+}
+
+pub(super) async fn unlock(State(sh): Shared_, h: HeaderMap) -> Answer {
+    act(sh, h, |s, _| s.unlock()).await
+}
+
+pub(super) async fn control(State(sh): Shared_, h: HeaderMap) -> Answer {
+    let Some(me) = client(&h) else {
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            format!("taking control needs the `{CLIENT_HEADER}` header naming the client"),
+        ));
+    };
+    sh.session().take_control(&me);
+    done()
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct JogBody {
+    axes: BTreeMap<String, f64>,
+    #[serde(default = "yes")]
+    relative: bool,
+    feed: Option<f64>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+pub(super) async fn jog(
+    State(sh): Shared_,
+    h: HeaderMap,
+    body: Result<Json<JogBody>, JsonRejection>,
+) -> Answer {
+    let Json(b) = body.map_err(bad_json)?;
+    let axes: Vec<(String, f64)> = b.axes.into_iter().collect();
+    act(sh, h, move |s, c| s.jog(&axes, b.relative, b.feed, c)).await
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PositionBody {
+    axes: BTreeMap<String, f64>,
+}
+
+pub(super) async fn position(
+    State(sh): Shared_,
+    h: HeaderMap,
+    body: Result<Json<PositionBody>, JsonRejection>,
+) -> Answer {
+    let Json(b) = body.map_err(bad_json)?;
+    let axes: Vec<(String, f64)> = b.axes.into_iter().collect();
+    act(sh, h, move |s, c| s.set_position(&axes, c)).await
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ToolBody {
+    tool: String,
+    value: f64,
+}
+
+pub(super) async fn tool(
+    State(sh): Shared_,
+    h: HeaderMap,
+    body: Result<Json<ToolBody>, JsonRejection>,
+) -> Answer {
+    let Json(b) = body.map_err(bad_json)?;
+    act(sh, h, move |s, c| s.set_tool(&b.tool, b.value, c)).await
+}

@@ -1,0 +1,83 @@
+//! The WebSocket: the machine's status pushed to every client as it moves
+//! (one message every [`PUSH_INTERVAL_US`]), events as they happen. A slow
+//! client skips status messages instead of holding the others up.
+
+use crate::server::{Shared, PUSH_INTERVAL_US};
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::response::Response;
+use serde_json::json;
+use std::sync::Arc;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use tokio::sync::broadcast::error::RecvError;
+
+pub(super) async fn upgrade(State(sh): State<Arc<Shared>>, ws: WebSocketUpgrade) -> Response {
+    let rx = sh.updates.subscribe();
+    let first = push_message(&sh, 0).0;
+    ws.on_upgrade(move |socket| serve_client(socket, rx, first))
+}
+
+async fn serve_client(
+    mut socket: WebSocket,
+    mut rx: tokio::sync::broadcast::Receiver<Arc<str>>,
+    first: String,
+) {
+    if socket.send(Message::Text(first.into())).await.is_err() {
+        return;
+    }
+    loop {
+        tokio::select! {
+            got = rx.recv() => match got {
+                Ok(text) => {
+                    if socket.send(Message::Text(text.as_ref().into())).await.is_err() {
+                        return;
+                    }
+                }
+                Err(RecvError::Lagged(_)) => continue,
+                Err(RecvError::Closed) => return,
+            },
+            incoming = socket.recv() => match incoming {
+                // Clients only listen; anything but a close is ignored.
+                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
+                Some(Ok(_)) => {}
+            },
+        }
+    }
+}
+
+/// One push: the status, the events after `seen`, and the wall clock in ms
+/// (so a client on the same computer measures how old the status is).
+fn push_message(sh: &Shared, seen: u64) -> (String, u64) {
+    let s = sh.session();
+    let status = s.status();
+    let events = s.events.since(seen);
+    let last = s.events.last_seq();
+    drop(s);
+    let wall_ms = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64() * 1e3);
+    let msg = json!({
+        "type": "status",
+        "wall_ms": wall_ms,
+        "status": status,
+        "events": events,
+    });
+    (msg.to_string(), last)
+}
+
+/// Pushes the status to every WebSocket client, while there are any.
+pub(crate) async fn push_status(sh: Arc<Shared>) {
+    let mut tick = tokio::time::interval(Duration::from_micros(PUSH_INTERVAL_US));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    let mut seen = 0;
+    loop {
+        tick.tick().await;
+        if sh.updates.receiver_count() == 0 {
+            seen = sh.session().events.last_seq();
+            continue;
+        }
+        let (msg, last) = push_message(&sh, seen);
+        seen = last;
+        let _ = sh.updates.send(msg.into());
+    }
+}

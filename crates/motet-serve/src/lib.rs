@@ -1,0 +1,22 @@
+//! `motet serve`: a long-running host that owns one machine and its nodes
+//! ([`session::Session`]), with the jobs uploaded to it ([`jobs::JobStore`]),
+//! served over HTTP and a WebSocket to programs and to the browser page
+//! embedded here (`docs/api.md` documents the API; `openapi.json` is its
+//! schema).
+//!
+//! The session is plain, synchronous code driven by a clock thread
+//! ([`server::Server`]); the HTTP side (axum on tokio) only takes a lock,
+//! acts, and answers, so nothing a client does can hold the machine up.
+
+pub mod auth;
+pub mod engine;
+pub mod events;
+mod http;
+pub mod jobs;
+pub mod preview;
+pub mod server;
+pub mod session;
+
+pub use engine::{serve_config, Nodes, SimNodes};
+pub use server::{Server, ServerConfig};
+pub use session::{ActionError, Session, State, Status};

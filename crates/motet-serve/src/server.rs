@@ -1,0 +1,180 @@
+//! The server process's parts: the session behind a lock, a clock thread
+//! that ticks it on the wall clock, and a task that pushes the machine's
+//! status to WebSocket clients.
+
+use crate::engine::Nodes;
+use crate::jobs::JobStore;
+use crate::session::{Session, State};
+use motet_host::Machine;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+use tokio::sync::broadcast;
+
+/// Status pushes to WebSocket clients, µs apart.
+pub const PUSH_INTERVAL_US: u64 = 20_000;
+/// Longest the clock thread sleeps while the machine moves, µs.
+const ACTIVE_TICK_US: u64 = 1_000;
+/// Longest it sleeps while nothing moves, µs.
+const IDLE_TICK_US: u64 = 20_000;
+
+/// How a server is set up.
+#[derive(Clone, Debug)]
+pub struct ServerConfig {
+    /// Address to listen on (loopback unless the person says otherwise).
+    pub listen: SocketAddr,
+    /// The server's own folder: uploads and the token.
+    pub dir: PathBuf,
+    /// Required on every request when set.
+    pub token: Option<String>,
+}
+
+/// What the HTTP side shares with the clock thread.
+pub(crate) struct Shared {
+    pub(crate) session: Mutex<Session>,
+    pub(crate) jobs: Mutex<JobStore>,
+    pub(crate) machine: Arc<Machine>,
+    pub(crate) token: Option<String>,
+    pub(crate) started: Instant,
+    pub(crate) updates: broadcast::Sender<Arc<str>>,
+    stop: AtomicBool,
+    driver: Mutex<Option<std::thread::Thread>>,
+}
+
+impl Shared {
+    /// Server time, µs since it started.
+    pub(crate) fn now(&self) -> u64 {
+        self.started.elapsed().as_micros() as u64
+    }
+
+    /// The session, ticked to now. A lock poisoned by a panic elsewhere is
+    /// taken anyway: the session's own state is always whole between calls.
+    pub(crate) fn session(&self) -> MutexGuard<'_, Session> {
+        let mut s = self.session.lock().unwrap_or_else(|e| e.into_inner());
+        s.tick(self.now());
+        s
+    }
+
+    pub(crate) fn jobs(&self) -> MutexGuard<'_, JobStore> {
+        self.jobs.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Wakes the clock thread (an action started motion).
+    pub(crate) fn wake(&self) {
+        if let Some(t) = self
+            .driver
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+        {
+            t.unpark();
+        }
+    }
+}
+
+/// A running server: the session ticking on the wall clock.
+pub struct Server {
+    pub(crate) shared: Arc<Shared>,
+    driver: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Server {
+    /// Starts the clock thread for `machine` on `nodes`; uploads go under
+    /// `cfg.dir`.
+    pub fn start(
+        machine: Machine,
+        nodes: Box<dyn Nodes>,
+        cfg: &ServerConfig,
+    ) -> std::io::Result<Server> {
+        let machine = Arc::new(machine);
+        let (updates, _) = broadcast::channel(64);
+        let shared = Arc::new(Shared {
+            session: Mutex::new(Session::new(machine.clone(), nodes)),
+            jobs: Mutex::new(JobStore::new(&cfg.dir)?),
+            machine,
+            token: cfg.token.clone(),
+            started: Instant::now(),
+            updates,
+            stop: AtomicBool::new(false),
+            driver: Mutex::new(None),
+        });
+        let s = shared.clone();
+        let driver = std::thread::Builder::new()
+            .name("motet-clock".into())
+            .spawn(move || drive(&s))?;
+        *shared.driver.lock().unwrap_or_else(|e| e.into_inner()) = Some(driver.thread().clone());
+        Ok(Server {
+            shared,
+            driver: Some(driver),
+        })
+    }
+
+    /// The HTTP routes, the page and the WebSocket.
+    pub fn router(&self) -> axum::Router {
+        crate::http::router(self.shared.clone())
+    }
+
+    /// Serves on `listener` until `shutdown` resolves; then the machine is
+    /// stopped on its path before the process goes.
+    pub async fn serve(
+        mut self,
+        listener: tokio::net::TcpListener,
+        shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+    ) -> std::io::Result<()> {
+        let pusher = tokio::spawn(crate::http::push_status(self.shared.clone()));
+        let app = self.router();
+        let served = axum::serve(listener, app)
+            .with_graceful_shutdown(shutdown)
+            .await;
+        pusher.abort();
+        self.finish();
+        served
+    }
+
+    /// Stops the machine on its path (if it moves) and the clock thread.
+    fn finish(&mut self) {
+        {
+            let mut s = self.shared.session();
+            s.estop();
+        }
+        // Let the nodes brake to rest on their tails (a few hundred ms).
+        let until = Instant::now() + Duration::from_secs(3);
+        while Instant::now() < until {
+            if matches!(
+                self.shared.session().state(),
+                State::Stopped | State::Idle | State::Alarm
+            ) {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        self.shared.stop.store(true, Ordering::Relaxed);
+        self.shared.wake();
+        if let Some(d) = self.driver.take() {
+            let _ = d.join();
+        }
+    }
+}
+
+/// The clock thread: ticks the session as often as its run needs.
+fn drive(shared: &Shared) {
+    while !shared.stop.load(Ordering::Relaxed) {
+        let now = shared.now();
+        let (next, moving) = {
+            let mut s = shared.session.lock().unwrap_or_else(|e| e.into_inner());
+            let next = s.tick(now);
+            (
+                next,
+                !matches!(
+                    s.state(),
+                    State::Idle | State::Stopped | State::Alarm | State::Paused
+                ),
+            )
+        };
+        let most = if moving { ACTIVE_TICK_US } else { IDLE_TICK_US };
+        let wait = next.saturating_sub(shared.now()).clamp(100, most);
+        std::thread::park_timeout(Duration::from_micros(wait));
+    }
+}

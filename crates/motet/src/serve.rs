@@ -1,0 +1,105 @@
+//! `motet serve`: one machine, its nodes and its jobs, driven over HTTP, a
+//! WebSocket and the browser page (crates/motet-serve).
+
+use anyhow::{bail, Context};
+use motet_serve::{serve_config, Server, ServerConfig, SimNodes};
+use std::io::Write;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+/// Where a server's nodes are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum NodesAt {
+    /// Simulated in this process, on the server's clock.
+    Sim,
+}
+
+/// `motet serve` arguments.
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// Machine file (TOML).
+    machine: PathBuf,
+    /// Where the machine's nodes are.
+    #[arg(long, value_enum, default_value = "sim")]
+    nodes: NodesAt,
+    /// Address and port to listen on (port 0: any free port). An address
+    /// other than loopback needs the server's token on every request.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    listen: SocketAddr,
+    /// The server's folder: uploaded jobs and the token [default:
+    /// out/serve].
+    #[arg(long)]
+    dir: Option<PathBuf>,
+    /// Require the token on loopback too.
+    #[arg(long)]
+    token: bool,
+}
+
+/// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
+/// path.
+pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
+    let machine = motet_host::Machine::load(&args.machine)?;
+    let dir = args.dir.unwrap_or_else(|| PathBuf::from("out/serve"));
+    std::fs::create_dir_all(&dir).with_context(|| format!("{}", dir.display()))?;
+    let needs_token = args.token || !args.listen.ip().is_loopback();
+    let token = if needs_token {
+        let (t, made) = motet_serve::auth::load_or_make_token(&dir)
+            .with_context(|| format!("{}/token", dir.display()))?;
+        if made {
+            println!("token (shown once; kept in {}/token): {t}", dir.display());
+        } else {
+            println!("token: in {}/token", dir.display());
+        }
+        Some(t)
+    } else {
+        None
+    };
+    let nodes = match args.nodes {
+        NodesAt::Sim => Box::new(SimNodes::new(&machine, machine.start, serve_config())),
+    };
+    let name = machine.name.clone();
+    let cfg = ServerConfig {
+        listen: args.listen,
+        dir,
+        token,
+    };
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    rt.block_on(async move {
+        let listener = match tokio::net::TcpListener::bind(cfg.listen).await {
+            Ok(l) => l,
+            Err(e) => bail!("--listen {}: {e}", cfg.listen),
+        };
+        let addr = listener.local_addr()?;
+        let server = Server::start(machine, nodes, &cfg)?;
+        println!("motet serve: machine {name} on simulated nodes at http://{addr}/");
+        std::io::stdout().flush()?;
+        server.serve(listener, shutdown()).await?;
+        println!("motet serve: stopped");
+        Ok(())
+    })
+}
+
+/// Resolves on Ctrl-C or SIGTERM.
+async fn shutdown() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
+    }
+}
