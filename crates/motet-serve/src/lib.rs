@@ -18,5 +18,6 @@ pub mod server;
 pub mod session;
 
 pub use engine::{serve_config, Nodes, SimNodes};
+pub use http::ROUTES;
 pub use server::{Server, ServerConfig};
 pub use session::{ActionError, Session, State, Status};

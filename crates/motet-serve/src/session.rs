@@ -41,11 +41,25 @@ pub enum State {
     Alarm,
 }
 
+impl std::fmt::Display for State {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            State::Idle => "idle",
+            State::Running => "running",
+            State::Holding => "holding",
+            State::Paused => "paused",
+            State::Stopping => "stopping",
+            State::Stopped => "stopped",
+            State::Alarm => "in alarm",
+        })
+    }
+}
+
 /// Why an action was refused. Nothing changed.
 #[derive(Debug, thiserror::Error)]
 pub enum ActionError {
     /// The action does not fit what the machine is doing.
-    #[error("cannot {action} while the machine is {state:?}")]
+    #[error("cannot {action} while the machine is {state}")]
     WrongState {
         /// The action asked for.
         action: &'static str,

@@ -1,0 +1,488 @@
+//! The HTTP API against a real server on a loopback port (in this process,
+//! on simulated nodes): every route, a job from upload to emergency stop
+//! with the WebSocket watching, and every refusal. Each answer is checked
+//! against the schema (openapi.json).
+
+use motet_serve::{serve_config, Server, ServerConfig, SimNodes, ROUTES};
+use serde_json::{json, Value};
+use std::net::TcpStream;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+fn root() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+struct Running {
+    base: String,
+    token: Option<String>,
+    dir: tempfile::TempDir,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Running {
+    fn start(token: Option<&str>) -> Running {
+        let m = motet_host::Machine::load(&root().join("examples/plotter.toml")).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let cfg = ServerConfig {
+            listen: "127.0.0.1:0".parse().unwrap(),
+            dir: dir.path().to_path_buf(),
+            token: token.map(String::from),
+        };
+        let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+        let (addr_tx, addr_rx) = std::sync::mpsc::channel();
+        let thread = std::thread::spawn(move || {
+            let rt = tokio::runtime::Runtime::new().unwrap();
+            rt.block_on(async move {
+                let listener = tokio::net::TcpListener::bind(cfg.listen).await.unwrap();
+                addr_tx.send(listener.local_addr().unwrap()).unwrap();
+                let nodes = Box::new(SimNodes::new(&m, m.start, serve_config()));
+                let server = Server::start(m, nodes, &cfg).unwrap();
+                server
+                    .serve(listener, async {
+                        let _ = rx.await;
+                    })
+                    .await
+                    .unwrap();
+            });
+        });
+        let addr = addr_rx.recv().unwrap();
+        Running {
+            base: format!("http://{addr}"),
+            token: token.map(String::from),
+            dir,
+            stop: Some(tx),
+            thread: Some(thread),
+        }
+    }
+
+    /// Sends a request; returns the status and the JSON body.
+    fn call(&self, method: &str, path: &str, body: Option<Value>, client: &str) -> (u16, Value) {
+        let bytes = body.map(|b| b.to_string().into_bytes());
+        self.raw(
+            method,
+            path,
+            bytes.as_deref(),
+            client,
+            self.token.as_deref(),
+            "application/json",
+        )
+    }
+
+    fn raw(
+        &self,
+        method: &str,
+        path: &str,
+        body: Option<&[u8]>,
+        client: &str,
+        token: Option<&str>,
+        content_type: &str,
+    ) -> (u16, Value) {
+        let mut req = ureq::request(method, &format!("{}{path}", self.base))
+            .set("X-Motet-Client", client)
+            .set("Content-Type", content_type);
+        if let Some(t) = token {
+            req = req.set("Authorization", &format!("Bearer {t}"));
+        }
+        let got = match body {
+            Some(b) => req.send_bytes(b),
+            None => req.call(),
+        };
+        let resp = match got {
+            Ok(r) => r,
+            Err(ureq::Error::Status(_, r)) => r,
+            Err(e) => panic!("{method} {path}: {e}"),
+        };
+        let code = resp.status();
+        let text = resp.into_string().unwrap();
+        let v = serde_json::from_str(&text).unwrap_or(Value::String(text));
+        (code, v)
+    }
+
+    fn upload(&self, name: &str, bytes: &[u8]) -> (u16, Value) {
+        let path = format!("/api/jobs?name={}", urlencode(name));
+        self.raw(
+            "POST",
+            &path,
+            Some(bytes),
+            "a",
+            self.token.as_deref(),
+            "application/octet-stream",
+        )
+    }
+
+    fn status(&self) -> Value {
+        self.call("GET", "/api/status", None, "a").1
+    }
+
+    /// Polls the status until its state is `want`.
+    fn until(&self, want: &str, max: Duration) -> Value {
+        let end = Instant::now() + max;
+        loop {
+            let s = self.status();
+            if s["state"] == want {
+                return s;
+            }
+            assert!(
+                Instant::now() < end,
+                "state {} after {max:?}, want {want}",
+                s["state"]
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        if let Some(tx) = self.stop.take() {
+            let _ = tx.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn urlencode(s: &str) -> String {
+    s.bytes()
+        .map(|b| match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'.' | b'-' | b'_' => (b as char).to_string(),
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
+/// Checks `v` against the schema's component `name`.
+fn check_schema(name: &str, v: &Value) {
+    let spec: Value =
+        serde_json::from_str(include_str!("../openapi.json")).expect("openapi.json is JSON");
+    let schema = json!({
+        "$ref": format!("#/components/schemas/{name}"),
+        "components": spec["components"],
+    });
+    let validator = jsonschema::validator_for(&schema).expect("the schema compiles");
+    let errors: Vec<String> = validator.iter_errors(v).map(|e| e.to_string()).collect();
+    assert!(errors.is_empty(), "{name}: {errors:?}\n{v}");
+}
+
+#[test]
+fn every_route_is_served_and_a_job_runs_from_upload_to_stop() {
+    let s = Running::start(None);
+    // Every route the schema lists answers (not the fallback's 404).
+    for (method, path) in ROUTES {
+        let path = path.replace("{id}", "999");
+        let (code, body) = s.call(&method.to_uppercase(), &path, None, "a");
+        let missing = body["error"]
+            .as_str()
+            .is_some_and(|e| e.starts_with("no such route"));
+        assert!(!missing, "{method} {path}: {code} {body}");
+    }
+    let (code, machine) = s.call("GET", "/api/machine", None, "a");
+    assert_eq!(code, 200);
+    check_schema("Machine", &machine);
+    let (_, nodes) = s.call("GET", "/api/nodes", None, "a");
+    for n in nodes.as_array().unwrap() {
+        check_schema("Node", n);
+    }
+    let svg = std::fs::read(root().join("examples/jobs/drawing.svg")).unwrap();
+    let (code, job) = s.upload("drawing.svg", &svg);
+    assert_eq!(code, 201, "{job}");
+    check_schema("Job", &job);
+    let id = job["id"].as_u64().unwrap();
+    let (code, preview) = s.call("GET", &format!("/api/jobs/{id}/preview"), None, "a");
+    assert_eq!(code, 200);
+    check_schema("Preview", &preview);
+    assert!(preview["strokes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|s| s["on"] == true));
+
+    // Watch over the WebSocket while the job runs.
+    let (mut ws, _) =
+        tungstenite::connect(format!("{}/api/ws", s.base.replace("http", "ws"))).unwrap();
+    let (code, body) = s.call("POST", &format!("/api/jobs/{id}/start"), None, "a");
+    assert_eq!(code, 200, "{body}");
+    let (code, body) = s.call("POST", &format!("/api/jobs/{id}/start"), None, "a");
+    assert_eq!(code, 409, "a second start while running: {body}");
+    let mut positions = std::collections::BTreeSet::new();
+    let end = Instant::now() + Duration::from_secs(20);
+    while positions.len() < 10 {
+        assert!(
+            Instant::now() < end,
+            "the position did not move: {positions:?}"
+        );
+        let msg = ws.read().unwrap();
+        let Ok(text) = msg.to_text() else { continue };
+        let v: Value = serde_json::from_str(text).unwrap();
+        check_schema("PushMessage", &v);
+        positions.insert(v["status"]["position"].to_string());
+    }
+    // Another client cannot hold the job; the one in control can.
+    let (code, _) = s.call("POST", "/api/pause", None, "b");
+    assert_eq!(code, 409);
+    let (code, body) = s.call("POST", "/api/pause", None, "a");
+    assert_eq!(code, 200, "{body}");
+    let held = s.until("paused", Duration::from_secs(10));
+    check_schema("Status", &held);
+    let (code, _) = s.call("POST", "/api/resume", None, "a");
+    assert_eq!(code, 200);
+    s.until("running", Duration::from_secs(2));
+    std::thread::sleep(Duration::from_millis(300));
+    // The emergency stop is honoured from any client.
+    let (code, _) = s.call("POST", "/api/estop", None, "b");
+    assert_eq!(code, 200);
+    let stopped = s.until("stopped", Duration::from_secs(10));
+    assert_eq!(stopped["reason"], "emergency stop");
+    let (_, events) = s.call("GET", "/api/events?since=0", None, "a");
+    for e in events.as_array().unwrap() {
+        check_schema("Event", e);
+    }
+    let said: Vec<&str> = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["message"].as_str().unwrap())
+        .collect();
+    for want in [
+        "started",
+        "held at rest",
+        "resumed",
+        "emergency stop: every node at rest",
+    ] {
+        assert!(
+            said.iter().any(|m| m.contains(want)),
+            "no event {want:?} in {said:?}"
+        );
+    }
+    let (code, _) = s.call("POST", "/api/unlock", None, "a");
+    assert_eq!(code, 200);
+    let (code, body) = s.call(
+        "POST",
+        "/api/jog",
+        Some(json!({"axes": {"x": 5}, "feed": 100})),
+        "a",
+    );
+    assert_eq!(code, 200, "{body}");
+    s.until("idle", Duration::from_secs(10));
+}
+
+#[test]
+fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
+    let s = Running::start(None);
+    let outside = b"G0 X10 Y10\nG1 X9000 Y10 F600\n";
+    let cases: &[(&str, &str, Option<&[u8]>, &str, u16, &str)] = &[
+        // method, path, body, content type, status, words in the error
+        (
+            "POST",
+            "/api/jobs?name=part.docx",
+            Some(b"x"),
+            "application/octet-stream",
+            400,
+            ".docx",
+        ),
+        (
+            "POST",
+            "/api/jobs?name=empty.svg",
+            Some(b""),
+            "application/octet-stream",
+            400,
+            "empty",
+        ),
+        (
+            "POST",
+            "/api/jobs?name=far.gcode",
+            Some(outside),
+            "application/octet-stream",
+            422,
+            "far.gcode:2",
+        ),
+        (
+            "POST",
+            "/api/jobs?name=bad.svg",
+            Some(b"<svg"),
+            "application/octet-stream",
+            422,
+            "bad.svg",
+        ),
+        (
+            "POST",
+            "/api/jobs",
+            Some(b"G0 X1"),
+            "application/octet-stream",
+            400,
+            "name",
+        ),
+        (
+            "POST",
+            "/api/jobs?name=a.svg&colour=red",
+            Some(b"x"),
+            "application/octet-stream",
+            400,
+            "colour",
+        ),
+        (
+            "POST",
+            "/api/jog",
+            Some(b"{\"axes\": {\"x\": 1}"),
+            "application/json",
+            400,
+            "EOF",
+        ),
+        (
+            "POST",
+            "/api/jog",
+            Some(b"{\"axes\": {}, \"speed\": 3}"),
+            "application/json",
+            400,
+            "speed",
+        ),
+        (
+            "POST",
+            "/api/jog",
+            Some(b"{\"axes\": {\"x\": 1e6}}"),
+            "application/json",
+            422,
+            "travel",
+        ),
+        (
+            "POST",
+            "/api/jog",
+            Some(b"{\"axes\": {\"w\": 1}}"),
+            "application/json",
+            422,
+            "no axis",
+        ),
+        (
+            "POST",
+            "/api/jog",
+            Some(b"{\"axes\": {\"x\": 1}, \"feed\": -2}"),
+            "application/json",
+            422,
+            "feed",
+        ),
+        (
+            "POST",
+            "/api/tool",
+            Some(b"{\"tool\": \"pen\", \"value\": 7}"),
+            "application/json",
+            422,
+            "tool value",
+        ),
+        (
+            "POST",
+            "/api/tool",
+            Some(b"{\"tool\": \"drill\", \"value\": 1}"),
+            "application/json",
+            422,
+            "no tool",
+        ),
+        (
+            "POST",
+            "/api/position",
+            Some(b"[1, 2]"),
+            "application/json",
+            400,
+            "line 1 column",
+        ),
+        ("POST", "/api/pause", None, "application/json", 409, "idle"),
+        ("POST", "/api/resume", None, "application/json", 409, "idle"),
+        (
+            "POST",
+            "/api/jobs/77/start",
+            None,
+            "application/json",
+            404,
+            "no job 77",
+        ),
+        (
+            "GET",
+            "/api/jobs/x",
+            None,
+            "application/json",
+            404,
+            "no job",
+        ),
+        (
+            "GET",
+            "/api/events?since=-1",
+            None,
+            "application/json",
+            400,
+            "since",
+        ),
+        (
+            "GET",
+            "/api/nothing",
+            None,
+            "application/json",
+            404,
+            "no such route",
+        ),
+    ];
+    for &(method, path, body, ct, want, words) in cases {
+        let (code, v) = s.raw(method, path, body, "a", None, ct);
+        assert_eq!(code, want, "{method} {path}: {v}");
+        let text = v["error"]
+            .as_str()
+            .unwrap_or_else(|| panic!("{method} {path}: no error in {v}"));
+        assert!(
+            text.contains(words),
+            "{method} {path}: {text:?} does not say {words:?}"
+        );
+        check_schema("Error", &v);
+    }
+    // Too large: refused before it is stored.
+    let big = vec![b'G'; motet_serve::jobs::MAX_UPLOAD + 1];
+    let (code, _) = s.upload("big.gcode", &big);
+    assert_eq!(code, 413);
+    // A path in the name reaches no file system: the job is stored under
+    // the server's folder with a name the server made.
+    let svg = std::fs::read(root().join("examples/jobs/drawing.svg")).unwrap();
+    let (code, job) = s.upload("../../escape.svg", &svg);
+    assert_eq!(code, 201, "{job}");
+    assert_eq!(job["name"], "escape.svg");
+    assert!(!s.dir.path().join("../escape.svg").exists());
+    assert!(!s.dir.path().join("../../escape.svg").exists());
+    let stored: Vec<String> = std::fs::read_dir(s.dir.path().join("jobs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(stored, vec![format!("{}.svg", job["id"])]);
+    // Nothing moved and nothing is queued.
+    let st = s.status();
+    assert_eq!(st["state"], "idle");
+    assert!(st["job"].is_null());
+    assert_eq!(st["position"], json!([0.0, 0.0]));
+}
+
+#[test]
+fn a_server_with_a_token_refuses_requests_without_it() {
+    let token = "0123456789abcdef0123456789abcdef";
+    let s = Running::start(Some(token));
+    for (given, want) in [(None, 401), (Some("wrong"), 401), (Some(token), 200)] {
+        let (code, v) = s.raw("GET", "/api/status", None, "a", given, "application/json");
+        assert_eq!(code, want, "{given:?}: {v}");
+    }
+    let (code, _) = s.raw("POST", "/api/estop", None, "a", None, "application/json");
+    assert_eq!(code, 401);
+    // The query form, for the page and its WebSocket.
+    let (code, _) = s.raw(
+        "GET",
+        &format!("/api/status?token={token}"),
+        None,
+        "a",
+        None,
+        "x",
+    );
+    assert_eq!(code, 200);
+    let ws = format!("{}/api/ws", s.base.replace("http", "ws"));
+    assert!(tungstenite::connect(&ws).is_err());
+    assert!(tungstenite::connect(format!("{ws}?token={token}")).is_ok());
+    // The page's own files load without it; they hold nothing of the machine.
+    let (code, _) = s.raw("GET", "/", None, "a", None, "x");
+    assert_eq!(code, 200);
+    let _ = TcpStream::connect(s.base.trim_start_matches("http://")).unwrap();
+}
