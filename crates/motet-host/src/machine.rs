@@ -256,6 +256,7 @@ impl Machine {
             lookahead: self.lookahead,
             stop_horizon: self.stop_horizon,
             min_move_s: 0.0,
+            max_move_s: 0.0,
         }
     }
 

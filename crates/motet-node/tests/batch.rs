@@ -29,6 +29,7 @@ fn batches(cfg: StreamConfig, n: usize, per_batch: usize) -> Vec<Batch> {
         lookahead: 64,
         stop_horizon: 0,
         min_move_s: 0.0,
+        max_move_s: 0.0,
     };
     let mut p = Planner::new(limits, [0.0; 6], 0.0);
     for k in 1..=n {

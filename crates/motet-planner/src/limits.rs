@@ -71,6 +71,12 @@ pub struct Limits {
     /// segments a node can hold always last long enough for a seal to reach
     /// it, however short the moves.
     pub min_move_s: f64,
+    /// Longest time a move should take, seconds (0: none): longer moves are
+    /// planned as straight pieces of about this duration (at their feed),
+    /// with the same speeds. A server sets it so that a hold or a stop,
+    /// which brakes at the end of the segments already committed, starts
+    /// braking soon after it is asked, whatever the moves' lengths.
+    pub max_move_s: f64,
 }
 
 impl Limits {

@@ -17,6 +17,8 @@ use motet_trajectory::profile::{fastest, reachable_entry, reachable_speed};
 use motet_trajectory::{JointMap, Point, Profile, ProfileKind, Segment, MAX_AXES};
 use std::collections::VecDeque;
 
+/// Most pieces [`Limits::max_move_s`] splits one move into.
+const MAX_PIECES: usize = 10_000;
 /// A tool output changing value at a time on the trajectory.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ToolEvent {
@@ -323,6 +325,55 @@ impl Planner {
     }
 
     fn push_move(&mut self, m: &Move) -> Result<(), PlanError> {
+        let pieces = self.pieces(m);
+        if pieces <= 1 {
+            return self.push_piece(m);
+        }
+        // Straight pieces of the same move: collinear junctions keep the
+        // speed, so the profile is the move's own, in shorter segments.
+        let start = self.tail;
+        for k in 1..=pieces {
+            let mut piece = *m;
+            if k < pieces {
+                let f = k as f64 / pieces as f64;
+                for i in 0..MAX_AXES {
+                    piece.target[i] = start[i] + (m.target[i] - start[i]) * f;
+                }
+            }
+            self.push_piece(&piece)?;
+        }
+        Ok(())
+    }
+
+    /// Into how many pieces [`Limits::max_move_s`] splits a move: its
+    /// length over the farthest it can go in that time (at its feed, or at
+    /// every path axis's top speed at once: a move never goes faster).
+    fn pieces(&self, m: &Move) -> usize {
+        if self.limits.max_move_s <= 0.0 {
+            return 1;
+        }
+        let length = distance_masked(&self.tail, &m.target, self.path_mask);
+        let top = self
+            .limits
+            .axes
+            .iter()
+            .filter(|a| a.path)
+            .map(|a| a.max_velocity * a.max_velocity)
+            .sum::<f64>()
+            .sqrt();
+        let speed = match m.kind {
+            MoveKind::Rapid => top,
+            MoveKind::Feed => m.feed.min(top),
+        };
+        let reach = speed * self.limits.max_move_s;
+        if !(length.is_finite() && reach > 0.0 && reach.is_finite()) {
+            return 1;
+        }
+        // Bounded: a job of endless pieces is not what the limit is for.
+        (length / reach).ceil().clamp(1.0, MAX_PIECES as f64) as usize
+    }
+
+    fn push_piece(&mut self, m: &Move) -> Result<(), PlanError> {
         for (axis, v) in m.target.iter().enumerate() {
             if !v.is_finite() {
                 return Err(PlanError::NotFinite { axis });

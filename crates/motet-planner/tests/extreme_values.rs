@@ -23,6 +23,7 @@ fn limits() -> Limits {
         lookahead: 64,
         stop_horizon: 0,
         min_move_s: 0.0,
+        max_move_s: 0.0,
     }
 }
 

@@ -34,6 +34,7 @@ fn limits(profile: ProfileKind, joints: Vec<JointLimits>) -> Limits {
         lookahead: 10_000,
         stop_horizon: 0,
         min_move_s: 0.0,
+        max_move_s: 0.0,
     }
 }
 

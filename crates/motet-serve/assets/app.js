@@ -10,7 +10,8 @@ const client = sessionStorage.getItem("motet-client") ||
 const $ = (id) => document.getElementById(id);
 
 // Figures the browser test reads: pushes received and their age on arrival.
-window.motetStats = { updates: 0, ages: [], positions: 0, lastPosition: null };
+// speeds: [server µs, speed, wall ms of the push] for the newest pushes.
+window.motetStats = { updates: 0, ages: [], positions: 0, lastPosition: null, speeds: [] };
 
 let machine = null;
 let job = null;        // the uploaded job's description
@@ -174,6 +175,8 @@ function showStatus(s, wallMs) {
   const stats = window.motetStats;
   stats.updates += 1;
   if (wallMs) { stats.ages.push(Date.now() - wallMs); if (stats.ages.length > 1000) stats.ages.shift(); }
+  stats.speeds.push([s.t_us, s.speed, wallMs]);
+  if (stats.speeds.length > 500) stats.speeds.shift();
   const pos = JSON.stringify(s.position);
   if (pos !== stats.lastPosition) { stats.positions += 1; stats.lastPosition = pos; }
 }
@@ -223,6 +226,8 @@ async function upload(file) {
     const body = await file.arrayBuffer();
     job = await api("POST", "/api/jobs?name=" + encodeURIComponent(file.name), body, true);
     preview = await api("GET", "/api/jobs/" + job.id + "/preview");
+    window.motetStats.previewStrokes = preview.strokes.length;
+    window.motetStats.jobId = job.id;
     trail = [];
     $("job-info").textContent = job.name + ": " + job.command_count + " commands, " + fmtTime(job.planned_s) +
       (job.warnings.length ? ", " + job.warnings.length + " warnings" : "");

@@ -29,6 +29,7 @@ fn limits(profile: ProfileKind) -> Limits {
         lookahead: 64,
         stop_horizon: 0,
         min_move_s: 0.0,
+        max_move_s: 0.0,
     }
 }
 

@@ -54,6 +54,11 @@ pub struct NetConfig {
     /// fewer seals on the wire, shorter ones keep more of the trajectory
     /// editable.
     pub window_us: u64,
+    /// Longest a planned move should take, µs (0: no limit): longer moves
+    /// are planned as pieces, so a stop brakes soon after it is asked
+    /// ([`motet_planner::Limits::max_move_s`]). Not journaled: a run that
+    /// may be resumed from its journal leaves it at 0.
+    pub max_move_us: u64,
 }
 
 impl Default for NetConfig {
@@ -66,6 +71,7 @@ impl Default for NetConfig {
             model_interval_us: 5_000_000,
             connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
+            max_move_us: 0,
         }
     }
 }
@@ -591,7 +597,8 @@ impl NetRun {
                 })?;
             }
             let commands = std::mem::take(&mut self.commands);
-            let limits = run_limits(&self.machine, min_move_s);
+            let mut limits = run_limits(&self.machine, min_move_s);
+            limits.max_move_s = self.cfg.max_move_us as f64 * 1e-6;
             self.feed = Some(PlanFeed::new(limits, self.start_point, t0, commands));
             self.phase = Phase::Streaming;
             self.fill(now)?;

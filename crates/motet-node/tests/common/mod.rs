@@ -116,6 +116,7 @@ pub fn limits(profile: ProfileKind) -> Limits {
         lookahead: 24,
         stop_horizon: 0,
         min_move_s: 0.0,
+        max_move_s: 0.0,
     }
 }
 

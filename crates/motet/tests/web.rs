@@ -1,0 +1,141 @@
+//! `motet serve` in a real browser: Debian's chromium, driven by Playwright
+//! (`tests/web/page.mjs`), loads the page of a server started from the
+//! command line, uploads the plotter drawing, checks the preview, starts,
+//! sees the position move, pauses, resumes and presses the emergency stop;
+//! the machine must rest on the job's path. `./scripts/test` installs
+//! chromium and the script's npm package. A screenshot of the running page
+//! is written to `target/web/serve.png` (the README shows a copy).
+
+mod common;
+
+use common::root;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The server, stopped with SIGTERM (as a service manager would) when
+/// dropped.
+struct Serve(Child);
+
+impl Drop for Serve {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn terminate(child: &mut Child) -> bool {
+    // SAFETY: kill(2) on our own child's pid.
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGTERM);
+    }
+    let end = Instant::now() + Duration::from_secs(10);
+    while Instant::now() < end {
+        if let Ok(Some(status)) = child.try_wait() {
+            return status.success();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
+}
+
+/// GET `path` answers 200.
+fn answers(addr: &str, path: &str) -> bool {
+    let Ok(mut s) = TcpStream::connect(addr) else {
+        return false;
+    };
+    let _ = write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+    );
+    let mut text = String::new();
+    let _ = s.read_to_string(&mut text);
+    text.starts_with("HTTP/1.1 200")
+}
+
+#[test]
+fn the_page_drives_the_plotter_in_a_real_browser() {
+    let web = root().join("crates/motet/tests/web");
+    assert!(
+        web.join("node_modules/playwright-core").exists(),
+        "playwright-core missing: ./scripts/test installs it (npm ci --prefix crates/motet/tests/web)"
+    );
+    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    assert!(
+        std::path::Path::new(&chromium).exists(),
+        "{chromium} missing: ./scripts/test installs it (apt-get install chromium)"
+    );
+    let dir = common::scratch("web", "serve");
+    let started = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "serve",
+            "examples/plotter.toml",
+            "--listen",
+            "127.0.0.1:0",
+            "--dir",
+        ])
+        .arg(dir.path())
+        .current_dir(root())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let banner = lines.next().unwrap().unwrap();
+    let url = banner
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .unwrap_or_else(|| panic!("no address in {banner:?}"))
+        .to_string();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    while !answers(&addr, "/") {
+        assert!(
+            started.elapsed() < Duration::from_secs(10),
+            "the page never answered"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let to_page = started.elapsed();
+    let mut serve = Serve(child);
+
+    let shots = root().join("target/web");
+    std::fs::create_dir_all(&shots).unwrap();
+    let out = Command::new("node")
+        .arg(web.join("page.mjs"))
+        .arg(&url)
+        .arg(root().join("examples/jobs/drawing.svg"))
+        .arg(&shots)
+        .env("CHROMIUM", &chromium)
+        .output()
+        .expect("node (Node.js) runs the browser script");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "page.mjs failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let seen: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    eprintln!("serve start to page served: {to_page:?}; the browser saw: {seen}");
+    assert_eq!(seen["page_errors"], serde_json::json!([]));
+    assert!(seen["preview_strokes"].as_u64().unwrap() > 10, "{seen}");
+    assert!(
+        seen["positions_moved"].as_u64().unwrap() > 5,
+        "the position did not move: {seen}"
+    );
+    assert_eq!(seen["still_when_paused"], true, "{seen}");
+    assert_eq!(seen["final_state"], "stopped", "{seen}");
+    assert_eq!(seen["stop_event"], true, "{seen}");
+    let off = seen["off_path"].as_f64().unwrap();
+    assert!(off < 1e-3, "stopped {off} mm off the path");
+    assert_eq!(seen["phone_estop_visible"], true, "{seen}");
+    assert_eq!(seen["phone_no_sideways_scroll"], true, "{seen}");
+    assert!(shots.join("serve.png").exists());
+    assert!(
+        terminate(&mut serve.0),
+        "motet serve did not stop cleanly on SIGTERM"
+    );
+}
