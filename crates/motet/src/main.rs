@@ -17,6 +17,7 @@ mod peak;
 mod run;
 
 use clap::{Parser, Subcommand};
+use motet_api::{JobOptions, Placement};
 use motet_planner::ranges;
 use std::path::PathBuf;
 
@@ -122,6 +123,8 @@ enum Cmd {
         /// cost of wire traffic (about 70 bytes per exchange).
         #[arg(long, default_value_t = 400.0, value_parser = flags::number(ranges::SYNC_MS))]
         sync_ms: f64,
+        #[command(flatten)]
+        place: flags::PlacementFlags,
     },
     /// Continue a networked job that stopped, from where every node came to
     /// rest, after checking that the files, the journal and the nodes are the run's.
@@ -190,6 +193,8 @@ enum Cmd {
         job: Option<PathBuf>,
         #[arg(long)]
         allow_unknown: bool,
+        #[command(flatten)]
+        place: flags::PlacementFlags,
     },
     /// Run a dataflow graph (graph file) on a simulated node, driven by a CSV
     /// input trace or two pendulums, and render its channels through a machine.
@@ -294,8 +299,23 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             time_scale,
             lead_ms,
             sync_ms,
+            place,
         } => match nodes {
-            netrun::NodesMode::Sim => run::run(&machine, &job, out, allow_unknown, quiet),
+            netrun::NodesMode::Sim => run::run(
+                &machine,
+                &job,
+                out,
+                &JobOptions {
+                    allow_unknown,
+                    placement: place.placement()?,
+                },
+                quiet,
+            ),
+            // A stopped run resumes from the job file as it is: placing it
+            // would need the placement kept with the journal.
+            _ if place.placement()? != Placement::default() => {
+                anyhow::bail!("--fit, --scale, --rotate and --origin work with --nodes sim only")
+            }
             mode => netrun::run(netrun::NetArgs {
                 machine_path: &machine,
                 job_path: &job,
@@ -350,7 +370,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine,
             job,
             allow_unknown,
-        } => run::check(&machine, job.as_deref(), allow_unknown),
+            place,
+        } => run::check(
+            &machine,
+            job.as_deref(),
+            &JobOptions {
+                allow_unknown,
+                placement: place.placement()?,
+            },
+        ),
         Cmd::Dance {
             machine,
             graph,
