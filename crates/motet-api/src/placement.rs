@@ -30,6 +30,7 @@
 //! placement on one is refused.
 
 use motet_host::Clamps;
+use motet_planner::ranges::number;
 
 /// Margin of `--fit` without a value, mm.
 pub const DEFAULT_FIT_MARGIN_MM: f64 = 10.0;
@@ -77,7 +78,7 @@ pub struct Placed {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PlacementError {
     /// A value out of its range (scale ≤ 0, a negative margin, NaN, ∞).
-    #[error("placement {field} (`{flag}`) must be {expected}, not {value}")]
+    #[error("placement {field} (`{flag}`) must be {expected}, not {}", number(*.value))]
     Invalid {
         /// The [`Placement`] field.
         field: &'static str,
@@ -111,7 +112,7 @@ pub enum PlacementError {
         why: &'static str,
     },
     /// A fit margin that leaves no room.
-    #[error("placement fit_margin_mm (`--fit`) {margin_mm} mm leaves nothing of the {width_mm} × {height_mm} mm x/y travel to draw on (it must be under half the shorter side)")]
+    #[error("placement fit_margin_mm (`--fit`) {} mm leaves nothing of the {} × {} mm x/y travel to draw on (it must be under half the shorter side)", number(*.margin_mm), number(*.width_mm), number(*.height_mm))]
     MarginTooLarge {
         /// The margin given, mm.
         margin_mm: f64,
@@ -131,7 +132,7 @@ pub enum PlacementError {
     NoArea(String),
     /// The placed drawing leaves the travel by more than
     /// [`PLACEMENT_TOLERANCE_MM`].
-    #[error("the placed drawing spans {axis} {lo:.3}..{hi:.3} mm, beyond the {axis} travel {min}..{max} mm; {hint}")]
+    #[error("the placed drawing spans {axis} {lo:.3}..{hi:.3} mm, beyond the {axis} travel {}..{} mm; {hint}", number(*.min), number(*.max))]
     Beyond {
         /// `x` or `y`.
         axis: &'static str,

@@ -13,6 +13,7 @@ use crate::placement::{Placed, PlacementError};
 use flate2::read::GzDecoder;
 use motet_gcode::{line_number, GcodeOptions, Interpreter};
 use motet_host::{Clamps, JobCheck, Machine};
+use motet_planner::ranges::COORDINATE;
 use motet_planner::{Command, JobTarget, Located, Planner, SourceError};
 use std::cell::Cell;
 use std::collections::VecDeque;
@@ -174,7 +175,9 @@ impl<'a> JobReader<'a> {
                 fine.tolerance = target.tolerance / t.scale.max(1.0);
                 let [xi, yi] = area.axes;
                 [fine.start[xi], fine.start[yi]] = t.inverse([target.start[xi], target.start[yi]]);
-                if fine.start.iter().all(|v| v.is_finite()) {
+                // A start mapped far beyond any drawing (the drawing moved
+                // a long way) orders nothing better than none.
+                if fine.start.iter().all(|v| COORDINATE.contains(*v)) {
                     commands = parse(&fine)?;
                     plan = place::plan(&opts.placement, &commands, &area).map_err(placing)?;
                 }
