@@ -534,3 +534,27 @@ mod props {
         }
     }
 }
+
+/// A photo is placed by the same rule: turned a quarter and fitted without
+/// margin, the portrait fills the travel's height, centred across.
+#[test]
+fn a_photo_is_placed_like_a_drawing() {
+    let photo = std::fs::read(format!(
+        "{}/../../examples/photos/portrait.jpg",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let (pts, placed) = place(
+        JobKind::Image,
+        &photo,
+        placement(Some(0.0), None, 90.0, None),
+    )
+    .unwrap();
+    let [lo, hi] = bounds(&pts);
+    assert!(near([lo[1], hi[1]], [0.0, 218.0], 1e-9), "{lo:?} {hi:?}");
+    assert!(
+        (lo[0] + hi[0] - 300.0).abs() < 1e-9 && hi[0] - lo[0] < 300.0,
+        "{lo:?} {hi:?}"
+    );
+    assert_eq!(placed.unwrap().rotate_deg, 90.0);
+}
