@@ -1,6 +1,7 @@
 //! Job files: G-code, SVG and photographs, turned into checked commands for a
 //! machine. Used by the command line and by scripts alike.
 
+use crate::placement::{Placed, Placement, PlacementError};
 use crate::reader::JobReader;
 use flate2::read::GzDecoder;
 use motet_host::{Clamps, Machine};
@@ -78,6 +79,15 @@ pub enum JobError {
         /// What is wrong, and where in the file.
         error: SourceError,
     },
+    #[error("{file}: {error}")]
+    /// A placement that is invalid, or that does not fit the drawing on the
+    /// machine.
+    Placement {
+        /// The job file's path.
+        file: String,
+        /// What is wrong.
+        error: PlacementError,
+    },
 }
 
 /// `file:line:column: message`; `file: message` for errors about the whole
@@ -89,11 +99,14 @@ fn located(file: &str, error: &SourceError) -> String {
     }
 }
 
-/// Options for reading jobs.
+/// Options for reading jobs. The default reads every job as it is.
 #[derive(Clone, Debug, Default)]
 pub struct JobOptions {
     /// Skip unsupported G-codes with a warning instead of refusing the job.
     pub allow_unknown: bool,
+    /// Where an SVG or photo goes on the machine (default: where it is);
+    /// anything else on a G-code job is [`JobError::Placement`].
+    pub placement: Placement,
 }
 
 /// A job read and checked against a machine.
@@ -112,6 +125,9 @@ pub struct Job {
     /// How long the job takes as planned, seconds; set by [`load_job`]
     /// (see [`plan_check`]).
     pub planned_s: Option<f64>,
+    /// Where the drawing was placed, with a [`JobOptions::placement`] other
+    /// than the default.
+    pub placed: Option<Placed>,
 }
 
 impl JobKind {
@@ -216,5 +232,6 @@ fn collect(path: &Path, kind: JobKind, mut reader: JobReader<'_>) -> Result<Job,
         warnings: reader.warnings().to_vec(),
         clamps: reader.clamps(),
         planned_s: None,
+        placed: reader.placed(),
     })
 }

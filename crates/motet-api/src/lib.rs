@@ -24,10 +24,13 @@
 mod drawing;
 pub mod job;
 mod machine;
+mod place;
+pub mod placement;
 pub mod reader;
 
 pub use job::{job_name, load_job, plan_check, Job, JobError, JobKind, JobOptions};
 pub use machine::{ApiError, Event, Machine};
 pub use motet_planner::PlanError;
 pub use motet_sim::{Held, Report};
+pub use placement::{Placed, Placement, PlacementError};
 pub use reader::{scan_job, JobReader, JobScan};

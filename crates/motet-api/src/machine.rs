@@ -265,7 +265,10 @@ impl Machine {
         let job = crate::job::load_job(
             self.description(),
             path,
-            &crate::job::JobOptions { allow_unknown },
+            &crate::job::JobOptions {
+                allow_unknown,
+                ..Default::default()
+            },
         )?;
         // The job was checked from the machine's start; it must also fit from here.
         if let Some(Command::Move(first)) = job

@@ -8,10 +8,13 @@
 //! input file, not by how long the job runs.
 
 use crate::job::{JobError, JobKind, JobOptions};
+use crate::place::{self, Area};
+use crate::placement::{Placed, PlacementError};
 use flate2::read::GzDecoder;
 use motet_gcode::{line_number, GcodeOptions, Interpreter};
 use motet_host::{Clamps, JobCheck, Machine};
-use motet_planner::{Command, Located, Planner, SourceError};
+use motet_planner::ranges::COORDINATE;
+use motet_planner::{Command, JobTarget, Located, Planner, SourceError};
 use std::cell::Cell;
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read};
@@ -64,6 +67,7 @@ pub struct JobReader<'a> {
     size: u64,
     commands: usize,
     finished: bool,
+    placed: Option<Placed>,
 }
 
 impl<'a> JobReader<'a> {
@@ -78,7 +82,7 @@ impl<'a> JobReader<'a> {
         let file = path.display().to_string();
         if kind != JobKind::Gcode {
             let data = crate::job::read_bytes(path)?;
-            return JobReader::drawing(machine, file, kind, &data);
+            return JobReader::drawing(machine, file, kind, &data, opts);
         }
         let read_err = |error| JobError::Read {
             file: file.clone(),
@@ -114,7 +118,7 @@ impl<'a> JobReader<'a> {
         let file = path.display().to_string();
         let size = data.len() as u64;
         if kind != JobKind::Gcode {
-            return JobReader::drawing(machine, file, kind, data);
+            return JobReader::drawing(machine, file, kind, data, opts);
         }
         let read = Rc::new(Cell::new(0));
         let text = Counting {
@@ -132,27 +136,61 @@ impl<'a> JobReader<'a> {
         )
     }
 
-    /// An SVG drawing or a photo: parsed whole, handed out a command at a time.
+    /// An SVG drawing or a photo: parsed whole, placed, handed out a command
+    /// at a time.
     fn drawing(
         machine: &'a Machine,
         file: String,
         kind: JobKind,
         data: &[u8],
+        opts: &JobOptions,
     ) -> Result<JobReader<'a>, JobError> {
         let target = machine.job_target();
         let located = |error: SourceError| JobError::Source {
             file: file.clone(),
             error,
         };
-        let commands = match kind {
-            JobKind::Svg => motet_svg::parse(data, &target, &motet_svg::SvgOptions::default())
-                .map_err(located)?,
-            _ => motet_image::parse(data, &target, &motet_image::ImageOptions::default())
-                .map_err(located)?,
+        let parse = |target: &JobTarget| match kind {
+            JobKind::Svg => {
+                motet_svg::parse(data, target, &motet_svg::SvgOptions::default()).map_err(located)
+            }
+            _ => motet_image::parse(data, target, &motet_image::ImageOptions::default())
+                .map_err(located),
         };
+        let placing = |error: PlacementError| JobError::Placement {
+            file: file.clone(),
+            error,
+        };
+        opts.placement.check().map_err(placing)?;
+        let mut commands = parse(&target)?;
+        let mut placed = None;
+        if !opts.placement.is_identity() {
+            let area = Area::of(machine).map_err(placing)?;
+            let mut plan = place::plan(&opts.placement, &commands, &area).map_err(placing)?;
+            if let (Some(t), JobKind::Svg) = (plan, kind) {
+                // Read the drawing again as it will be placed: curves
+                // flattened to the tolerance at the placed size, strokes
+                // ordered from where the machine starts.
+                let mut fine = target.clone();
+                fine.tolerance = target.tolerance / t.scale.max(1.0);
+                let [xi, yi] = area.axes;
+                [fine.start[xi], fine.start[yi]] = t.inverse([target.start[xi], target.start[yi]]);
+                // A start mapped far beyond any drawing (the drawing moved
+                // a long way) orders nothing better than none.
+                if fine.start.iter().all(|v| COORDINATE.contains(*v)) {
+                    commands = parse(&fine)?;
+                    plan = place::plan(&opts.placement, &commands, &area).map_err(placing)?;
+                }
+            }
+            if let Some(t) = plan {
+                placed =
+                    Some(place::apply(&opts.placement, &t, &mut commands, &area).map_err(placing)?);
+            }
+        }
         let size = data.len() as u64;
-        let r = JobReader::new(machine, file, Source::Loaded(commands.into_iter()), size);
+        let mut r = JobReader::new(machine, file, Source::Loaded(commands.into_iter()), size);
         r.read.set(size);
+        r.placed = placed;
         Ok(r)
     }
 
@@ -165,6 +203,12 @@ impl<'a> JobReader<'a> {
         size: u64,
         opts: &JobOptions,
     ) -> Result<JobReader<'a>, JobError> {
+        if !opts.placement.is_identity() {
+            return Err(JobError::Placement {
+                file,
+                error: PlacementError::NotADrawing,
+            });
+        }
         let gopts = GcodeOptions {
             allow_unknown: opts.allow_unknown,
             ..Default::default()
@@ -198,6 +242,7 @@ impl<'a> JobReader<'a> {
             size,
             commands: 0,
             finished: false,
+            placed: None,
         }
     }
 
@@ -216,6 +261,12 @@ impl<'a> JobReader<'a> {
     /// complete once the stream has ended.
     pub fn warnings(&self) -> &[String] {
         &self.warnings
+    }
+
+    /// Where the drawing was placed, for a job read with a
+    /// [`crate::Placement`] other than the default.
+    pub fn placed(&self) -> Option<Placed> {
+        self.placed
     }
 
     /// Coordinates clamped onto travel so far.
@@ -383,6 +434,8 @@ pub struct JobScan {
     pub clamps: Clamps,
     /// How long the job takes as planned, seconds.
     pub planned_s: f64,
+    /// Where the drawing was placed (see [`JobReader::placed`]).
+    pub placed: Option<Placed>,
 }
 
 /// Reads a job through, checking every command and planning it (see
@@ -418,5 +471,6 @@ pub fn scan_job(
         warnings: reader.warnings().to_vec(),
         clamps: reader.clamps(),
         planned_s: planner.clock() * 1e-6,
+        placed: reader.placed(),
     })
 }

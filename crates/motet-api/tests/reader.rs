@@ -77,6 +77,7 @@ fn a_file_read_as_a_stream_gives_the_whole_text_parse() {
     let dir = tmp.path();
     let opts = JobOptions {
         allow_unknown: true,
+        ..Default::default()
     };
     for (name, data) in cases() {
         let (want, warnings) = whole(&m, &data);
@@ -229,7 +230,7 @@ mod props {
         fn streamed_equals_whole_text(data in arb_text()) {
             let m = machine("plotter.toml");
             let (want, warnings) = whole(&m, &data);
-            let opts = JobOptions { allow_unknown: true };
+            let opts = JobOptions { allow_unknown: true, ..Default::default() };
             let mut r = JobReader::from_bytes(&m, Path::new("j.gcode"), JobKind::Gcode, &data, &opts).unwrap();
             let got: Vec<_> = r.by_ref().collect::<Result<_, _>>().unwrap();
             prop_assert_eq!(got, want);

@@ -15,6 +15,7 @@ pub fn gcode(data: &[u8]) {
         // warning on the others (`--allow-unknown`), to reach past them.
         let opts = JobOptions {
             allow_unknown: i > 0,
+            ..Default::default()
         };
         match parse_job(
             machine,

@@ -114,6 +114,7 @@ fn parsing(
     let kind = JobKind::of(job_path)?;
     let opts = JobOptions {
         allow_unknown: true,
+        ..Default::default()
     };
     let mut parse_best = f64::INFINITY;
     let mut loaded = None;

@@ -163,6 +163,7 @@ fn load(args: &Args) -> Result<Loaded> {
         &data,
         &JobOptions {
             allow_unknown: true,
+            ..Default::default()
         },
     )?;
     let steps: Vec<String> = machine

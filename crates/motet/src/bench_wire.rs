@@ -103,6 +103,7 @@ pub fn bench_wire(args: Args) -> Result<()> {
         &data,
         &JobOptions {
             allow_unknown: true,
+            ..Default::default()
         },
     )?;
     let (batched, plain, seconds, segments) = measure(&machine, &job.commands)?;

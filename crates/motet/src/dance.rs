@@ -137,6 +137,7 @@ fn plan_job(machine: &Machine, path: Option<&Path>) -> Result<Option<PlannedJob>
         p,
         &JobOptions {
             allow_unknown: false,
+            ..Default::default()
         },
     )?;
     Ok(Some(
@@ -247,6 +248,7 @@ mod tests {
             &dir().join("boat.svg"),
             &JobOptions {
                 allow_unknown: false,
+                ..Default::default()
             },
         )
         .unwrap();

@@ -18,6 +18,7 @@ mod run;
 mod serve;
 
 use clap::{Parser, Subcommand};
+use motet_api::{JobOptions, Placement};
 use motet_planner::ranges;
 use std::path::PathBuf;
 
@@ -89,41 +90,47 @@ enum NodesCmd {
     },
 }
 
+/// `motet run`'s arguments.
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Machine file (TOML).
+    machine: PathBuf,
+    /// Job: G-code (.gcode/.nc/.g, optionally .gz), SVG, or a photo (.png/.jpg).
+    job: PathBuf,
+    /// Output folder [default: out/<job name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Skip unsupported G-codes with a warning instead of refusing the job.
+    #[arg(long)]
+    allow_unknown: bool,
+    /// No progress bar or summary.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Which nodes run the job: simulated in this process (render and
+    /// report), node processes started for the run, or the paired nodes.
+    #[arg(long, value_enum, default_value = "sim")]
+    nodes: netrun::NodesMode,
+    /// With --nodes spawn|paired: run time this many times faster than
+    /// real time (nodes started by hand need the same --time-scale).
+    #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
+    time_scale: f64,
+    /// With --nodes spawn|paired: least time the committed trajectory
+    /// reaches ahead, ms (at least 2×RTT is used anyway).
+    #[arg(long, default_value_t = 100.0, value_parser = flags::number(ranges::LEAD_MS))]
+    lead_ms: f64,
+    /// With --nodes spawn|paired: clock exchanges with each node, ms
+    /// apart. Faster tracks clocks more closely on jittery links at the
+    /// cost of wire traffic (about 70 bytes per exchange).
+    #[arg(long, default_value_t = 400.0, value_parser = flags::number(ranges::SYNC_MS))]
+    sync_ms: f64,
+    #[command(flatten)]
+    place: flags::PlacementFlags,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
-    /// Run a job (G-code or SVG) on the simulated machine and write a render and a report.
-    Run {
-        /// Machine file (TOML).
-        machine: PathBuf,
-        /// Job: G-code (.gcode/.nc/.g, optionally .gz), SVG, or a photo (.png/.jpg).
-        job: PathBuf,
-        /// Output folder [default: out/<job name>].
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Skip unsupported G-codes with a warning instead of refusing the job.
-        #[arg(long)]
-        allow_unknown: bool,
-        /// No progress bar or summary.
-        #[arg(long, short)]
-        quiet: bool,
-        /// Which nodes run the job: simulated in this process (render and
-        /// report), node processes started for the run, or the paired nodes.
-        #[arg(long, value_enum, default_value = "sim")]
-        nodes: netrun::NodesMode,
-        /// With --nodes spawn|paired: run time this many times faster than
-        /// real time (nodes started by hand need the same --time-scale).
-        #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
-        time_scale: f64,
-        /// With --nodes spawn|paired: least time the committed trajectory
-        /// reaches ahead, ms (at least 2×RTT is used anyway).
-        #[arg(long, default_value_t = 100.0, value_parser = flags::number(ranges::LEAD_MS))]
-        lead_ms: f64,
-        /// With --nodes spawn|paired: clock exchanges with each node, ms
-        /// apart. Faster tracks clocks more closely on jittery links at the
-        /// cost of wire traffic (about 70 bytes per exchange).
-        #[arg(long, default_value_t = 400.0, value_parser = flags::number(ranges::SYNC_MS))]
-        sync_ms: f64,
-    },
+    /// Run a job (G-code, SVG or a photo) on the simulated machine and write a render and a report.
+    Run(RunArgs),
     /// Continue a networked job that stopped, from where every node came to
     /// rest, after checking that the files, the journal and the nodes are the run's.
     Resume {
@@ -191,6 +198,8 @@ enum Cmd {
         job: Option<PathBuf>,
         #[arg(long)]
         allow_unknown: bool,
+        #[command(flatten)]
+        place: flags::PlacementFlags,
     },
     /// Run a dataflow graph (graph file) on a simulated node, driven by a CSV
     /// input trace or two pendulums, and render its channels through a machine.
@@ -286,32 +295,42 @@ fn main() -> std::process::ExitCode {
     }
 }
 
+/// `motet run`: on the simulated machine, or on node processes or boards.
+fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
+    let placement = a.place.placement()?;
+    match a.nodes {
+        netrun::NodesMode::Sim => run::run(
+            &a.machine,
+            &a.job,
+            a.out,
+            &JobOptions {
+                allow_unknown: a.allow_unknown,
+                placement,
+            },
+            a.quiet,
+        ),
+        // A stopped run resumes from the job file as it is: placing it
+        // would need the placement kept with the journal.
+        _ if placement != Placement::default() => {
+            anyhow::bail!("--fit, --scale, --rotate and --origin work with --nodes sim only")
+        }
+        mode => netrun::run(netrun::NetArgs {
+            machine_path: &a.machine,
+            job_path: &a.job,
+            out: a.out,
+            allow_unknown: a.allow_unknown,
+            quiet: a.quiet,
+            mode,
+            time_scale: a.time_scale,
+            lead_ms: a.lead_ms,
+            sync_ms: a.sync_ms,
+        }),
+    }
+}
+
 fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Cmd::Run {
-            machine,
-            job,
-            out,
-            allow_unknown,
-            quiet,
-            nodes,
-            time_scale,
-            lead_ms,
-            sync_ms,
-        } => match nodes {
-            netrun::NodesMode::Sim => run::run(&machine, &job, out, allow_unknown, quiet),
-            mode => netrun::run(netrun::NetArgs {
-                machine_path: &machine,
-                job_path: &job,
-                out,
-                allow_unknown,
-                quiet,
-                mode,
-                time_scale,
-                lead_ms,
-                sync_ms,
-            }),
-        },
+        Cmd::Run(a) => run_cmd(a),
         Cmd::Resume {
             out,
             assume_position,
@@ -354,7 +373,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine,
             job,
             allow_unknown,
-        } => run::check(&machine, job.as_deref(), allow_unknown),
+            place,
+        } => run::check(
+            &machine,
+            job.as_deref(),
+            &JobOptions {
+                allow_unknown,
+                placement: place.placement()?,
+            },
+        ),
         Cmd::Dance {
             machine,
             graph,

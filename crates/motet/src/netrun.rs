@@ -83,7 +83,10 @@ fn read_files(machine_path: &Path, job_path: &Path, allow_unknown: bool) -> Resu
         &job_path,
         JobKind::of(&job_path)?,
         &bytes,
-        &JobOptions { allow_unknown },
+        &JobOptions {
+            allow_unknown,
+            ..Default::default()
+        },
     )?;
     Ok(Files {
         machine_sha256: Digest::of(text.as_bytes()),

@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use motet_api::{job_name, scan_job, JobOptions, JobReader};
+use motet_api::{job_name, scan_job, JobOptions, JobReader, Placed};
 use motet_host::Machine;
 use motet_render::{PngCanvas, RenderSpec, SvgWriter};
 use std::io::IsTerminal;
@@ -12,7 +12,7 @@ pub fn load_machine(path: &Path) -> Result<Machine> {
     Ok(Machine::load(path)?)
 }
 
-pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Result<()> {
+pub fn check(machine: &Path, job_path: Option<&Path>, opts: &JobOptions) -> Result<()> {
     let m = load_machine(machine)?;
     println!(
         "{}: ok ({}, {} axes, {} actuators, {} nodes)",
@@ -23,10 +23,7 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
         m.nodes.len()
     );
     if let Some(j) = job_path {
-        let scan = scan_job(
-            JobReader::open(&m, j, &JobOptions { allow_unknown })?,
-            &mut |_, _| {},
-        )?;
+        let scan = scan_job(JobReader::open(&m, j, opts)?, &mut |_, _| {})?;
         for w in &scan.warnings {
             eprintln!("warning: {w}");
         }
@@ -36,6 +33,9 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
             scan.commands,
             motet_sim::format_duration(scan.planned_s)
         );
+        if let Some(p) = &scan.placed {
+            println!("  {}", placed_line(p));
+        }
         if scan.clamps.moves > 0 {
             println!(
                 "  {} move(s) clamped onto the travel, by {} mm at most (less than half a step)",
@@ -45,6 +45,51 @@ pub fn check(machine: &Path, job_path: Option<&Path>, allow_unknown: bool) -> Re
         }
     }
     Ok(())
+}
+
+/// Where the drawing went: `placed at x 10..290, y 52.5..247.5 mm (scale
+/// 17.5, rotated 0°)`, and what was put back on the travel.
+fn placed_line(p: &Placed) -> String {
+    let n = motet_planner::ranges::rounded;
+    let mut line = format!(
+        "placed at x {}..{}, y {}..{} mm (scale {}, rotated {}°)",
+        n(p.min[0]),
+        n(p.max[0]),
+        n(p.min[1]),
+        n(p.max[1]),
+        n(p.scale),
+        n(p.rotate_deg)
+    );
+    if p.clamps.moves > 0 {
+        line += &format!(
+            "; {} move(s) put on the travel's edge, {} mm beyond it at most",
+            p.clamps.moves,
+            n(p.clamps.max_mm)
+        );
+    }
+    line
+}
+
+/// `report.json`: the run's report, and where the drawing was placed when
+/// it was (without placement, the report alone, as it always was).
+#[derive(serde::Serialize)]
+struct ReportJson<'a> {
+    #[serde(flatten)]
+    report: &'a motet_sim::Report,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    placement: Option<serde_json::Value>,
+}
+
+/// The report's `placement` entry: what [`placed_line`] says, for programs.
+fn placed_json(p: &Placed) -> serde_json::Value {
+    serde_json::json!({
+        "scale": p.scale,
+        "rotate_deg": p.rotate_deg,
+        "min_mm": p.min,
+        "max_mm": p.max,
+        "clamped_moves": p.clamps.moves,
+        "max_clamp_mm": p.clamps.max_mm,
+    })
 }
 
 /// A progress bar on a terminal, hidden otherwise.
@@ -70,18 +115,17 @@ pub fn run(
     machine_path: &Path,
     job_path: &Path,
     out: Option<PathBuf>,
-    allow_unknown: bool,
+    opts: &JobOptions,
     quiet: bool,
 ) -> Result<()> {
     let machine = load_machine(machine_path)?;
-    let opts = JobOptions { allow_unknown };
     let scan_bar = bar(
         quiet,
         0,
         "{spinner} checking [{bar:40}] {bytes}/{total_bytes} ({eta})",
     );
     let scan = scan_job(
-        JobReader::open(&machine, job_path, &opts)?,
+        JobReader::open(&machine, job_path, opts)?,
         &mut |done, size| {
             scan_bar.set_length(size);
             scan_bar.set_position(done);
@@ -126,7 +170,7 @@ pub fn run(
     let run = motet_sim::simulate_stream(
         &machine,
         &name,
-        JobReader::open(&machine, job_path, &opts)?,
+        JobReader::open(&machine, job_path, opts)?,
         scan.commands,
         &mut progress,
         &mut |stroke| {
@@ -155,12 +199,19 @@ pub fn run(
         out.join("path.png"),
         png.encode().context("rendering the tool path")?,
     )?;
+    let json = ReportJson {
+        report: &report,
+        placement: scan.placed.as_ref().map(placed_json),
+    };
     std::fs::write(
         out.join("report.json"),
-        serde_json::to_string_pretty(&report)? + "\n",
+        serde_json::to_string_pretty(&json)? + "\n",
     )?;
     if !quiet {
         println!("{}", report.summary());
+        if let Some(p) = &scan.placed {
+            println!("  {}", placed_line(p));
+        }
         if let Some(peak) = crate::peak::own_peak_mib() {
             println!("  {}{peak:.1} MiB", crate::peak::PEAK_LINE);
         }

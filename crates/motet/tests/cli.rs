@@ -262,3 +262,59 @@ fn bench_microsteps_is_the_edited_machine() {
     let (ok, _, stderr) = motet(&["bench", "--microsteps", "0", "--no-sim"]);
     assert!(!ok && stderr.contains("--microsteps"), "{stderr}");
 }
+
+/// Placement flags: a fitted run reports where the drawing went (and a run
+/// without them writes no such entry); refused values and combinations
+/// name their flags before anything runs.
+#[test]
+fn placement_flags_place_drawings_or_name_what_is_wrong() {
+    let tmp = scratch("place");
+    let out = |name: &str| tmp.path().join(name).to_str().unwrap().to_string();
+    let svg = "examples/jobs/drawing.svg";
+    let plotter = "examples/plotter.toml";
+    for (name, placed) in [("fit", true), ("plain", false)] {
+        let o = out(name);
+        let mut args = vec!["run", plotter, svg, "--out", &o, "--quiet"];
+        if placed {
+            args.push("--fit");
+        }
+        let (ok, _, stderr) = motet(&args);
+        assert!(ok, "{name}: {stderr}");
+        let report: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(tmp.path().join(name).join("report.json")).unwrap(),
+        )
+        .unwrap();
+        match placed {
+            // The default 10 mm margin: the drawing is wider than tall, so
+            // it spans x 10..290.
+            true => {
+                let p = &report["placement"];
+                assert_eq!(p["min_mm"][0].as_f64(), Some(10.0), "{p}");
+                assert_eq!(p["max_mm"][0].as_f64(), Some(290.0), "{p}");
+                assert_eq!(p["clamped_moves"].as_u64(), Some(0), "{p}");
+            }
+            false => assert!(report.get("placement").is_none(), "{report}"),
+        }
+    }
+    let cases: &[(&[&str], bool, &str)] = &[
+        (&["check", plotter, svg, "--rotate", "-90", "--scale", "0.5", "--origin", "-0,10"], true, "placed at x 0.."),
+        (&["check", plotter, svg, "--fit", "5"], true, "placed at x 5..295"),
+        (&["check", plotter, svg, "--fit", "--scale", "2"], false, "placement fit_margin_mm (`--fit`) and scale (`--scale`) cannot be combined"),
+        (&["check", plotter, svg, "--fit", "--origin", "1,1"], false, "(`--fit`) and origin (`--origin`) cannot be combined"),
+        (&["check", plotter, svg, "--scale", "0"], false, "scale (`--scale`) must be a finite number > 0, not 0"),
+        (&["check", plotter, svg, "--scale", "nan"], false, "not NaN"),
+        (&["check", plotter, svg, "--fit", "-3"], false, "fit_margin_mm (`--fit`) must be a finite number of mm ≥ 0, not -3"),
+        (&["check", plotter, svg, "--fit", "wide"], false, "invalid value 'wide' for '--fit [<MARGIN_MM>]'"),
+        (&["check", plotter, svg, "--fit", "150"], false, "drawing.svg: placement fit_margin_mm (`--fit`) 150 mm leaves nothing"),
+        (&["check", plotter, svg, "--origin", "1;2"], false, "invalid value '1;2' for '--origin <X,Y>'"),
+        (&["check", plotter, svg, "--scale", "3"], false, "beyond the x travel 0..300 mm"),
+        (&["check", "examples/laser.toml", "examples/jobs/laser-badge.gcode", "--rotate", "90"], false, "laser-badge.gcode: placement (`--fit`, `--scale`, `--rotate`, `--origin`) applies to SVG and photo jobs"),
+        (&["run", plotter, svg, "--nodes", "spawn", "--fit"], false, "--fit, --scale, --rotate and --origin work with --nodes sim only"),
+    ];
+    for (args, want_ok, want) in cases {
+        let (ok, stdout, stderr) = motet(args);
+        assert_eq!(ok, *want_ok, "{args:?}: {stdout}{stderr}");
+        let text = if ok { stdout } else { stderr };
+        assert!(text.contains(want), "{args:?}: `{text}` lacks `{want}`");
+    }
+}
