@@ -145,7 +145,7 @@ const LABELS = { idle: "idle", running: "running", holding: "holding…", paused
 function showStatus(s, wallMs) {
   lastStatus = s;
   const st = $("state");
-  st.textContent = LABELS[s.state] || s.state;
+  st.textContent = (LABELS[s.state] || s.state) + (s.connecting ? " · connecting to nodes…" : "");
   st.dataset.state = s.state;
   document.body.dataset.state = s.state;
   const names = machine ? machine.axes.map((a) => a.name) : [];
@@ -219,17 +219,33 @@ function frame() {
 
 // ---- actions ---------------------------------------------------------------
 
+// The placement query for drawings (G-code is placed by its own
+// coordinates: no placement is sent for it).
+function placement(name) {
+  if (/\.(gcode|gco|g|nc|ngc|tap)(\.gz)?$/i.test(name)) return "";
+  let q = "";
+  if ($("place").value === "fit") q += "&fit=" + encodeURIComponent($("margin").value || "10");
+  else if ($("scale").value) q += "&scale=" + encodeURIComponent($("scale").value);
+  if ($("rotate").value) q += "&rotate=" + encodeURIComponent($("rotate").value);
+  return q;
+}
+
+let lastFile = null;
+
 async function upload(file) {
   showError(null);
+  lastFile = file;
   $("job-info").textContent = "reading " + file.name + "…";
   try {
     const body = await file.arrayBuffer();
-    job = await api("POST", "/api/jobs?name=" + encodeURIComponent(file.name), body, true);
+    job = await api("POST", "/api/jobs?name=" + encodeURIComponent(file.name) + placement(file.name), body, true);
     preview = await api("GET", "/api/jobs/" + job.id + "/preview");
     window.motetStats.previewStrokes = preview.strokes.length;
     window.motetStats.jobId = job.id;
     trail = [];
-    $("job-info").textContent = job.name + ": " + job.command_count + " commands, " + fmtTime(job.planned_s) +
+    const placed = job.placed ? ", " + (job.placed.max[0] - job.placed.min[0]).toFixed(1) + " × " +
+      (job.placed.max[1] - job.placed.min[1]).toFixed(1) + " at " + job.placed.min.map((v) => v.toFixed(1)).join(", ") : "";
+    $("job-info").textContent = job.name + ": " + job.command_count + " commands, " + fmtTime(job.planned_s) + placed +
       (job.warnings.length ? ", " + job.warnings.length + " warnings" : "");
     $("start").disabled = false;
   } catch (e) {
@@ -282,6 +298,7 @@ async function main() {
   document.title = "motet · " + machine.name;
   buildJog();
   $("file").onchange = (e) => e.target.files[0] && upload(e.target.files[0]);
+  $("replace").onclick = () => lastFile && upload(lastFile);
   $("start").onclick = () => { trail = []; if (job) act("POST", "/api/jobs/" + job.id + "/start"); };
   $("pause").onclick = () => act("POST", "/api/pause");
   $("resume").onclick = () => act("POST", "/api/resume");

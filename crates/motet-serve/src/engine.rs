@@ -38,14 +38,14 @@ pub trait Nodes: Send {
 }
 
 /// Settings of a server's runs: a short lead, short windows and moves
-/// planned in pieces of at most about 50 ms, because a hold or a stop
+/// planned in pieces of at most about 20 ms, because a hold or a stop
 /// brakes on the tail of the committed window and a person waits for it
 /// (in-process nodes have no link delay to cover).
 pub fn serve_config() -> NetConfig {
     NetConfig {
-        lead_min_us: 30_000,
-        window_us: 30_000,
-        max_move_us: 50_000,
+        lead_min_us: 10_000,
+        window_us: 20_000,
+        max_move_us: 20_000,
         ..NetConfig::default()
     }
 }

@@ -72,6 +72,9 @@ pub struct StoredJob {
     pub warnings: Vec<String>,
     /// Number of commands.
     pub command_count: usize,
+    /// Where a placed drawing landed (`--fit`, `--scale`, `--rotate`,
+    /// `--origin`), if it was placed.
+    pub placed: Option<PlacedInfo>,
     /// Its commands, in machine space.
     #[serde(skip)]
     pub commands: Vec<Located<Command>>,
@@ -80,6 +83,21 @@ pub struct StoredJob {
     pub preview: Preview,
     #[serde(skip)]
     file: PathBuf,
+}
+
+/// Where a placed drawing landed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PlacedInfo {
+    /// Its scale.
+    pub scale: f64,
+    /// Its turn, degrees counter-clockwise.
+    pub rotate_deg: f64,
+    /// Lower-left corner of what it draws, machine units.
+    pub min: [f64; 2],
+    /// Upper-right corner.
+    pub max: [f64; 2],
+    /// Moves put onto the travel's edge (within the placement tolerance).
+    pub clamped_moves: usize,
 }
 
 /// The uploaded jobs.
@@ -192,6 +210,13 @@ pub fn read_upload(
         planned_s: job.planned_s.unwrap_or(0.0),
         warnings,
         command_count: job.commands.len(),
+        placed: job.placed.map(|p| PlacedInfo {
+            scale: p.scale,
+            rotate_deg: p.rotate_deg,
+            min: p.min,
+            max: p.max,
+            clamped_moves: p.clamps.moves,
+        }),
         commands: job.commands,
         preview,
         file,

@@ -152,6 +152,9 @@ pub struct Status {
     pub t_us: u64,
     /// What the machine is doing.
     pub state: State,
+    /// The nodes' links are being set up and their clocks measured (a few
+    /// seconds after the server starts): motion asked for waits.
+    pub connecting: bool,
     /// Where the tool is, axis by axis, in the machine's axis order.
     pub position: Vec<f64>,
     /// Path speed, units/s.
@@ -472,7 +475,18 @@ impl Session {
         if self.stopping != Some(Stopping::EStop) {
             self.stopping = Some(how);
         }
-        self.nodes.run_mut().stop(reason, self.now);
+        let run = self.nodes.run_mut();
+        run.stop(reason, self.now);
+        if let Phase::Stopping(info) = run.phase() {
+            let ms = (info.braking_at - self.now as f64) * 1e-3;
+            self.events.push(
+                self.now,
+                Level::Info,
+                format!(
+                    "{reason}: braking {ms:.0} ms after the request, on the trajectory's clock"
+                ),
+            );
+        }
     }
 
     /// Clears an alarm: the person says the machine is where the session
@@ -634,6 +648,7 @@ impl Session {
         Status {
             t_us: self.now,
             state: self.state,
+            connecting: matches!(self.nodes.run().phase(), Phase::Starting),
             position: p[..n].to_vec(),
             speed,
             job: self.job_progress(),

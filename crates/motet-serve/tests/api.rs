@@ -101,7 +101,11 @@ impl Running {
     }
 
     fn upload(&self, name: &str, bytes: &[u8]) -> (u16, Value) {
-        let path = format!("/api/jobs?name={}", urlencode(name));
+        self.upload_with(name, bytes, "")
+    }
+
+    fn upload_with(&self, name: &str, bytes: &[u8], query: &str) -> (u16, Value) {
+        let path = format!("/api/jobs?name={}{query}", urlencode(name));
         self.raw(
             "POST",
             &path,
@@ -451,6 +455,30 @@ fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
         .map(|e| e.unwrap().file_name().into_string().unwrap())
         .collect();
     assert_eq!(stored, vec![format!("{}.svg", job["id"])]);
+    // Placement: fitted with a 10 mm margin, centred in the travel.
+    let (code, job) = s.upload_with("drawing.svg", &svg, "&fit=10");
+    assert_eq!(code, 201, "{job}");
+    check_schema("Job", &job);
+    let m = s.call("GET", "/api/machine", None, "a").1;
+    for (i, axis) in m["axes"].as_array().unwrap().iter().take(2).enumerate() {
+        let lo = axis["travel"][0].as_f64().unwrap();
+        let hi = axis["travel"][1].as_f64().unwrap();
+        let min = job["placed"]["min"][i].as_f64().unwrap();
+        let max = job["placed"]["max"][i].as_f64().unwrap();
+        assert!(
+            min >= lo + 10.0 - 1e-6 && max <= hi - 10.0 + 1e-6,
+            "axis {i}: {min}..{max} in {lo}..{hi}"
+        );
+        assert!(
+            ((min + max) / 2.0 - (lo + hi) / 2.0).abs() < 1e-6,
+            "axis {i} not centred: {min}..{max}"
+        );
+    }
+    let b = &job["bounds"];
+    assert!(
+        b[2].as_f64().unwrap() <= job["placed"]["max"][0].as_f64().unwrap() + 1e-6,
+        "{b}"
+    );
     // Nothing moved and nothing is queued.
     let st = s.status();
     assert_eq!(st["state"], "idle");

@@ -29,6 +29,9 @@ pub struct StopInfo {
     /// from (the job's length when no motion was left): where a job held
     /// on its path continues, from `point`.
     pub next_command: usize,
+    /// Host time the tail takes over, µs: when the machine starts braking
+    /// (or the stop's own time, when the window already ends at rest).
+    pub braking_at: f64,
     /// Where the nodes that kept running come to rest.
     pub point: Point,
     /// Host time at which the machine is at rest, µs.
@@ -82,7 +85,9 @@ impl NetRun {
         // From here the nodes run the tail: so does the record.
         let n = self.committed.len().min(self.history.len());
         let from = self.history.len() - n;
+        let mut braking_at = now as f64;
         if let Ok(c) = motet_trajectory::contingency::Contingency::of(self.history.range(from..)) {
+            braking_at = braking_at.max(c.start_time);
             let mut walk = c.walk();
             for s in self.history.range_mut(from + c.start..) {
                 *s = walk.next(s);
@@ -97,6 +102,7 @@ impl NetRun {
             tail_start: self.tail_start,
             done: self.done,
             next_command,
+            braking_at,
             point,
             rest_time,
             lost: self.lost.clone(),

@@ -144,6 +144,34 @@ pub(super) struct UploadQuery {
     name: String,
     #[serde(default)]
     allow_unknown: bool,
+    /// Fit the drawing to the travel with this margin, mm.
+    fit: Option<f64>,
+    /// Scale the drawing by this factor.
+    scale: Option<f64>,
+    /// Turn the drawing counter-clockwise about its centre, degrees.
+    rotate: Option<f64>,
+    /// Where the drawing's lower-left corner goes: `X,Y`.
+    origin: Option<String>,
+}
+
+impl UploadQuery {
+    /// The placement the query asks for, checked.
+    fn placement(&self) -> Result<motet_api::Placement, ApiError> {
+        let bad = |e: motet_api::PlacementError| ApiError(StatusCode::BAD_REQUEST, e.to_string());
+        let p = motet_api::Placement {
+            fit_margin_mm: self.fit,
+            scale: self.scale,
+            rotate_deg: self.rotate.unwrap_or(0.0),
+            origin: self
+                .origin
+                .as_deref()
+                .map(motet_api::Placement::parse_origin)
+                .transpose()
+                .map_err(bad)?,
+        };
+        p.check().map_err(bad)?;
+        Ok(p)
+    }
 }
 
 pub(super) async fn upload(
@@ -154,11 +182,12 @@ pub(super) async fn upload(
     let q = q.map_err(|e| ApiError(StatusCode::BAD_REQUEST, e.body_text()))?;
     // Too large, or the client went away mid-upload: nothing is stored.
     let body = body.map_err(|e| ApiError(e.status(), e.body_text()))?;
-    let (id, dir) = sh.jobs().reserve();
-    let machine = sh.machine.clone();
     let opts = motet_api::JobOptions {
         allow_unknown: q.allow_unknown,
+        placement: q.placement()?,
     };
+    let (id, dir) = sh.jobs().reserve();
+    let machine = sh.machine.clone();
     let read = tokio::task::spawn_blocking(move || {
         read_upload(&machine, &dir.clone(), id, &q.name, &body, &opts)
     })

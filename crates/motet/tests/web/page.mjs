@@ -37,6 +37,10 @@ try {
   const waitState = (s, ms = 20000) => page.waitForFunction((want) => document.body.dataset.state === want, s, { timeout: ms });
   await page.click("#start");
   await waitState("running");
+  // The nodes' clocks settle for a few seconds after the server starts:
+  // the job moves once they have.
+  const first = await page.evaluate(() => window.motetStats.positions);
+  await page.waitForFunction((n) => window.motetStats.positions > n + 1, first, { timeout: 15000 });
   const before = await page.evaluate(() => ({ ...window.motetStats, ages: [] }));
   const t1 = Date.now();
   await page.waitForTimeout(2000);
@@ -99,6 +103,9 @@ try {
   });
   const events = await page.$$eval("#events li", (lis) => lis.map((l) => l.textContent));
   out.stop_event = events.some((e) => e.includes("every node at rest on the path"));
+  // The server's own figure: when the tail took over after the request.
+  const braking = events.map((e) => /emergency stop: braking (-?\d+) ms/.exec(e)).find((m) => m);
+  out.request_to_braking_ms = braking ? Number(braking[1]) : null;
   step("stopped");
 
   await page.setViewportSize({ width: 390, height: 844 });
