@@ -35,6 +35,8 @@ pub struct Reading {
     pub temp: i16,
     /// Target.
     pub target: i16,
+    /// The highest temperature read during the run.
+    pub peak: i16,
 }
 
 /// What a run did.
@@ -54,6 +56,25 @@ pub struct Summary {
     pub temperatures: BTreeMap<String, Reading>,
 }
 
+/// Timing of a run.
+#[derive(Debug, Clone, Copy)]
+pub struct DriverConfig {
+    /// The line's timing; its poll interval also paces the wait for the
+    /// bot to finish.
+    pub link: LinkConfig,
+    /// How often the heaters are read while the host waits.
+    pub temperature_every: Duration,
+}
+
+impl Default for DriverConfig {
+    fn default() -> DriverConfig {
+        DriverConfig {
+            link: LinkConfig::default(),
+            temperature_every: Duration::from_millis(500),
+        }
+    }
+}
+
 /// Drives one bot through one job.
 pub struct Driver<P> {
     link: Link<P>,
@@ -63,6 +84,7 @@ pub struct Driver<P> {
     readings: BTreeMap<Heater, Reading>,
     last_poll: Option<Instant>,
     poll_every: Duration,
+    idle_sleep: Duration,
     on_pause: Box<dyn FnMut(bool)>,
     points: u64,
     scratch: Vec<Command>,
@@ -79,10 +101,10 @@ impl<P: Read + Write> Driver<P> {
     /// Checks the machine, then greets the bot on `port`: version, its
     /// own acceleration off (motet plans the speeds), and the position set
     /// to the machine's start.
-    pub fn connect(port: P, machine: &Machine, config: LinkConfig) -> Result<Driver<P>, DriverError> {
+    pub fn connect(port: P, machine: &Machine, config: DriverConfig) -> Result<Driver<P>, DriverError> {
         let map = AxisMap::of(machine)?;
         let emitter = Emitter::new(map, &machine.start);
-        let mut link = Link::new(port, config);
+        let mut link = Link::new(port, config.link);
         link.query(&Command::Version(100))?;
         match link.action(&Command::SetAcceleration(false), &mut |_| Ok(())) {
             // Firmware without acceleration runs points as they come.
@@ -100,7 +122,8 @@ impl<P: Read + Write> Driver<P> {
             heaters: Vec::new(),
             readings: BTreeMap::new(),
             last_poll: None,
-            poll_every: Duration::from_millis(500),
+            poll_every: config.temperature_every,
+            idle_sleep: config.link.poll_interval,
             on_pause: Box::new(|_| {}),
             points: 0,
             scratch: Vec::new(),
@@ -203,7 +226,7 @@ impl<P: Read + Write> Driver<P> {
                 return Ok(());
             }
             self.poll_temperatures(false)?;
-            std::thread::sleep(Duration::from_millis(5));
+            std::thread::sleep(self.idle_sleep);
         }
     }
 }
@@ -233,7 +256,8 @@ fn read_heaters<P: Read + Write>(
             Heater::Tool(_) => sub::GET_SP,
             Heater::Platform => sub::GET_PLATFORM_SP,
         })?;
-        out.insert(h, Reading { temp, target });
+        let peak = out.get(&h).map_or(temp, |r| r.peak.max(temp));
+        out.insert(h, Reading { temp, target, peak });
     }
     Ok(())
 }

@@ -12,6 +12,7 @@
 //! bot acknowledges and queues.
 
 pub mod bot;
+pub mod check;
 pub mod command;
 pub mod crc8;
 pub mod decoder;

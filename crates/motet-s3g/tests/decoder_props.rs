@@ -98,7 +98,8 @@ proptest! {
         prop_assert!(!packets(&found).contains(&&payload), "corruption missed");
         prop_assert!(d.crc_errors >= 1);
         if !bytes[2..i + 1].contains(&START) && !payload.contains(&START) {
-            prop_assert_eq!(packets(&found), vec![&vec![0x81, 7]]);
+            let want = vec![0x81u8, 7];
+            prop_assert_eq!(packets(&found), vec![&want]);
         }
     }
 

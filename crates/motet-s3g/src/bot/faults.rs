@@ -1,10 +1,10 @@
 //! Ways the simulated bot can be told to misbehave, for tests of the
-//! host's recovery: `garbage=N,crc=N,generic=N,full=N,reply-crc=N,silent-after=N`
+//! host's recovery: `garbage=N,crc=N,generic=N,full=N,reply-crc=N,ack-crc=N,silent-after=N`
 //! (every N-th packet; `silent-after`: none answered after the N-th).
 
 /// A fault specification that does not parse.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("fault `{item}`: {why} (expected garbage=N, crc=N, generic=N, full=N, reply-crc=N or silent-after=N, N ≥ 1)")]
+#[error("fault `{item}`: {why} (expected garbage=N, crc=N, generic=N, full=N, reply-crc=N, ack-crc=N or silent-after=N, N ≥ 1)")]
 pub struct FaultError {
     /// The item.
     pub item: String,
@@ -26,6 +26,9 @@ pub struct Faults {
     pub full: Option<u64>,
     /// Every N-th reply to a query corrupted on the way out.
     pub reply_crc: Option<u64>,
+    /// Every N-th acknowledgement of an action corrupted on the way out
+    /// (the action was queued; the host cannot know).
+    pub ack_crc: Option<u64>,
     /// No answer to anything after this many packets.
     pub silent_after: Option<u64>,
 }
@@ -50,6 +53,7 @@ impl Faults {
                 "generic" => &mut f.generic,
                 "full" => &mut f.full,
                 "reply-crc" => &mut f.reply_crc,
+                "ack-crc" => &mut f.ack_crc,
                 "silent-after" => &mut f.silent_after,
                 _ => return Err(err("unknown fault")),
             };

@@ -102,7 +102,10 @@ impl Served {
             return;
         };
         let query_reply = r.code == ReplyCode::Success && !r.body.is_empty();
-        if query_reply && Faults::hits(self.faults.reply_crc, n) {
+        let ack = r.code == ReplyCode::Success && r.body.is_empty();
+        if (query_reply && Faults::hits(self.faults.reply_crc, n))
+            || (ack && Faults::hits(self.faults.ack_crc, n))
+        {
             self.stats.faults += 1;
             if let Some(c) = bytes.last_mut() {
                 *c ^= 0x5A;
