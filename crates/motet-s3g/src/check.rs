@@ -18,7 +18,10 @@ pub struct PlannedPath {
 impl PlannedPath {
     /// Plans `commands` on `machine` as the driver does (from its start at
     /// time 0).
-    pub fn plan(machine: &Machine, commands: &[Command]) -> Result<PlannedPath, motet_planner::PlanError> {
+    pub fn plan(
+        machine: &Machine,
+        commands: &[Command],
+    ) -> Result<PlannedPath, motet_planner::PlanError> {
         let mut p = Planner::new(machine.limits(), machine.start, 0.0);
         let mut segments = Vec::new();
         let mut take = |p: &mut Planner| {

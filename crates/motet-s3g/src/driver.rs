@@ -101,7 +101,11 @@ impl<P: Read + Write> Driver<P> {
     /// Checks the machine, then greets the bot on `port`: version, its
     /// own acceleration off (motet plans the speeds), and the position set
     /// to the machine's start.
-    pub fn connect(port: P, machine: &Machine, config: DriverConfig) -> Result<Driver<P>, DriverError> {
+    pub fn connect(
+        port: P,
+        machine: &Machine,
+        config: DriverConfig,
+    ) -> Result<Driver<P>, DriverError> {
         let map = AxisMap::of(machine)?;
         let emitter = Emitter::new(map, &machine.start);
         let mut link = Link::new(port, config.link);
@@ -114,7 +118,9 @@ impl<P: Read + Write> Driver<P> {
             }) => {}
             r => r?,
         }
-        link.action(&Command::SetPositionExt(emitter.start_steps()), &mut |_| Ok(()))?;
+        link.action(&Command::SetPositionExt(emitter.start_steps()), &mut |_| {
+            Ok(())
+        })?;
         Ok(Driver {
             link,
             planner: Planner::new(machine.limits(), machine.start, 0.0),
@@ -211,7 +217,11 @@ impl<P: Read + Write> Driver<P> {
     }
 
     fn poll_temperatures(&mut self, now: bool) -> Result<(), DriverError> {
-        if now || self.last_poll.is_none_or(|t| t.elapsed() >= self.poll_every) {
+        if now
+            || self
+                .last_poll
+                .is_none_or(|t| t.elapsed() >= self.poll_every)
+        {
             self.last_poll = Some(Instant::now());
             read_heaters(&mut self.link, &self.heaters, &mut self.readings)?;
         }

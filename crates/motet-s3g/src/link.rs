@@ -287,7 +287,14 @@ impl<P: Read + Write> Link<P> {
         while Instant::now() < deadline {
             let n = match self.port.read(&mut buf) {
                 Ok(n) => n,
-                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => 0,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) =>
+                {
+                    0
+                }
                 Err(e) => return Err(e.into()),
             };
             self.decoder.push(&buf[..n], &mut found);

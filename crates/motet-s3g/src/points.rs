@@ -75,11 +75,7 @@ impl AxisMap {
                 .position(|n| n == name)
                 .ok_or_else(|| MapError::Axis(name.clone()))?;
             if let Some(other) = owner[slot] {
-                return Err(MapError::Shared(
-                    other.into(),
-                    a.name.clone(),
-                    name.clone(),
-                ));
+                return Err(MapError::Shared(other.into(), a.name.clone(), name.clone()));
             }
             owner[slot] = Some(&a.name);
             slots[slot] = Some((axis, a.steps_per_unit * c));
@@ -207,7 +203,9 @@ impl Emitter {
             } else {
                 PIECE_US[1]
             };
-            let n = (span_us / max_us.clamp(PIECE_US[0], PIECE_US[1])).ceil().max(1.0) as usize;
+            let n = (span_us / max_us.clamp(PIECE_US[0], PIECE_US[1]))
+                .ceil()
+                .max(1.0) as usize;
             for k in 1..=n {
                 let t = seg.t0 + (piece.t0 + piece.duration * k as f64 / n as f64) * 1e6;
                 self.point_at(t.min(seg.t1()).floor(), out);

@@ -18,10 +18,20 @@ fn command() -> impl Strategy<Value = Command> {
     let steps = prop::array::uniform5(any::<i32>());
     prop_oneof![
         (steps.clone(), any::<u32>(), 0u8..32).prop_map(|(steps, us, relative)| {
-            Command::PointNew(PointNew { steps, us, relative })
+            Command::PointNew(PointNew {
+                steps,
+                us,
+                relative,
+            })
         }),
-        (steps.clone(), any::<u32>(), 0u8..32, -1e6f32..1e6, any::<u16>()).prop_map(
-            |(steps, dda_rate, relative, distance, feedrate_x64)| {
+        (
+            steps.clone(),
+            any::<u32>(),
+            0u8..32,
+            -1e6f32..1e6,
+            any::<u16>()
+        )
+            .prop_map(|(steps, dda_rate, relative, distance, feedrate_x64)| {
                 Command::PointAccel(PointAccel {
                     steps,
                     dda_rate,
@@ -29,11 +39,18 @@ fn command() -> impl Strategy<Value = Command> {
                     distance,
                     feedrate_x64,
                 })
-            }
-        ),
-        (any::<u8>(), any::<u8>(), prop::collection::vec(any::<u8>(), 0..=28))
+            }),
+        (
+            any::<u8>(),
+            any::<u8>(),
+            prop::collection::vec(any::<u8>(), 0..=28)
+        )
             .prop_map(|(tool, sub, data)| Command::ToolAction { tool, sub, data }),
-        (any::<u8>(), any::<u8>(), prop::collection::vec(any::<u8>(), 0..=29))
+        (
+            any::<u8>(),
+            any::<u8>(),
+            prop::collection::vec(any::<u8>(), 0..=29)
+        )
             .prop_map(|(tool, sub, data)| Command::ToolQuery { tool, sub, data }),
         any::<u32>().prop_map(Command::Delay),
         steps.prop_map(Command::SetPositionExt),

@@ -137,15 +137,29 @@ fn check_clean(faults: &str) {
     assert!(dev <= 0.5, "{faults}: {dev} steps from the plan");
     // The bot's clock ends where the plan ends.
     let end = o.port_executed.last().unwrap().clock_us as f64;
-    assert!((o.plan.duration_us() - end).abs() < 1000.0, "{faults}: ends at {end} µs, plan {}", o.plan.duration_us());
+    assert!(
+        (o.plan.duration_us() - end).abs() < 1000.0,
+        "{faults}: ends at {end} µs, plan {}",
+        o.plan.duration_us()
+    );
     // Heaters were waited for and read back near their targets.
     assert_eq!(bot.actions.get(&135), Some(&1), "{faults}: wait for tool");
-    assert_eq!(bot.actions.get(&141), Some(&1), "{faults}: wait for platform");
+    assert_eq!(
+        bot.actions.get(&141),
+        Some(&1),
+        "{faults}: wait for platform"
+    );
     let t = &s.temperatures["tool0"];
     assert_eq!(t.target, 0, "{faults}: switched off at the end");
-    assert!(t.peak >= 208, "{faults}: the extruder reached 210 °C: {t:?}");
+    assert!(
+        t.peak >= 208,
+        "{faults}: the extruder reached 210 °C: {t:?}"
+    );
     let p = &s.temperatures["platform"];
-    assert!(p.peak >= 58 && p.target == 0, "{faults}: the platform reached 60 °C: {p:?}");
+    assert!(
+        p.peak >= 58 && p.target == 0,
+        "{faults}: the platform reached 60 °C: {p:?}"
+    );
     let seen = s.link;
     if faults.contains("crc=") || faults.contains("generic=") || faults.contains("reply-crc=") {
         assert!(seen.resends > 0, "{faults}: {seen:?}");

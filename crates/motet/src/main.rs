@@ -15,6 +15,7 @@ mod node;
 mod nodes;
 mod peak;
 mod run;
+mod s3g;
 
 use clap::{Parser, Subcommand};
 use motet_planner::ranges;
@@ -105,10 +106,12 @@ enum Cmd {
         /// No progress bar or summary.
         #[arg(long, short)]
         quiet: bool,
-        /// Which nodes run the job: simulated in this process (render and
-        /// report), node processes started for the run, or the paired nodes.
-        #[arg(long, value_enum, default_value = "sim")]
-        nodes: netrun::NodesMode,
+        /// Which nodes run the job: `sim` (simulated in this process: render
+        /// and report), `spawn` (node processes started for the run),
+        /// `paired` (the paired nodes), or `s3g:PORT[@BAUD]` (the whole
+        /// machine is a MakerBot-style S3G bot on a serial port; docs/compat.md).
+        #[arg(long, default_value = "sim", value_parser = s3g::nodes_arg)]
+        nodes: s3g::NodesArg,
         /// With --nodes spawn|paired: run time this many times faster than
         /// real time (nodes started by hand need the same --time-scale).
         #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
@@ -176,6 +179,13 @@ enum Cmd {
         /// Exit after this many seconds without a frame from a host.
         #[arg(long, value_parser = flags::number(ranges::WAIT_S))]
         idle_exit: Option<f64>,
+        /// With --type s3g: misbehave, e.g. `crc=5,full=3,garbage=7,generic=9,reply-crc=4,ack-crc=20,silent-after=100`
+        /// (every N-th packet).
+        #[arg(long)]
+        faults: Option<String>,
+        /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
+        #[arg(long)]
+        record: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -295,8 +305,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             lead_ms,
             sync_ms,
         } => match nodes {
-            netrun::NodesMode::Sim => run::run(&machine, &job, out, allow_unknown, quiet),
-            mode => netrun::run(netrun::NetArgs {
+            s3g::NodesArg::S3g(port, baud) => {
+                s3g::run(&machine, &job, out, allow_unknown, quiet, (&port, baud))
+            }
+            s3g::NodesArg::Mode(netrun::NodesMode::Sim) => {
+                run::run(&machine, &job, out, allow_unknown, quiet)
+            }
+            s3g::NodesArg::Mode(mode) => netrun::run(netrun::NetArgs {
                 machine_path: &machine,
                 job_path: &job,
                 out,
@@ -322,6 +337,33 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             job: job.as_deref(),
         }),
         Cmd::Node {
+            kind,
+            listen,
+            announce,
+            time_scale,
+            idle_exit,
+            faults,
+            record,
+            quiet,
+            ..
+        } if kind == "s3g" => s3g::bot(s3g::BotArgs {
+            listen,
+            announce,
+            time_scale,
+            idle_exit,
+            faults,
+            record,
+            quiet,
+        }),
+        Cmd::Node {
+            faults: Some(_), ..
+        }
+        | Cmd::Node {
+            record: Some(_), ..
+        } => {
+            anyhow::bail!("--faults and --record are for simulated S3G bots (--type s3g)")
+        }
+        Cmd::Node {
             sim: _,
             kind,
             listen,
@@ -332,6 +374,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             time_scale,
             auto_press,
             idle_exit,
+            faults: _,
+            record: _,
             quiet,
         } => node::node(node::NodeArgs {
             kind,

@@ -43,7 +43,10 @@ impl Faults {
                 why,
             };
             let (name, n) = item.split_once('=').ok_or_else(|| err("no `=N`"))?;
-            let n: u64 = n.trim().parse().map_err(|_| err("N is not a whole number"))?;
+            let n: u64 = n
+                .trim()
+                .parse()
+                .map_err(|_| err("N is not a whole number"))?;
             if n == 0 {
                 return Err(err("N must be at least 1"));
             }
@@ -75,7 +78,10 @@ mod tests {
     #[test]
     fn parses_and_refuses() {
         let f = Faults::parse("crc=7, full=3,silent-after=40").unwrap();
-        assert_eq!((f.crc, f.full, f.silent_after), (Some(7), Some(3), Some(40)));
+        assert_eq!(
+            (f.crc, f.full, f.silent_after),
+            (Some(7), Some(3), Some(40))
+        );
         assert_eq!(Faults::parse("").unwrap(), Faults::default());
         for bad in ["crc", "crc=0", "crc=x", "noise=3"] {
             let e = Faults::parse(bad).unwrap_err();

@@ -30,7 +30,11 @@ impl Heater {
 
     /// Lets `dt_s` seconds pass.
     pub fn advance(&mut self, dt_s: f64) {
-        let goal = if self.target > 0.0 { self.target } else { AMBIENT_C };
+        let goal = if self.target > 0.0 {
+            self.target
+        } else {
+            AMBIENT_C
+        };
         let k = 1.0 - (-dt_s.max(0.0) / self.tau_s).exp();
         self.temp += (goal - self.temp) * k;
         // A lag never arrives; a real controller settles on its target.

@@ -252,7 +252,10 @@ impl Bot {
     }
 
     fn tool_action(&mut self, tool: u8, s: u8, data: &[u8]) {
-        let temp = || data.get(..2).map(|b| i16::from_le_bytes([b[0], b[1]]) as f64);
+        let temp = || {
+            data.get(..2)
+                .map(|b| i16::from_le_bytes([b[0], b[1]]) as f64)
+        };
         match (s, temp()) {
             (sub::SET_TEMP, Some(c)) => self.heater(HeaterId::Tool(tool)).target = c,
             (sub::SET_PLATFORM_TEMP, Some(c)) => self.heater(HeaterId::Platform).target = c,

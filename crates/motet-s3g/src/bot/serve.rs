@@ -129,7 +129,14 @@ pub fn serve<P: Read + Write>(
     while keep_going(served) {
         let n = match port.read(&mut buf) {
             Ok(n) => n,
-            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => 0,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                ) =>
+            {
+                0
+            }
             Err(e) => return Err(e),
         };
         let t = now();
