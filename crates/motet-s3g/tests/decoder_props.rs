@@ -17,21 +17,15 @@ fn packets(d: &[Decoded]) -> Vec<&Vec<u8>> {
 fn command() -> impl Strategy<Value = Command> {
     let steps = prop::array::uniform5(any::<i32>());
     prop_oneof![
-        (steps.clone(), any::<u32>(), 0u8..32).prop_map(|(steps, us, relative)| {
+        (steps, any::<u32>(), 0u8..32).prop_map(|(steps, us, relative)| {
             Command::PointNew(PointNew {
                 steps,
                 us,
                 relative,
             })
         }),
-        (
-            steps.clone(),
-            any::<u32>(),
-            0u8..32,
-            -1e6f32..1e6,
-            any::<u16>()
-        )
-            .prop_map(|(steps, dda_rate, relative, distance, feedrate_x64)| {
+        (steps, any::<u32>(), 0u8..32, -1e6f32..1e6, any::<u16>()).prop_map(
+            |(steps, dda_rate, relative, distance, feedrate_x64)| {
                 Command::PointAccel(PointAccel {
                     steps,
                     dda_rate,
@@ -39,7 +33,8 @@ fn command() -> impl Strategy<Value = Command> {
                     distance,
                     feedrate_x64,
                 })
-            }),
+            }
+        ),
         (
             any::<u8>(),
             any::<u8>(),

@@ -82,7 +82,7 @@ pub fn run(
     let started = Instant::now();
     let mut driver = Driver::connect(port, &machine, DriverConfig::default())
         .with_context(|| format!("--nodes s3g:{port_path}"))?;
-    driver.on_pause(Box::new(|optional| pause(optional)));
+    driver.on_pause(Box::new(pause));
     let mut reader = JobReader::open(&machine, job_path, &opts)?;
     for c in reader.by_ref() {
         let c = c?;

@@ -223,3 +223,101 @@ fn refuses_a_machine_that_is_not_a_bot() {
     let (ok, _, err) = motet(&["run", MACHINE, JOB, "--nodes", "s3g:"]);
     assert!(!ok && err.contains("s3g:PORT[@BAUD]"), "{err}");
 }
+
+/// Whether Debian's `gpx` is here; under CI it must be (scripts/test
+/// installs it), elsewhere its tests say they are skipped.
+fn have_gpx(test: &str) -> bool {
+    if Command::new("gpx").arg("-?").output().is_ok() {
+        return true;
+    }
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "gpx is missing under CI: scripts/test installs it (apt-get install gpx)"
+    );
+    eprintln!("{test}: SKIPPED, gpx is not installed (apt-get install gpx)");
+    false
+}
+
+const GPX_JOB: &str = "crates/motet/tests/data/gpx-square.gcode";
+
+/// gpx's X3G for the test job (commands without framing), and the
+/// commands motet reads from it.
+fn gpx_x3g(dir: &Path) -> Vec<motet_s3g::Command> {
+    let x3g = dir.join("square.x3g");
+    let out = Command::new("gpx")
+        .args(["-m", "r2h"])
+        .arg(root().join(GPX_JOB))
+        .arg(&x3g)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "gpx: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&x3g).unwrap();
+    motet_s3g::stream::read_commands(&bytes).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn reads_every_command_gpx_writes() {
+    if !have_gpx("reads_every_command_gpx_writes") {
+        return;
+    }
+    let dir = scratch("s3g", "gpx-file");
+    let cmds = gpx_x3g(dir.path());
+    let count = |code: u8| cmds.iter().filter(|c| c.code() == code).count();
+    // Five moves and the homing's set position, heaters and waits, the
+    // fan, the dwell: each a known command that reads back as written.
+    assert!(count(155) >= 5, "{cmds:?}");
+    assert!(
+        count(136) >= 4 && count(135) >= 1 && count(133) >= 1,
+        "{cmds:?}"
+    );
+    for c in &cmds {
+        let p = c.encode().unwrap();
+        assert_eq!(&motet_s3g::Command::decode(&p).unwrap(), c);
+        assert!(motet_s3g::command::describe(c.code()).is_some());
+    }
+}
+
+#[test]
+fn gpx_drives_the_simulated_bot() {
+    if !have_gpx("gpx_drives_the_simulated_bot") {
+        return;
+    }
+    let dir = scratch("s3g", "gpx-serial");
+    let cmds = gpx_x3g(dir.path());
+    // gpx waits 2 s after opening the port: the bot stays longer.
+    let bot = Bot::start(dir.path(), "", "4");
+    let out = Command::new("gpx")
+        .args(["-m", "r2h", "-s"])
+        .arg(root().join(GPX_JOB))
+        .arg(&bot.port)
+        .output()
+        .unwrap();
+    let record = bot.record.clone();
+    let said = bot.finish();
+    assert!(
+        out.status.success(),
+        "gpx: {}\nbot: {said}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // "… N good packets, M CRC errors …": every packet gpx framed checked
+    // out (a wrong CRC would have made every one a mismatch).
+    let figure = |what: &str| -> u64 {
+        let at = said
+            .find(what)
+            .unwrap_or_else(|| panic!("{what} in {said}"));
+        said[..at]
+            .split_whitespace()
+            .last()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(figure(" CRC errors"), 0, "{said}");
+    assert!(figure(" good packets") >= cmds.len() as u64, "{said}");
+    let points = cmds.iter().filter(|c| c.code() == 155).count();
+    assert_eq!(recorded(&record).len(), points, "{said}");
+}
