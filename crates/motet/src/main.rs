@@ -336,59 +336,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine: machine.as_deref(),
             job: job.as_deref(),
         }),
-        Cmd::Node {
-            kind,
-            listen,
-            announce,
-            time_scale,
-            idle_exit,
-            faults,
-            record,
-            quiet,
-            ..
-        } if kind == "s3g" => s3g::bot(s3g::BotArgs {
-            listen,
-            announce,
-            time_scale,
-            idle_exit,
-            faults,
-            record,
-            quiet,
-        }),
-        Cmd::Node {
-            faults: Some(_), ..
-        }
-        | Cmd::Node {
-            record: Some(_), ..
-        } => {
-            anyhow::bail!("--faults and --record are for simulated S3G bots (--type s3g)")
-        }
-        Cmd::Node {
-            sim: _,
-            kind,
-            listen,
-            announce,
-            state,
-            uid,
-            ppm,
-            time_scale,
-            auto_press,
-            idle_exit,
-            faults: _,
-            record: _,
-            quiet,
-        } => node::node(node::NodeArgs {
-            kind,
-            listen,
-            announce,
-            state,
-            uid,
-            ppm,
-            time_scale,
-            auto_press,
-            idle_exit,
-            quiet,
-        }),
+        cmd @ Cmd::Node { .. } => node_cmd(cmd),
         Cmd::Nodes { command } => nodes_cmd(command),
         Cmd::Check {
             machine,
@@ -442,6 +390,55 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }
+}
+
+/// `motet node`: a simulated motet node, or with `--type s3g` a simulated
+/// S3G bot.
+fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
+    let Cmd::Node {
+        sim: _,
+        kind,
+        listen,
+        announce,
+        state,
+        uid,
+        ppm,
+        time_scale,
+        auto_press,
+        idle_exit,
+        faults,
+        record,
+        quiet,
+    } = cmd
+    else {
+        unreachable!("dispatch passes `node` only")
+    };
+    if kind == "s3g" {
+        return s3g::bot(s3g::BotArgs {
+            listen,
+            announce,
+            time_scale,
+            idle_exit,
+            faults,
+            record,
+            quiet,
+        });
+    }
+    if faults.is_some() || record.is_some() {
+        anyhow::bail!("--faults and --record are for simulated S3G bots (--type s3g)");
+    }
+    node::node(node::NodeArgs {
+        kind,
+        listen,
+        announce,
+        state,
+        uid,
+        ppm,
+        time_scale,
+        auto_press,
+        idle_exit,
+        quiet,
+    })
 }
 
 /// `motet nodes ...`: the node management commands.
