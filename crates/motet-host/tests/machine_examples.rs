@@ -157,11 +157,7 @@ const EXAMPLES: &[Expect] = &[
             ("z_motor", "z", 400.0),
         ],
         tools: &[],
-        nodes: &[(
-            "bot",
-            &["x_motor", "y_motor", "z_motor", "a_motor"],
-            &[],
-        )],
+        nodes: &[("bot", &["x_motor", "y_motor", "z_motor", "a_motor"], &[])],
         start: &[0.0, 0.0, 0.0, 0.0],
         joint_limits: &[],
         // Half the slowest path axis (z, 19.5 mm/s).

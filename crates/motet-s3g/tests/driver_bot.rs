@@ -215,6 +215,19 @@ fn stops_clearly_when_the_bot_cannot_be_trusted() {
         "stopped answering",
     );
     check_stop(
+        "cancel-after=100",
+        |e| {
+            matches!(
+                e,
+                LinkError::Refused {
+                    reply: motet_s3g::ReplyCode::Cancelled,
+                    ..
+                }
+            )
+        },
+        "0x89 (build cancelled on the bot)",
+    );
+    check_stop(
         "ack-crc=10",
         |e| matches!(e, LinkError::LostActionReply { .. }),
         "cannot tell whether the bot queued it",

@@ -1,10 +1,12 @@
 //! Ways the simulated bot can be told to misbehave, for tests of the
-//! host's recovery: `garbage=N,crc=N,generic=N,full=N,reply-crc=N,ack-crc=N,silent-after=N`
-//! (every N-th packet; `silent-after`: none answered after the N-th).
+//! host's recovery: `garbage=N,crc=N,generic=N,full=N,reply-crc=N,ack-crc=N,cancel-after=N,silent-after=N`
+//! (every N-th packet; `cancel-after`: 0x89 to everything after the N-th,
+//! as when the build is cancelled on the bot's panel; `silent-after`: none
+//! answered after the N-th).
 
 /// A fault specification that does not parse.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("fault `{item}`: {why} (expected garbage=N, crc=N, generic=N, full=N, reply-crc=N, ack-crc=N or silent-after=N, N ≥ 1)")]
+#[error("fault `{item}`: {why} (expected garbage=N, crc=N, generic=N, full=N, reply-crc=N, ack-crc=N, cancel-after=N or silent-after=N, N ≥ 1)")]
 pub struct FaultError {
     /// The item.
     pub item: String,
@@ -29,6 +31,8 @@ pub struct Faults {
     /// Every N-th acknowledgement of an action corrupted on the way out
     /// (the action was queued; the host cannot know).
     pub ack_crc: Option<u64>,
+    /// 0x89 (build cancelled) to everything after this many packets.
+    pub cancel_after: Option<u64>,
     /// No answer to anything after this many packets.
     pub silent_after: Option<u64>,
 }
@@ -57,6 +61,7 @@ impl Faults {
                 "full" => &mut f.full,
                 "reply-crc" => &mut f.reply_crc,
                 "ack-crc" => &mut f.ack_crc,
+                "cancel-after" => &mut f.cancel_after,
                 "silent-after" => &mut f.silent_after,
                 _ => return Err(err("unknown fault")),
             };

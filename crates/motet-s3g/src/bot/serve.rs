@@ -73,6 +73,10 @@ impl Served {
             return None;
         }
         let fault = |code| Some(Reply::new(code, vec![]));
+        if f.cancel_after.is_some_and(|s| n > s) {
+            self.stats.faults += 1;
+            return fault(ReplyCode::Cancelled);
+        }
         let is_action = p[0] >= 128;
         if Faults::hits(f.crc, n) {
             self.stats.faults += 1;
@@ -94,7 +98,9 @@ impl Served {
         self.stats.replies = n;
         if Faults::hits(self.faults.garbage, n) {
             // Noise with a false start whose length swallows the reply's
-            // first bytes: the host's decoder must find its way back.
+            // first bytes: the host's decoder must find its way back. The
+            // false frame's CRC never matches what follows it here (a
+            // reply's length and code byte).
             self.stats.faults += 1;
             out.extend_from_slice(&[0x00, 0xFF, 0xD5, 0x03, 0x17]);
         }
