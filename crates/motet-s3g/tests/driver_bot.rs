@@ -135,6 +135,10 @@ fn check_clean(faults: &str) {
     assert_eq!(o.port_executed.len() as u64, s.points, "{faults}: reported");
     let dev = o.plan.max_deviation(&o.port_executed);
     assert!(dev <= 0.5, "{faults}: {dev} steps from the plan");
+    eprintln!(
+        "{faults:?}: {} points, at most {dev:.3} steps from the plan; {:?}",
+        s.points, s.link
+    );
     // The bot's clock ends where the plan ends.
     let end = o.port_executed.last().unwrap().clock_us as f64;
     assert!(

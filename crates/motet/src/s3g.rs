@@ -234,10 +234,11 @@ pub fn bot(a: BotArgs) -> Result<()> {
     )?;
     if !a.quiet {
         eprintln!(
-            "no host for {} s: exiting; {} points received, {} run, {} good packets, {} CRC errors, {} faults injected",
+            "no host for {} s: exiting; {} points received, {} run, {} times the queue ran dry after a point, {} good packets, {} CRC errors, {} faults injected",
             idle.unwrap_or(0.0),
             served.bot.points_received,
             served.bot.points_run,
+            served.bot.underruns,
             served.stats.packets,
             served.stats.crc_errors,
             served.stats.faults

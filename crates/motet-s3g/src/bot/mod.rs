@@ -71,7 +71,8 @@ pub struct Bot {
     pub executed: Vec<Executed>,
     /// Actions received, by command number.
     pub actions: HashMap<u8, u64>,
-    /// Times the queue ran dry between two points of a move.
+    /// Points after which the queue was empty (the job's last point is one;
+    /// any other is the host not keeping up).
     pub underruns: u64,
 }
 
