@@ -49,6 +49,18 @@ pub enum LinkError {
         /// Its name.
         name: &'static str,
     },
+    /// A query's replies arrived corrupted every time.
+    #[error(
+        "the replies to command {code} ({name}) arrived corrupted (CRC mismatch) {tries} times"
+    )]
+    Garbled {
+        /// The command.
+        code: u8,
+        /// Its name.
+        name: &'static str,
+        /// How many times it was sent.
+        tries: u32,
+    },
     /// The bot refused with a code that is not retried.
     #[error("the bot answered command {code} ({name}) with {reply}")]
     Refused {
@@ -83,6 +95,9 @@ pub enum LinkError {
     },
 }
 
+/// How long to wait for more after a frame that failed its CRC.
+const AFTER_BAD_FRAME: Duration = Duration::from_millis(50);
+
 /// What the link saw, for the run's report.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LinkStats {
@@ -109,6 +124,9 @@ pub struct LinkConfig {
     pub reply_timeout: Duration,
     /// Sends of one command before giving up.
     pub tries: u32,
+    /// Sends of a query that met silence (no reply frame at all) before
+    /// giving up: a bot that says nothing twice is gone.
+    pub silent_tries: u32,
     /// Pause between buffer-size polls while the buffer is full.
     pub poll_interval: Duration,
 }
@@ -116,8 +134,9 @@ pub struct LinkConfig {
 impl Default for LinkConfig {
     fn default() -> LinkConfig {
         LinkConfig {
-            reply_timeout: Duration::from_secs(1),
+            reply_timeout: Duration::from_secs(2),
             tries: 5,
+            silent_tries: 2,
             poll_interval: Duration::from_millis(5),
         }
     }
@@ -217,7 +236,7 @@ impl<P: Read + Write> Link<P> {
         let payload = cmd.encode()?;
         let packet = encode(&payload)?;
         let code = payload[0];
-        let mut tries = 0;
+        let (mut tries, mut silences) = (0, 0);
         loop {
             tries += 1;
             self.port.write_all(&packet)?;
@@ -233,11 +252,23 @@ impl<P: Read + Write> Link<P> {
                         name: name(code),
                     })
                 }
-                None if cmd.is_action() || tries >= self.config.tries => {
-                    return Err(LinkError::Silent {
+                None if self.decoder.crc_errors == crc_before => {
+                    silences += 1;
+                    if cmd.is_action() || silences >= self.config.silent_tries {
+                        return Err(LinkError::Silent {
+                            code,
+                            name: name(code),
+                            waited_s: self.config.reply_timeout.as_secs_f64(),
+                            tries,
+                        });
+                    }
+                    self.stats.resends += 1;
+                    continue;
+                }
+                None if tries >= self.config.tries => {
+                    return Err(LinkError::Garbled {
                         code,
                         name: name(code),
-                        waited_s: self.config.reply_timeout.as_secs_f64(),
                         tries,
                     })
                 }
@@ -279,12 +310,19 @@ impl<P: Read + Write> Link<P> {
         }
     }
 
-    /// The next good reply packet, or `None` when none came in time.
+    /// The next good reply packet, or `None` when none came in time, or
+    /// when a frame failed its CRC and nothing followed it for
+    /// [`AFTER_BAD_FRAME`] (the bot sends one reply per packet: waiting
+    /// longer is waiting for nothing).
     fn read_reply(&mut self) -> Result<Option<Reply>, LinkError> {
         let deadline = Instant::now() + self.config.reply_timeout;
         let mut buf = [0u8; 64];
         let mut found = Vec::new();
+        let mut bad_at: Option<Instant> = None;
         while Instant::now() < deadline {
+            if bad_at.is_some_and(|t| t.elapsed() > AFTER_BAD_FRAME) && !self.decoder.in_frame() {
+                break;
+            }
             let n = match self.port.read(&mut buf) {
                 Ok(n) => n,
                 Err(e)
@@ -303,6 +341,9 @@ impl<P: Read + Write> Link<P> {
                 Decoded::CrcMismatch { .. } => None,
             }) {
                 return Ok(Some(Reply::from_payload(p)));
+            }
+            if !found.is_empty() {
+                bad_at = Some(Instant::now());
             }
             found.clear();
         }

@@ -91,6 +91,7 @@ fn run(faults: &str) -> Outcome {
         link: LinkConfig {
             reply_timeout: Duration::from_millis(30),
             tries: 5,
+            silent_tries: 2,
             poll_interval: Duration::ZERO,
         },
         temperature_every: Duration::ZERO,

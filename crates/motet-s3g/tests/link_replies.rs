@@ -52,6 +52,15 @@ fn free(n: u32) -> Vec<u8> {
     reply(0x81, &n.to_le_bytes())
 }
 
+fn config() -> LinkConfig {
+    LinkConfig {
+        reply_timeout: Duration::from_millis(20),
+        tries: 5,
+        silent_tries: 2,
+        poll_interval: Duration::ZERO,
+    }
+}
+
 /// What a case ends with.
 enum End {
     Ok,
@@ -67,17 +76,12 @@ fn case(name: &str, answers: Vec<Vec<u8>>, end: End, sends: usize) {
         rx: Vec::new(),
         sent: Vec::new(),
     };
-    let config = LinkConfig {
-        reply_timeout: Duration::from_millis(20),
-        tries: 5,
-        poll_interval: Duration::ZERO,
-    };
     let point = Command::PointNew(PointNew {
         steps: [1, 2, 3, 4, 5],
         us: 1000,
         relative: 0,
     });
-    let r = Link::new(&mut port, config).action(&point, &mut |_| Ok(()));
+    let r = Link::new(&mut port, config()).action(&point, &mut |_| Ok(()));
     match (end, r) {
         (End::Ok, Ok(())) => {}
         (End::Err(is, words), Err(e)) => {
@@ -219,6 +223,16 @@ fn each_reply_code() {
         ),
         1,
     );
+    // A query met by silence is asked once more, then given up.
+    let mut port = Script {
+        answers: VecDeque::new(),
+        rx: Vec::new(),
+        sent: Vec::new(),
+    };
+    let mut link = Link::new(&mut port, config());
+    let e = link.buffer_free().unwrap_err();
+    assert!(matches!(e, LinkError::Silent { tries: 2, .. }), "{e:?}");
+    assert_eq!(port.sent, vec![2, 2]);
     // A query's corrupted reply is asked again.
     let mut bad_free = free(512);
     *bad_free.last_mut().unwrap() ^= 1;
