@@ -138,6 +138,35 @@ const EXAMPLES: &[Expect] = &[
         min_radius: 1.0,
     },
     Expect {
+        file: "replicator.toml",
+        kinematics: KinematicsKind::CARTESIAN,
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [0.0, 285.0], true, None),
+            ("y", [0.0, 152.0], true, None),
+            ("z", [0.0, 155.0], true, None),
+            ("e", [-INF, INF], false, None),
+        ],
+        joints: &["x", "y", "z", "e"],
+        // The Replicator 2's: 18-tooth GT2 pulleys, an 8 mm lead screw, a
+        // 10.58 mm drive gear (96.2752 steps/mm).
+        actuators: &[
+            ("a_motor", "e", 3200.0 / (PI * 10.58)),
+            ("x_motor", "x", 3200.0 / 36.0),
+            ("y_motor", "y", 3200.0 / 36.0),
+            ("z_motor", "z", 400.0),
+        ],
+        tools: &[],
+        nodes: &[("bot", &["x_motor", "y_motor", "z_motor", "a_motor"], &[])],
+        start: &[0.0, 0.0, 0.0, 0.0],
+        joint_limits: &[],
+        // Half the slowest path axis (z, 19.5 mm/s).
+        draw_feed: 9.75,
+        tolerance: 0.01,
+        junction_deviation: 0.05,
+        min_radius: 1.0,
+    },
+    Expect {
         file: "printer.toml",
         kinematics: KinematicsKind::CARTESIAN,
         profile: ProfileKind::Trapezoid,

@@ -15,6 +15,7 @@ mod node;
 mod nodes;
 mod peak;
 mod run;
+mod s3g;
 mod serve;
 
 use clap::{Parser, Subcommand};
@@ -106,10 +107,12 @@ struct RunArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     quiet: bool,
-    /// Which nodes run the job: simulated in this process (render and
-    /// report), node processes started for the run, or the paired nodes.
-    #[arg(long, value_enum, default_value = "sim")]
-    nodes: netrun::NodesMode,
+    /// Which nodes run the job: `sim` (simulated in this process: render
+    /// and report), `spawn` (node processes started for the run),
+    /// `paired` (the paired nodes), or `s3g:PORT[@BAUD]` (the whole
+    /// machine is a MakerBot-style S3G bot on a serial port; docs/compat.md).
+    #[arg(long, default_value = "sim", value_parser = s3g::nodes_arg)]
+    nodes: s3g::NodesArg,
     /// With --nodes spawn|paired: run time this many times faster than
     /// real time (nodes started by hand need the same --time-scale).
     #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
@@ -184,6 +187,13 @@ enum Cmd {
         /// Exit after this many seconds without a frame from a host.
         #[arg(long, value_parser = flags::number(ranges::WAIT_S))]
         idle_exit: Option<f64>,
+        /// With --type s3g: misbehave, e.g. `crc=5,full=3,garbage=7,generic=9,reply-crc=4,ack-crc=20,silent-after=100`
+        /// (every N-th packet).
+        #[arg(long)]
+        faults: Option<String>,
+        /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
+        #[arg(long)]
+        record: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -299,7 +309,7 @@ fn main() -> std::process::ExitCode {
 fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
     let placement = a.place.placement()?;
     match a.nodes {
-        netrun::NodesMode::Sim => run::run(
+        s3g::NodesArg::Mode(netrun::NodesMode::Sim) => run::run(
             &a.machine,
             &a.job,
             a.out,
@@ -314,7 +324,15 @@ fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
         _ if placement != Placement::default() => {
             anyhow::bail!("--fit, --scale, --rotate and --origin work with --nodes sim only")
         }
-        mode => netrun::run(netrun::NetArgs {
+        s3g::NodesArg::S3g(port, baud) => s3g::run(
+            &a.machine,
+            &a.job,
+            a.out,
+            a.allow_unknown,
+            a.quiet,
+            (&port, baud),
+        ),
+        s3g::NodesArg::Mode(mode) => netrun::run(netrun::NetArgs {
             machine_path: &a.machine,
             job_path: &a.job,
             out: a.out,
@@ -344,30 +362,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine: machine.as_deref(),
             job: job.as_deref(),
         }),
-        Cmd::Node {
-            sim: _,
-            kind,
-            listen,
-            announce,
-            state,
-            uid,
-            ppm,
-            time_scale,
-            auto_press,
-            idle_exit,
-            quiet,
-        } => node::node(node::NodeArgs {
-            kind,
-            listen,
-            announce,
-            state,
-            uid,
-            ppm,
-            time_scale,
-            auto_press,
-            idle_exit,
-            quiet,
-        }),
+        cmd @ Cmd::Node { .. } => node_cmd(cmd),
         Cmd::Nodes { command } => nodes_cmd(command),
         Cmd::Check {
             machine,
@@ -430,6 +425,55 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Cmd::BenchWire(args) => bench_wire::bench_wire(args),
         Cmd::BenchNet(args) => bench_net::bench_net(args),
     }
+}
+
+/// `motet node`: a simulated motet node, or with `--type s3g` a simulated
+/// S3G bot.
+fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
+    let Cmd::Node {
+        sim: _,
+        kind,
+        listen,
+        announce,
+        state,
+        uid,
+        ppm,
+        time_scale,
+        auto_press,
+        idle_exit,
+        faults,
+        record,
+        quiet,
+    } = cmd
+    else {
+        unreachable!("dispatch passes `node` only")
+    };
+    if kind == "s3g" {
+        return s3g::bot(s3g::BotArgs {
+            listen,
+            announce,
+            time_scale,
+            idle_exit,
+            faults,
+            record,
+            quiet,
+        });
+    }
+    if faults.is_some() || record.is_some() {
+        anyhow::bail!("--faults and --record are for simulated S3G bots (--type s3g)");
+    }
+    node::node(node::NodeArgs {
+        kind,
+        listen,
+        announce,
+        state,
+        uid,
+        ppm,
+        time_scale,
+        auto_press,
+        idle_exit,
+        quiet,
+    })
 }
 
 /// `motet nodes ...`: the node management commands.
