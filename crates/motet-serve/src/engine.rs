@@ -33,8 +33,13 @@ pub trait Nodes: Send {
     fn figures(&self, now: u64) -> Vec<PeerFigures> {
         self.run().figures(now)
     }
-    /// Where the nodes are, for the person: `sim` (in this process).
+    /// Where the nodes are, for the person: `sim` (in this process),
+    /// `spawn` (node processes this server started) or `paired`.
     fn kind(&self) -> &'static str;
+    /// Node `k`'s firmware version, `major.minor.patch`.
+    fn firmware(&self, k: usize) -> String;
+    /// The link node `k` is reached on (`memory` for in-process nodes).
+    fn link(&self, k: usize) -> String;
 }
 
 /// Settings of a server's runs: a short lead, short windows and moves
@@ -100,5 +105,88 @@ impl Nodes for SimNodes {
 
     fn kind(&self) -> &'static str {
         "sim"
+    }
+
+    fn firmware(&self, k: usize) -> String {
+        self.net.nodes.get(k).map_or_else(String::new, |n| {
+            version(n.node.endpoint.services().info().firmware)
+        })
+    }
+
+    fn link(&self, _k: usize) -> String {
+        "memory".into()
+    }
+}
+
+fn version(v: motet_wire::service::Version) -> String {
+    format!("{}.{}.{}", v.major, v.minor, v.patch)
+}
+
+/// Nodes on real links (UDP, serial, CAN): node processes this server
+/// started, or the machine's paired nodes. The links and what each node
+/// said it is come from a [`motet_net::session::Session`]; the server's
+/// clock is the runs' host clock.
+pub struct LinkedNodes {
+    run: NetRun,
+    cfg: NetConfig,
+    session: motet_net::session::Session,
+    kind: &'static str,
+}
+
+impl LinkedNodes {
+    /// The session's nodes, connecting and idle at `start`. `kind` says
+    /// where they are (`spawn` or `paired`).
+    pub fn new(
+        machine: &Machine,
+        mut session: motet_net::session::Session,
+        start: Point,
+        cfg: NetConfig,
+        kind: &'static str,
+    ) -> LinkedNodes {
+        let peers = std::mem::take(&mut session.peers);
+        LinkedNodes {
+            run: NetRun::new(machine, Vec::new(), peers, start, cfg, None),
+            cfg,
+            session,
+            kind,
+        }
+    }
+}
+
+impl Nodes for LinkedNodes {
+    fn begin(&mut self, machine: &Machine, commands: Vec<Located<Command>>, start: Point) {
+        let peers = self.run.take_peers();
+        self.run = NetRun::new(machine, commands, peers, start, self.cfg, None);
+    }
+
+    fn advance(&mut self, now: u64) -> Result<u64, NetError> {
+        self.run.poll(now)?;
+        Ok(self.run.next_wakeup(now))
+    }
+
+    fn run(&self) -> &NetRun {
+        &self.run
+    }
+
+    fn run_mut(&mut self) -> &mut NetRun {
+        &mut self.run
+    }
+
+    fn kind(&self) -> &'static str {
+        self.kind
+    }
+
+    fn firmware(&self, k: usize) -> String {
+        self.session
+            .infos
+            .get(k)
+            .map_or_else(String::new, |i| version(i.firmware))
+    }
+
+    fn link(&self, k: usize) -> String {
+        self.session
+            .nodes
+            .get(k)
+            .map_or_else(String::new, |n| n.link.clone())
     }
 }

@@ -514,3 +514,48 @@ fn a_server_with_a_token_refuses_requests_without_it() {
     assert_eq!(code, 200);
     let _ = TcpStream::connect(s.base.trim_start_matches("http://")).unwrap();
 }
+
+#[test]
+fn hundreds_of_watchers_and_a_client_gone_mid_upload_leave_the_machine_safe() {
+    use std::io::Write;
+    let s = Running::start(None);
+    let ws = format!("{}/api/ws", s.base.replace("http", "ws"));
+    let mut watchers: Vec<_> = (0..200)
+        .map(|_| tungstenite::connect(&ws).unwrap().0)
+        .collect();
+    // A client that promises a large upload, sends a little and goes.
+    let addr = s.base.trim_start_matches("http://").to_string();
+    let mut c = TcpStream::connect(&addr).unwrap();
+    write!(
+        c,
+        "POST /api/jobs?name=half.gcode HTTP/1.1\r\nHost: {addr}\r\nContent-Length: 100000\r\n\r\nG0 X10\nG1 X"
+    )
+    .unwrap();
+    drop(c);
+    // Every watcher hears the machine; the API still answers quickly, and
+    // an emergency stop is taken.
+    for w in watchers.iter_mut() {
+        let msg = w.read().unwrap();
+        let v: Value = serde_json::from_str(msg.to_text().unwrap()).unwrap();
+        assert_eq!(v["type"], "status");
+    }
+    let t = Instant::now();
+    let (code, _) = s.call("POST", "/api/estop", None, "x");
+    assert_eq!(code, 200);
+    eprintln!(
+        "estop answered in {:?} with {} watchers",
+        t.elapsed(),
+        watchers.len()
+    );
+    s.until("stopped", Duration::from_secs(5));
+    drop(watchers);
+    // The half upload left nothing behind.
+    let (_, jobs) = s.call("GET", "/api/jobs", None, "a");
+    assert_eq!(jobs, json!([]));
+    assert_eq!(
+        std::fs::read_dir(s.dir.path().join("jobs"))
+            .unwrap()
+            .count(),
+        0
+    );
+}

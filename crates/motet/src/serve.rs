@@ -2,7 +2,9 @@
 //! WebSocket and the browser page (crates/motet-serve).
 
 use anyhow::{bail, Context};
-use motet_serve::{serve_config, Server, ServerConfig, SimNodes};
+use motet_net::pairing_file::{pairing_path, PairingFile};
+use motet_net::session::Session;
+use motet_serve::{serve_config, LinkedNodes, Nodes, Server, ServerConfig, SimNodes};
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -12,6 +14,10 @@ use std::path::PathBuf;
 pub enum NodesAt {
     /// Simulated in this process, on the server's clock.
     Sim,
+    /// Simulated node processes this server starts, on UDP.
+    Spawn,
+    /// The machine's paired nodes (`motet nodes pair`).
+    Paired,
 }
 
 /// `motet serve` arguments.
@@ -54,10 +60,13 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    let nodes = match args.nodes {
-        NodesAt::Sim => Box::new(SimNodes::new(&machine, machine.start, serve_config())),
-    };
+    let nodes = nodes(&machine, &args.machine, args.nodes)?;
     let name = machine.name.clone();
+    let where_ = match args.nodes {
+        NodesAt::Sim => "simulated",
+        NodesAt::Spawn => "spawned",
+        NodesAt::Paired => "paired",
+    };
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -74,12 +83,63 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         };
         let addr = listener.local_addr()?;
         let server = Server::start(machine, nodes, &cfg)?;
-        println!("motet serve: machine {name} on simulated nodes at http://{addr}/");
+        println!("motet serve: machine {name} on {where_} nodes at http://{addr}/");
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
         println!("motet serve: stopped");
         Ok(())
     })
+}
+
+/// The machine's nodes where the person said they are, reached and
+/// checked against the machine file.
+fn nodes(
+    machine: &motet_host::Machine,
+    machine_path: &std::path::Path,
+    at: NodesAt,
+) -> anyhow::Result<Box<dyn Nodes>> {
+    let clock = motet_net::clock::wall();
+    let session = match at {
+        NodesAt::Sim => {
+            return Ok(Box::new(SimNodes::new(
+                machine,
+                machine.start,
+                serve_config(),
+            )))
+        }
+        NodesAt::Spawn => {
+            let exe = std::env::current_exe().context("cannot find the motet executable")?;
+            // The nodes outlive a server killed without its clean-up by
+            // ten seconds of silence at most.
+            let extra = ["--idle-exit", "10", "--quiet"].map(String::from);
+            Session::spawn(machine, &exe, &extra, &clock)?
+        }
+        NodesAt::Paired => {
+            let path = pairing_path(machine_path);
+            if !path.exists() {
+                bail!(
+                    "{} does not exist: pair the nodes first with `motet nodes pair {} --link NODE=SPEC …`",
+                    path.display(),
+                    machine_path.display()
+                );
+            }
+            Session::paired(machine, &PairingFile::load(&path)?, &path, &clock)?
+        }
+    };
+    let kind = if at == NodesAt::Spawn {
+        "spawn"
+    } else {
+        "paired"
+    };
+    Ok(Box::new(LinkedNodes::new(
+        machine,
+        session,
+        machine.start,
+        // Real links have delay: the runs' lead covers twice the round
+        // trip whatever this says.
+        serve_config(),
+        kind,
+    )))
 }
 
 /// Resolves on Ctrl-C or SIGTERM.

@@ -68,7 +68,6 @@ pub(super) async fn nodes(State(sh): Shared_) -> Json<Value> {
     let s = sh.session();
     let figures = s.nodes().figures(now);
     let run = s.nodes().run();
-    let fw = motet_net::sim_node::sim_firmware();
     let m = s.machine();
     let list: Vec<Value> = m
         .nodes
@@ -80,9 +79,10 @@ pub(super) async fn nodes(State(sh): Shared_) -> Json<Value> {
                 "name": n.name,
                 "kind": s.nodes().kind(),
                 "link": run.peers().get(k).map(|p| format!("{:?}", p.link_state())),
+                "address": s.nodes().link(k),
                 "actuators": n.actuators.iter().map(|&a| m.actuators[a].name.clone()).collect::<Vec<_>>(),
                 "tools": n.tools.iter().map(|&t| m.tools[t].name.clone()).collect::<Vec<_>>(),
-                "firmware": format!("{}.{}.{}", fw.major, fw.minor, fw.patch),
+                "firmware": s.nodes().firmware(k),
                 "rtt_us": f.map(|f| f.rtt_us),
                 "retransmits": f.map(|f| f.retransmits),
                 "crc_errors": f.map(|f| f.crc_errors),
