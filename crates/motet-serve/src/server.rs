@@ -18,7 +18,7 @@ pub const PUSH_INTERVAL_US: u64 = 20_000;
 /// Longest the clock thread sleeps while the machine moves, µs.
 const ACTIVE_TICK_US: u64 = 1_000;
 /// Longest it sleeps while nothing moves, µs.
-const IDLE_TICK_US: u64 = 20_000;
+const IDLE_TICK_US: u64 = 50_000;
 
 /// How a server is set up.
 #[derive(Clone, Debug)]
@@ -162,19 +162,23 @@ impl Server {
 fn drive(shared: &Shared) {
     while !shared.stop.load(Ordering::Relaxed) {
         let now = shared.now();
-        let (next, moving) = {
+        let (next, busy) = {
             let mut s = shared.session.lock().unwrap_or_else(|e| e.into_inner());
             let next = s.tick(now);
-            (
-                next,
-                !matches!(
-                    s.state(),
-                    State::Idle | State::Stopped | State::Alarm | State::Paused
-                ),
-            )
+            let resting = matches!(
+                s.state(),
+                State::Idle | State::Stopped | State::Alarm | State::Paused
+            );
+            (next, !resting || s.status_connecting())
         };
-        let most = if moving { ACTIVE_TICK_US } else { IDLE_TICK_US };
-        let wait = next.saturating_sub(shared.now()).clamp(100, most);
+        // At rest only the clock exchanges (every few hundred ms) are due:
+        // a run's own wakeups (every ms) matter only while it moves or
+        // connects.
+        let wait = if busy {
+            next.saturating_sub(shared.now()).clamp(100, ACTIVE_TICK_US)
+        } else {
+            IDLE_TICK_US
+        };
         std::thread::park_timeout(Duration::from_micros(wait));
     }
 }

@@ -224,6 +224,11 @@ impl Session {
         self.state
     }
 
+    /// The nodes' links are being set up and their clocks measured.
+    pub fn status_connecting(&self) -> bool {
+        matches!(self.nodes.run().phase(), Phase::Starting)
+    }
+
     /// The job on the machine (running, held or paused), if any.
     pub fn job_id(&self) -> Option<u64> {
         match &self.activity {
@@ -648,7 +653,7 @@ impl Session {
         Status {
             t_us: self.now,
             state: self.state,
-            connecting: matches!(self.nodes.run().phase(), Phase::Starting),
+            connecting: self.status_connecting(),
             position: p[..n].to_vec(),
             speed,
             job: self.job_progress(),

@@ -73,7 +73,14 @@ pub(crate) async fn push_status(sh: Arc<Shared>) {
     loop {
         tick.tick().await;
         if sh.updates.receiver_count() == 0 {
-            seen = sh.session().events.last_seq();
+            // Nobody listens: note where the events are, nothing more (the
+            // clock thread ticks the session).
+            seen = sh
+                .session
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .events
+                .last_seq();
             continue;
         }
         let (msg, last) = push_message(&sh, seen);
