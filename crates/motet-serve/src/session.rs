@@ -123,6 +123,22 @@ struct JobRun {
     prelude: usize,
     /// Where a held job continues (its command), once at rest.
     held_at: Option<usize>,
+    /// The job command the run ends after: the job's end, or a pause for
+    /// the person (M0, a pen change), where the job waits at rest for
+    /// resume.
+    end: usize,
+}
+
+/// The end of the part of `commands` that starts at `from`: just after the
+/// first pause for the person (M0, a pen change; optional stops are run
+/// through), or the end.
+fn part_end(commands: &[Located<Command>], from: usize) -> usize {
+    commands
+        .iter()
+        .enumerate()
+        .skip(from)
+        .find(|(_, c)| matches!(c.item, Command::Pause { optional: false }))
+        .map_or(commands.len(), |(i, _)| i + 1)
 }
 
 /// What the current run is.
@@ -266,6 +282,22 @@ impl Session {
                 if let Some(p) = self.nodes.run().position_at(f64::INFINITY) {
                     self.rest = p;
                 }
+                if let Activity::Job(j) = &mut self.activity {
+                    if j.end < j.job.commands.len() {
+                        // A pause in the job: it waits, at rest, for resume.
+                        let line = j.job.commands[j.end - 1].loc.line;
+                        j.held_at = Some(j.end);
+                        self.state = State::Paused;
+                        self.events.push(
+                            self.now,
+                            Level::Warn,
+                            format!(
+                                "the job pauses (line {line}): change the tool or pen, then resume"
+                            ),
+                        );
+                        return;
+                    }
+                }
                 let what = match std::mem::replace(&mut self.activity, Activity::None) {
                     Activity::Job(j) => format!("job {} ({}) finished", j.job.id, j.job.name),
                     Activity::Other(what) => format!("{what} finished"),
@@ -379,12 +411,14 @@ impl Session {
             Level::Info,
             format!("job {} ({}) started", job.id, job.name),
         );
-        let commands = job.commands.clone();
+        let end = part_end(&job.commands, 0);
+        let commands = job.commands[..end].to_vec();
         let run = JobRun {
             job,
             base: 0,
             prelude: 0,
             held_at: None,
+            end,
         };
         self.begin(commands, Activity::Job(run), client);
         Ok(())
@@ -422,12 +456,17 @@ impl Session {
                 state,
             });
         };
-        let res = motet_net::resume::resume_at(&j.job.commands, self.rest, self.rest, at);
+        let mut res = motet_net::resume::resume_at(&j.job.commands, self.rest, self.rest, at);
+        let prelude = res.commands.len() - (j.job.commands.len() - res.command);
+        // Up to the next pause in the job.
+        let end = part_end(&j.job.commands, res.command);
+        res.commands.truncate(prelude + (end - res.command));
         let run = JobRun {
             job: j.job.clone(),
             base: res.command,
-            prelude: res.commands.len() - (j.job.commands.len() - res.command),
+            prelude,
             held_at: None,
+            end,
         };
         self.events.push(self.now, Level::Info, "resumed".into());
         self.begin(res.commands, Activity::Job(run), client);

@@ -308,3 +308,47 @@ fn jogs_tools_and_positions() {
     r.until(State::Idle, 5_000_000);
     assert_eq!(xy(&r.s), [3.0, 0.0]);
 }
+
+#[test]
+fn a_job_waits_at_its_pauses_for_the_person() {
+    let mut r = Rig::new("examples/plotter.toml");
+    let job = r.job("examples/jobs/two-pens.svg");
+    let pauses = job
+        .commands
+        .iter()
+        .filter(|c| matches!(c.item, motet_planner::Command::Pause { optional: false }))
+        .count();
+    assert!(pauses > 0, "the two-pen drawing has a pen change");
+    r.s.start(job.clone(), None).unwrap();
+    let mut waited = 0;
+    loop {
+        r.run_for(1_000);
+        match r.s.state() {
+            State::Paused => {
+                waited += 1;
+                let at = xy(&r.s);
+                r.run_for(200_000);
+                assert_eq!(xy(&r.s), at, "moved while waiting for the pen");
+                r.s.resume(None).unwrap();
+            }
+            State::Idle => break,
+            State::Running => {}
+            s => panic!("{s:?}"),
+        }
+        assert!(r.now < 600_000_000, "never finished");
+    }
+    assert_eq!(waited, pauses);
+    let end = last_target(&job);
+    let p = xy(&r.s);
+    assert!(
+        (p[0] - end[0]).hypot(p[1] - end[1]) < 1e-3,
+        "ended at {p:?}, not {end:?}"
+    );
+    let said = r.s.events.since(0);
+    assert_eq!(
+        said.iter()
+            .filter(|e| e.message.contains("the job pauses"))
+            .count(),
+        pauses
+    );
+}
