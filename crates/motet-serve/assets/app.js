@@ -287,6 +287,12 @@ async function refreshNodes() {
       for (const v of [n.name, n.kind, link, n.rtt_us, n.retransmits, n.clock_error_us == null ? "–" : n.clock_error_us.toFixed(1), n.firmware]) {
         const td = document.createElement("td"); td.textContent = v == null ? "–" : v; tr.appendChild(td);
       }
+      const td = document.createElement("td");
+      const b = document.createElement("button");
+      b.textContent = n.identifying ? "blinking" : "identify";
+      b.title = "Blink the node's LED for 5 s";
+      b.onclick = () => act("POST", "/api/nodes/" + encodeURIComponent(n.name) + "/identify", { seconds: 5 }).then(refreshNodes);
+      td.appendChild(b); tr.appendChild(td);
       return tr;
     }));
   } catch (_) { /* shown by the state badge */ }

@@ -40,6 +40,11 @@ pub trait Nodes: Send {
     fn firmware(&self, k: usize) -> String;
     /// The link node `k` is reached on (`memory` for in-process nodes).
     fn link(&self, k: usize) -> String;
+    /// Whether node `k`'s identify LED is on at `now`, where the server
+    /// can see it (in-process nodes); `None` elsewhere.
+    fn identifying(&self, _k: usize, _now: u64) -> Option<bool> {
+        None
+    }
 }
 
 /// Settings of a server's runs: a short lead, short windows and moves
@@ -115,6 +120,12 @@ impl Nodes for SimNodes {
 
     fn link(&self, _k: usize) -> String {
         "memory".into()
+    }
+
+    fn identifying(&self, k: usize, now: u64) -> Option<bool> {
+        // Loopback nodes' clocks equal the host's (no crystal error).
+        let n = self.net.nodes.get(k)?;
+        Some(n.node.endpoint.services().blinking(now))
     }
 }
 

@@ -101,6 +101,14 @@ pub enum ActionError {
     /// No job with this id.
     #[error("no job {0}")]
     UnknownJob(u64),
+    /// No node of this name.
+    #[error("no node `{name}` (the machine's nodes: {nodes})")]
+    UnknownNode {
+        /// The name asked for.
+        name: String,
+        /// The machine's nodes.
+        nodes: String,
+    },
 }
 
 /// Who asks: a client id (any string the client chose) for control.
@@ -656,6 +664,37 @@ impl Session {
                 name: name.to_string(),
                 axes: names(self.machine.axes.iter().map(|a| &a.name)),
             })
+    }
+
+    /// Lights node `name`'s identify LED for `seconds` (any client, any
+    /// state: it moves nothing).
+    pub fn identify(&mut self, name: &str, seconds: f64) -> Result<(), ActionError> {
+        let k = self
+            .machine
+            .nodes
+            .iter()
+            .position(|n| n.name == name)
+            .ok_or_else(|| ActionError::UnknownNode {
+                name: name.to_string(),
+                nodes: names(self.machine.nodes.iter().map(|n| &n.name)),
+            })?;
+        if !(0.0..=60.0).contains(&seconds) {
+            return Err(ActionError::OutOfRange {
+                what: "seconds",
+                value: seconds,
+                range: "0..=60".into(),
+            });
+        }
+        let ms = (seconds * 1e3).round() as u32;
+        if let Some(p) = self.nodes.run_mut().peer_mut(k) {
+            p.send_service(&motet_wire::service::ServiceRequest::Identify { ms });
+        }
+        self.events.push(
+            self.now,
+            Level::Info,
+            format!("identify node {name} for {seconds} s"),
+        );
+        Ok(())
     }
 
     /// Where the tool is now.

@@ -189,6 +189,20 @@ fn every_route_is_served_and_a_job_runs_from_upload_to_stop() {
     let (_, nodes) = s.call("GET", "/api/nodes", None, "a");
     for n in nodes.as_array().unwrap() {
         check_schema("Node", n);
+        assert_eq!(n["identifying"], false, "{n}");
+    }
+    // Identify lights the node's LED, in any state, for any client.
+    let (code, body) = s.call(
+        "POST",
+        "/api/nodes/ebb/identify",
+        Some(json!({"seconds": 2})),
+        "z",
+    );
+    assert_eq!(code, 200, "{body}");
+    let end = Instant::now() + Duration::from_secs(2);
+    while s.call("GET", "/api/nodes", None, "a").1[0]["identifying"] != true {
+        assert!(Instant::now() < end, "the node's LED never came on");
+        std::thread::sleep(Duration::from_millis(10));
     }
     let svg = std::fs::read(root().join("examples/jobs/drawing.svg")).unwrap();
     let (code, job) = s.upload("drawing.svg", &svg);
@@ -395,6 +409,22 @@ fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
             "line 1 column",
         ),
         ("POST", "/api/pause", None, "application/json", 409, "idle"),
+        (
+            "POST",
+            "/api/nodes/zz/identify",
+            Some(b"{}"),
+            "application/json",
+            404,
+            "no node `zz`",
+        ),
+        (
+            "POST",
+            "/api/nodes/ebb/identify",
+            Some(b"{\"seconds\": 99}"),
+            "application/json",
+            422,
+            "seconds",
+        ),
         ("POST", "/api/resume", None, "application/json", 409, "idle"),
         (
             "POST",

@@ -312,6 +312,12 @@ impl NetRun {
         &self.peers
     }
 
+    /// The link to machine node `k`, to send it a service request (identify)
+    /// between the run's own messages.
+    pub fn peer_mut(&mut self, k: usize) -> Option<&mut Peer> {
+        self.peers.get_mut(k)
+    }
+
     /// Takes the links to the nodes, for the next run on the same nodes
     /// (their clock estimates carry over, so it starts at once); this run
     /// is left with none and must not be polled again.

@@ -83,6 +83,7 @@ pub(super) async fn nodes(State(sh): Shared_) -> Json<Value> {
                 "actuators": n.actuators.iter().map(|&a| m.actuators[a].name.clone()).collect::<Vec<_>>(),
                 "tools": n.tools.iter().map(|&t| m.tools[t].name.clone()).collect::<Vec<_>>(),
                 "firmware": s.nodes().firmware(k),
+                "identifying": s.nodes().identifying(k, now),
                 "rtt_us": f.map(|f| f.rtt_us),
                 "retransmits": f.map(|f| f.retransmits),
                 "crc_errors": f.map(|f| f.crc_errors),
@@ -94,6 +95,28 @@ pub(super) async fn nodes(State(sh): Shared_) -> Json<Value> {
         })
         .collect();
     Json(json!(list))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct IdentifyBody {
+    #[serde(default = "five")]
+    seconds: f64,
+}
+
+fn five() -> f64 {
+    5.0
+}
+
+pub(super) async fn identify(
+    State(sh): Shared_,
+    Path(name): Path<String>,
+    body: Result<Json<IdentifyBody>, JsonRejection>,
+) -> Answer {
+    let Json(b) = body.map_err(bad_json)?;
+    sh.session().identify(&name, b.seconds)?;
+    sh.wake();
+    done()
 }
 
 #[derive(Deserialize)]

@@ -22,6 +22,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/machine"),
     ("get", "/api/status"),
     ("get", "/api/nodes"),
+    ("post", "/api/nodes/{name}/identify"),
     ("get", "/api/events"),
     ("get", "/api/jobs"),
     ("post", "/api/jobs"),
@@ -46,6 +47,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/machine", get(api::machine))
         .route("/api/status", get(api::status))
         .route("/api/nodes", get(api::nodes))
+        .route("/api/nodes/{name}/identify", post(api::identify))
         .route("/api/events", get(api::events))
         .route(
             "/api/jobs",
@@ -93,7 +95,7 @@ impl From<crate::session::ActionError> for ApiError {
         use crate::session::ActionError as E;
         let code = match e {
             E::WrongState { .. } | E::NotController => StatusCode::CONFLICT,
-            E::UnknownJob(_) => StatusCode::NOT_FOUND,
+            E::UnknownJob(_) | E::UnknownNode { .. } => StatusCode::NOT_FOUND,
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
             | E::OutOfRange { .. }
