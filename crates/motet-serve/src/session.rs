@@ -271,7 +271,11 @@ impl Session {
                 next
             }
             Err(e) => {
-                self.alarm(format!("run: {e}"));
+                // A run that cannot go on says so once, not at every tick.
+                let reason = format!("run: {e}");
+                if self.state != State::Alarm || self.reason.as_deref() != Some(&reason) {
+                    self.alarm(reason);
+                }
                 self.now + 50_000
             }
         }
@@ -437,8 +441,9 @@ impl Session {
         self.may_drive(client)?;
         match (&self.state, &self.activity) {
             (State::Running, Activity::Job(_)) => {
-                self.stop(Stopping::Hold, "feed hold");
-                self.state = State::Holding;
+                if self.stop(Stopping::Hold, "feed hold") {
+                    self.state = State::Holding;
+                }
                 Ok(())
             }
             (state, _) => Err(ActionError::WrongState {
@@ -486,8 +491,9 @@ impl Session {
         self.may_drive(client)?;
         match self.state {
             State::Running | State::Holding => {
-                self.stop(Stopping::Cancel, "cancel");
-                self.state = State::Stopping;
+                if self.stop(Stopping::Cancel, "cancel") {
+                    self.state = State::Stopping;
+                }
                 Ok(())
             }
             State::Paused => {
@@ -510,8 +516,9 @@ impl Session {
             .push(self.now, Level::Warn, "emergency stop requested".into());
         match self.state {
             State::Running | State::Holding | State::Stopping => {
-                self.stop(Stopping::EStop, "emergency stop");
-                self.state = State::Stopping;
+                if self.stop(Stopping::EStop, "emergency stop") {
+                    self.state = State::Stopping;
+                }
             }
             State::Paused | State::Idle => {
                 self.activity = Activity::None;
@@ -522,7 +529,15 @@ impl Session {
         }
     }
 
-    fn stop(&mut self, how: Stopping, reason: &str) {
+    /// Stops the run: `true` if the machine brakes on its path (the caller
+    /// says so in the state); `false` if the run had not started moving
+    /// (its nodes still connecting), so the session settles at once where
+    /// it was.
+    fn stop(&mut self, how: Stopping, reason: &str) -> bool {
+        if matches!(self.nodes.run().phase(), Phase::Starting) {
+            self.settle_unmoved(how, reason);
+            return false;
+        }
         // An emergency stop overrides a hold or a cancel under way.
         if self.stopping != Some(Stopping::EStop) {
             self.stopping = Some(how);
@@ -538,6 +553,37 @@ impl Session {
                     "{reason}: braking {ms:.0} ms after the request, on the trajectory's clock"
                 ),
             );
+        }
+        true
+    }
+
+    /// A stop before anything moved: the run is dropped for an empty one
+    /// on the same links, and the job (if held) continues from where it
+    /// would have started.
+    fn settle_unmoved(&mut self, how: Stopping, reason: &str) {
+        self.nodes.begin(&self.machine, Vec::new(), self.rest);
+        self.stopping = None;
+        self.events.push(
+            self.now,
+            Level::Info,
+            format!("{reason} before anything moved"),
+        );
+        match how {
+            Stopping::Hold => {
+                if let Activity::Job(j) = &mut self.activity {
+                    j.held_at = Some(j.base);
+                }
+                self.state = State::Paused;
+            }
+            Stopping::Cancel => {
+                self.activity = Activity::None;
+                self.state = State::Idle;
+            }
+            Stopping::EStop => {
+                self.activity = Activity::None;
+                self.state = State::Stopped;
+                self.reason = Some("emergency stop".into());
+            }
         }
     }
 

@@ -352,3 +352,60 @@ fn a_job_waits_at_its_pauses_for_the_person() {
         pauses
     );
 }
+
+#[test]
+fn stops_before_the_nodes_are_ready_settle_at_once_where_the_machine_was() {
+    // No settling here: the nodes' clocks are still being measured.
+    for how in ["pause", "cancel", "estop"] {
+        let m = motet_host::Machine::load(&root().join("examples/plotter.toml")).unwrap();
+        let nodes = Box::new(SimNodes::new(&m, m.start, serve_config()));
+        let mut s = Session::new(Arc::new(m), nodes);
+        let dir = tempfile::tempdir().unwrap();
+        let bytes = std::fs::read(root().join("examples/jobs/drawing.svg")).unwrap();
+        let job = Arc::new(
+            read_upload(
+                s.machine(),
+                dir.path(),
+                1,
+                "drawing.svg",
+                &bytes,
+                &Default::default(),
+            )
+            .unwrap(),
+        );
+        s.tick(1_000);
+        s.start(job.clone(), None).unwrap();
+        s.tick(2_000);
+        assert!(s.status().connecting);
+        match how {
+            "pause" => s.pause(None).unwrap(),
+            "cancel" => s.cancel(None).unwrap(),
+            _ => s.estop(),
+        }
+        let want = match how {
+            "pause" => State::Paused,
+            "cancel" => State::Idle,
+            _ => State::Stopped,
+        };
+        assert_eq!(s.state(), want, "{how}");
+        assert_eq!(s.position()[..2], [0.0, 0.0], "{how}");
+        // Ticking on does not turn it into an alarm or a finished job.
+        let mut now = 2_000;
+        while now < 6_000_000 {
+            now += 1_000;
+            s.tick(now);
+        }
+        assert_eq!(s.state(), want, "{how}: {:?}", s.events.since(0));
+        if how == "pause" {
+            s.resume(None).unwrap();
+            while s.state() != State::Idle {
+                now += 1_000;
+                s.tick(now);
+                assert!(now < 300_000_000, "never finished");
+            }
+            let end = last_target(&job);
+            let p = xy(&s);
+            assert!((p[0] - end[0]).hypot(p[1] - end[1]) < 1e-3, "{p:?} {end:?}");
+        }
+    }
+}
