@@ -131,6 +131,8 @@ struct JobRun {
     prelude: usize,
     /// Where a held job continues (its command), once at rest.
     held_at: Option<usize>,
+    /// When it started, µs (server time).
+    started_us: u64,
     /// The job command the run ends after: the job's end, or a pause for
     /// the person (M0, a pen change), where the job waits at rest for
     /// resume.
@@ -193,6 +195,24 @@ pub struct Status {
     pub event_seq: u64,
 }
 
+/// Jobs kept in the history.
+pub const KEPT_HISTORY: usize = 100;
+
+/// How a job ended.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JobOutcome {
+    /// The job's id.
+    pub id: u64,
+    /// Its file name.
+    pub name: String,
+    /// When it started, µs (server time).
+    pub started_us: u64,
+    /// When it ended.
+    pub ended_us: u64,
+    /// `finished`, `cancelled`, `emergency stop`, or the alarm's reason.
+    pub outcome: String,
+}
+
 /// The machine a server owns (see the module documentation).
 pub struct Session {
     machine: Arc<Machine>,
@@ -207,6 +227,7 @@ pub struct Session {
     now: u64,
     /// What happened, newest last, bounded.
     pub events: EventLog,
+    history: std::collections::VecDeque<JobOutcome>,
 }
 
 impl Session {
@@ -230,6 +251,7 @@ impl Session {
             controller: None,
             now: 0,
             events,
+            history: std::collections::VecDeque::new(),
         }
     }
 
@@ -310,11 +332,12 @@ impl Session {
                         return;
                     }
                 }
-                let what = match std::mem::replace(&mut self.activity, Activity::None) {
+                let what = match &self.activity {
                     Activity::Job(j) => format!("job {} ({}) finished", j.job.id, j.job.name),
                     Activity::Other(what) => format!("{what} finished"),
                     Activity::None => "run finished".into(),
                 };
+                self.end_activity("finished");
                 self.events.push(self.now, Level::Info, what);
                 self.state = State::Idle;
                 self.stopping = None;
@@ -328,7 +351,7 @@ impl Session {
         self.rest = info.point;
         let stopping = self.stopping.take();
         if !info.all_at_rest() {
-            self.activity = Activity::None;
+            self.end_activity("lost: the machine may have moved");
             return self.alarm(info.reason.clone());
         }
         match stopping {
@@ -342,7 +365,7 @@ impl Session {
                     .push(self.now, Level::Info, "held at rest on the path".into());
             }
             Some(Stopping::Cancel) => {
-                self.activity = Activity::None;
+                self.end_activity("cancelled");
                 self.state = State::Idle;
                 self.events.push(
                     self.now,
@@ -351,7 +374,7 @@ impl Session {
                 );
             }
             Some(Stopping::EStop) => {
-                self.activity = Activity::None;
+                self.end_activity("emergency stop");
                 self.state = State::Stopped;
                 self.reason = Some("emergency stop".into());
                 self.events.push(
@@ -361,13 +384,36 @@ impl Session {
                 );
             }
             None => {
-                self.activity = Activity::None;
+                self.end_activity("stopped by the run");
                 self.alarm(info.reason);
             }
         }
     }
 
+    /// The current run's activity is over; a job's outcome goes into the
+    /// history.
+    fn end_activity(&mut self, outcome: &str) {
+        if let Activity::Job(j) = std::mem::replace(&mut self.activity, Activity::None) {
+            if self.history.len() == KEPT_HISTORY {
+                self.history.pop_front();
+            }
+            self.history.push_back(JobOutcome {
+                id: j.job.id,
+                name: j.job.name.clone(),
+                started_us: j.started_us,
+                ended_us: self.now,
+                outcome: outcome.to_string(),
+            });
+        }
+    }
+
+    /// The jobs that ended, oldest first (the newest [`KEPT_HISTORY`]).
+    pub fn history(&self) -> impl Iterator<Item = &JobOutcome> {
+        self.history.iter()
+    }
+
     fn alarm(&mut self, reason: String) {
+        self.end_activity(&format!("alarm: {reason}"));
         self.events
             .push(self.now, Level::Error, format!("alarm: {reason}"));
         self.reason = Some(reason);
@@ -431,6 +477,7 @@ impl Session {
             prelude: 0,
             held_at: None,
             end,
+            started_us: self.now,
         };
         self.begin(commands, Activity::Job(run), client);
         Ok(())
@@ -480,6 +527,7 @@ impl Session {
             prelude,
             held_at: None,
             end,
+            started_us: j.started_us,
         };
         self.events.push(self.now, Level::Info, "resumed".into());
         self.begin(res.commands, Activity::Job(run), client);
@@ -497,7 +545,7 @@ impl Session {
                 Ok(())
             }
             State::Paused => {
-                self.activity = Activity::None;
+                self.end_activity("cancelled");
                 self.state = State::Idle;
                 self.events.push(self.now, Level::Info, "cancelled".into());
                 Ok(())
@@ -521,7 +569,7 @@ impl Session {
                 }
             }
             State::Paused | State::Idle => {
-                self.activity = Activity::None;
+                self.end_activity("emergency stop");
                 self.state = State::Stopped;
                 self.reason = Some("emergency stop".into());
             }
@@ -576,11 +624,11 @@ impl Session {
                 self.state = State::Paused;
             }
             Stopping::Cancel => {
-                self.activity = Activity::None;
+                self.end_activity("cancelled");
                 self.state = State::Idle;
             }
             Stopping::EStop => {
-                self.activity = Activity::None;
+                self.end_activity("emergency stop");
                 self.state = State::Stopped;
                 self.reason = Some("emergency stop".into());
             }

@@ -275,6 +275,11 @@ fn every_route_is_served_and_a_job_runs_from_upload_to_stop() {
             "no event {want:?} in {said:?}"
         );
     }
+    let (_, history) = s.call("GET", "/api/history", None, "a");
+    assert_eq!(history.as_array().unwrap().len(), 1, "{history}");
+    check_schema("JobOutcome", &history[0]);
+    assert_eq!(history[0]["outcome"], "emergency stop");
+    assert_eq!(history[0]["id"], id);
     let (code, _) = s.call("POST", "/api/unlock", None, "a");
     assert_eq!(code, 200);
     let (code, body) = s.call(

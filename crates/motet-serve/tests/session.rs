@@ -179,6 +179,13 @@ fn run_script(script: Script) {
             );
             assert!(!near(at, end), "{script:?}: stopped at the job's end");
             assert!(r.s.status().job.is_none());
+            let outcomes: Vec<&str> = r.s.history().map(|h| h.outcome.as_str()).collect();
+            let want = if matches!(script, Script::Cancel(_)) {
+                "cancelled"
+            } else {
+                "emergency stop"
+            };
+            assert_eq!(outcomes, [want], "{script:?}");
             return;
         }
     }

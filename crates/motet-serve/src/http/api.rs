@@ -131,6 +131,11 @@ pub(super) async fn events(State(sh): Shared_, q: Result<Query<Since>, QueryReje
     Ok(Json(json!(sh.session().events.since(q.since))))
 }
 
+pub(super) async fn history(State(sh): Shared_) -> Json<Value> {
+    let s = sh.session();
+    Json(json!(s.history().collect::<Vec<_>>()))
+}
+
 fn job_json(j: &StoredJob) -> Value {
     let mut v = json!(j);
     v["bounds"] = json!(j.preview.bounds);

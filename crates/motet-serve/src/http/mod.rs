@@ -24,6 +24,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/nodes"),
     ("post", "/api/nodes/{name}/identify"),
     ("get", "/api/events"),
+    ("get", "/api/history"),
     ("get", "/api/jobs"),
     ("post", "/api/jobs"),
     ("get", "/api/jobs/{id}"),
@@ -49,6 +50,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/nodes", get(api::nodes))
         .route("/api/nodes/{name}/identify", post(api::identify))
         .route("/api/events", get(api::events))
+        .route("/api/history", get(api::history))
         .route(
             "/api/jobs",
             get(api::jobs)
