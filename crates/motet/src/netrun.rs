@@ -10,7 +10,7 @@ use motet_net::admin::AdminError;
 use motet_net::clock::{Clock, WallClock};
 use motet_net::digest::Digest;
 use motet_net::journal::{Journal, JournalWriter};
-use motet_net::pairing_file::{format_uid, pairing_path, PairingFile};
+use motet_net::pairing_file::{format_uid, pairing_path};
 use motet_net::resume::{parse_assumed, prove, Evidence, NodeSeen, ResumeError};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
 use motet_net::session::{locate, NodeAddr, Session, SessionError};
@@ -140,22 +140,12 @@ pub fn run(a: NetArgs) -> Result<()> {
             ];
             Session::spawn(machine, &exe, &extra, &motet_net::clock::wall())?
         }
-        NodesMode::Paired => {
-            let path = pairing_path(a.machine_path);
-            if !path.exists() {
-                bail!(
-                    "{} does not exist: pair the nodes first with `motet nodes pair {} --link NODE=SPEC …`",
-                    path.display(),
-                    a.machine_path.display()
-                );
-            }
-            Session::paired(
-                machine,
-                &PairingFile::load(&path)?,
-                &path,
-                &motet_net::clock::wall(),
-            )?
-        }
+        NodesMode::Paired => Session::paired(
+            machine,
+            &crate::nodes::paired(a.machine_path)?,
+            &pairing_path(a.machine_path),
+            &motet_net::clock::wall(),
+        )?,
         NodesMode::Sim => unreachable!("in-process runs do not come here"),
     };
     let identity = RunIdentity::new(files.machine_sha256, files.job_sha256);

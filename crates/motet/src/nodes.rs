@@ -226,7 +226,8 @@ fn own_device(devices: &[Device], uid: u64, node: &str, link: &str) -> Result<()
     )
 }
 
-fn paired(machine_path: &Path) -> Result<PairingFile> {
+/// The machine's pairing file, or an error that says how to make it.
+pub(crate) fn paired(machine_path: &Path) -> Result<PairingFile> {
     let path = pairing_path(machine_path);
     if !path.exists() {
         bail!(

@@ -2,7 +2,7 @@
 //! WebSocket and the browser page (crates/motet-serve).
 
 use anyhow::{bail, Context};
-use motet_net::pairing_file::{pairing_path, PairingFile};
+use motet_net::pairing_file::pairing_path;
 use motet_net::session::Session;
 use motet_serve::{serve_config, LinkedNodes, Nodes, Server, ServerConfig, SimNodes};
 use std::io::Write;
@@ -114,17 +114,12 @@ fn nodes(
             let extra = ["--idle-exit", "10", "--quiet"].map(String::from);
             Session::spawn(machine, &exe, &extra, &clock)?
         }
-        NodesAt::Paired => {
-            let path = pairing_path(machine_path);
-            if !path.exists() {
-                bail!(
-                    "{} does not exist: pair the nodes first with `motet nodes pair {} --link NODE=SPEC …`",
-                    path.display(),
-                    machine_path.display()
-                );
-            }
-            Session::paired(machine, &PairingFile::load(&path)?, &path, &clock)?
-        }
+        NodesAt::Paired => Session::paired(
+            machine,
+            &crate::nodes::paired(machine_path)?,
+            &pairing_path(machine_path),
+            &clock,
+        )?,
     };
     let kind = if at == NodesAt::Spawn {
         "spawn"

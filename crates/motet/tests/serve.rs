@@ -5,61 +5,28 @@
 
 mod common;
 
-use common::root;
 use serde_json::Value;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 struct Serve {
-    child: Child,
+    /// The server: it stops when this drops.
+    _served: common::Served,
     addr: String,
     banner: Vec<String>,
     _dir: tempfile::TempDir,
     dir: std::path::PathBuf,
 }
 
-impl Drop for Serve {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts `motet serve ARGS`; returns once it printed its address.
+/// Starts `motet serve ARGS` in a scratch folder of its own.
 fn serve(args: &[&str]) -> Serve {
     let dir = common::scratch("serve", "cli");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
-        .arg("serve")
-        .args(args)
-        .arg("--dir")
-        .arg(dir.path())
-        .current_dir(root())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let mut banner = Vec::new();
-    let addr = loop {
-        let line = lines
-            .next()
-            .expect("motet serve printed no address")
-            .unwrap();
-        banner.push(line.clone());
-        if let Some(w) = line.split_whitespace().find(|w| w.starts_with("http://")) {
-            break w
-                .trim_start_matches("http://")
-                .trim_end_matches('/')
-                .to_string();
-        }
-    };
-    // Keep draining stdout so the server never blocks on it.
-    std::thread::spawn(move || for _ in lines {});
+    let served = common::serve(args, dir.path());
     Serve {
-        child,
-        addr,
-        banner,
+        addr: served.addr.clone(),
+        banner: served.banner.clone(),
+        _served: served,
         dir: dir.path().to_path_buf(),
         _dir: dir,
     }

@@ -9,21 +9,10 @@
 mod common;
 
 use common::root;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::{Duration, Instant};
-
-/// The server, stopped with SIGTERM (as a service manager would) when
-/// dropped.
-struct Serve(Child);
-
-impl Drop for Serve {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn terminate(child: &mut Child) -> bool {
     // SAFETY: kill(2) on our own child's pid.
@@ -68,30 +57,12 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     );
     let dir = common::scratch("web", "serve");
     let started = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
-        .args([
-            "serve",
-            "examples/plotter.toml",
-            "--listen",
-            "127.0.0.1:0",
-            "--dir",
-        ])
-        .arg(dir.path())
-        .current_dir(root())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let banner = lines.next().unwrap().unwrap();
-    let url = banner
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .unwrap_or_else(|| panic!("no address in {banner:?}"))
-        .to_string();
-    let addr = url
-        .trim_start_matches("http://")
-        .trim_end_matches('/')
-        .to_string();
+    let mut serve = common::serve(
+        &["examples/plotter.toml", "--listen", "127.0.0.1:0"],
+        dir.path(),
+    );
+    let addr = serve.addr.clone();
+    let url = format!("http://{addr}/");
     while !answers(&addr, "/") {
         assert!(
             started.elapsed() < Duration::from_secs(10),
@@ -100,7 +71,6 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
         std::thread::sleep(Duration::from_millis(5));
     }
     let to_page = started.elapsed();
-    let mut serve = Serve(child);
 
     let shots = root().join("target/web");
     std::fs::create_dir_all(&shots).unwrap();
@@ -135,7 +105,7 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     assert_eq!(seen["phone_no_sideways_scroll"], true, "{seen}");
     assert!(shots.join("serve.png").exists());
     assert!(
-        terminate(&mut serve.0),
+        terminate(&mut serve.child),
         "motet serve did not stop cleanly on SIGTERM"
     );
 }

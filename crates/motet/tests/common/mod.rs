@@ -55,3 +55,54 @@ pub fn resume_to_done(out: &std::path::Path, extra: &[&str]) -> String {
     assert!(report.contains("\"outcome\": \"done\""), "{report}");
     stdout
 }
+
+/// `motet serve ARGS --dir DIR`, started in the repository root: the
+/// process (killed when dropped), its address (`HOST:PORT`), and the lines
+/// it printed up to the address (the token's among them).
+pub struct Served {
+    pub child: std::process::Child,
+    pub addr: String,
+    pub banner: Vec<String>,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn serve(args: &[&str], dir: &std::path::Path) -> Served {
+    use std::io::BufRead;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
+        .arg("serve")
+        .args(args)
+        .arg("--dir")
+        .arg(dir)
+        .current_dir(root())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    let mut banner = Vec::new();
+    let addr = loop {
+        let line = lines
+            .next()
+            .expect("motet serve printed no address")
+            .unwrap();
+        banner.push(line.clone());
+        if let Some(w) = line.split_whitespace().find(|w| w.starts_with("http://")) {
+            break w
+                .trim_start_matches("http://")
+                .trim_end_matches('/')
+                .to_string();
+        }
+    };
+    // Keep reading its output so it never blocks on a full pipe.
+    std::thread::spawn(move || for _ in lines {});
+    Served {
+        child,
+        addr,
+        banner,
+    }
+}
