@@ -74,11 +74,6 @@ impl PlanFeed {
         self.open && self.next_command >= self.commands.len()
     }
 
-    /// Whether it still takes commands.
-    pub fn is_open(&self) -> bool {
-        self.open
-    }
-
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
         (self.next_command, self.commands.len())

@@ -11,6 +11,7 @@
 pub mod auth;
 pub mod engine;
 pub mod events;
+pub mod grbl;
 mod http;
 pub mod jobs;
 pub mod preview;

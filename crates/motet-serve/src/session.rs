@@ -20,6 +20,10 @@ use motet_trajectory::Point;
 use serde::Serialize;
 use std::sync::Arc;
 
+mod machine_edit;
+mod stream;
+pub use stream::{StreamStatus, STREAM_BLOCKS};
+
 /// What the machine is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -129,6 +133,8 @@ struct JobRun {
 enum Activity {
     None,
     Job(JobRun),
+    /// Commands streamed a line at a time ([`stream`]).
+    Stream,
     Other(&'static str),
 }
 
@@ -181,6 +187,7 @@ pub struct Session {
     reason: Option<String>,
     controller: Option<String>,
     now: u64,
+    stream: stream::Stream,
     /// What happened, newest last, bounded.
     pub events: EventLog,
 }
@@ -205,6 +212,7 @@ impl Session {
             reason: None,
             controller: None,
             now: 0,
+            stream: stream::Stream::default(),
             events,
         }
     }
@@ -239,6 +247,7 @@ impl Session {
         match self.nodes.advance(self.now) {
             Ok(next) => {
                 self.follow();
+                self.stream_tick();
                 next
             }
             Err(e) => {
@@ -264,6 +273,10 @@ impl Session {
                 let what = match std::mem::replace(&mut self.activity, Activity::None) {
                     Activity::Job(j) => format!("job {} ({}) finished", j.job.id, j.job.name),
                     Activity::Other(what) => format!("{what} finished"),
+                    Activity::Stream => {
+                        self.stream_run_done();
+                        "streamed commands run, at rest".into()
+                    }
                     Activity::None => "run finished".into(),
                 };
                 self.events.push(self.now, Level::Info, what);
@@ -287,6 +300,9 @@ impl Session {
                 if let Activity::Job(j) = &mut self.activity {
                     let done = info.next_command.saturating_sub(j.prelude);
                     j.held_at = Some((j.base + done).min(j.job.commands.len()));
+                }
+                if let Activity::Stream = self.activity {
+                    self.stream_held(info.next_command);
                 }
                 self.state = State::Paused;
                 self.events
@@ -394,6 +410,7 @@ impl Session {
                 self.state = State::Holding;
                 Ok(())
             }
+            (State::Running, Activity::Stream) => self.stream_hold(),
             (state, _) => Err(ActionError::WrongState {
                 action: "pause",
                 state: *state,
@@ -405,6 +422,9 @@ impl Session {
     pub fn resume(&mut self, client: Client) -> Result<(), ActionError> {
         self.may_drive(client)?;
         let state = self.state;
+        if let Activity::Stream = self.activity {
+            return self.stream_resume();
+        }
         let Activity::Job(j) = &self.activity else {
             return Err(ActionError::WrongState {
                 action: "resume",
@@ -432,6 +452,10 @@ impl Session {
     /// Cancels the job (or jog): the machine brakes on its path and rests.
     pub fn cancel(&mut self, client: Client) -> Result<(), ActionError> {
         self.may_drive(client)?;
+        // Streamed commands not yet run go with what runs.
+        if matches!(self.state, State::Running | State::Holding) {
+            self.stream_clear();
+        }
         match self.state {
             State::Running | State::Holding => {
                 self.stop(Stopping::Cancel, "cancel");
@@ -439,6 +463,7 @@ impl Session {
                 Ok(())
             }
             State::Paused => {
+                self.stream_clear();
                 self.activity = Activity::None;
                 self.state = State::Idle;
                 self.events.push(self.now, Level::Info, "cancelled".into());
@@ -456,6 +481,7 @@ impl Session {
     pub fn estop(&mut self) {
         self.events
             .push(self.now, Level::Warn, "emergency stop requested".into());
+        self.stream_clear();
         match self.state {
             State::Running | State::Holding | State::Stopping => {
                 self.stop(Stopping::EStop, "emergency stop");

@@ -33,6 +33,11 @@ pub struct ServeArgs {
     /// Require the token on loopback too.
     #[arg(long)]
     token: bool,
+    /// Also be a grbl 1.1 device for G-code senders: `pty` (a
+    /// pseudo-terminal; its path is printed) or `tcp:ADDRESS:PORT`
+    /// (docs/compat.md). Same machine, same state as the web page.
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    grbl: Option<motet_serve::grbl::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -58,6 +63,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         NodesAt::Sim => Box::new(SimNodes::new(&machine, machine.start, serve_config())),
     };
     let name = machine.name.clone();
+    let grbl = args.grbl;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -75,6 +81,12 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         let addr = listener.local_addr()?;
         let server = Server::start(machine, nodes, &cfg)?;
         println!("motet serve: machine {name} on simulated nodes at http://{addr}/");
+        if let Some(port) = &grbl {
+            let at = server
+                .grbl(port)
+                .with_context(|| format!("--grbl {port:?}"))?;
+            println!("grbl: {at}");
+        }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
         println!("motet serve: stopped");
