@@ -172,6 +172,12 @@ impl Session {
         self.stream.run = commands.clone();
         self.stream.held_at = None;
         self.stream.runs += 1;
+        let n = self.stream.runs;
+        self.events.push(
+            self.now,
+            Level::Info,
+            format!("stream run {n} started from rest"),
+        );
         self.nodes.begin(&self.machine, commands, self.rest);
         self.nodes.run_mut().keep_feed_open();
         self.activity = Activity::Stream;
