@@ -130,6 +130,11 @@ impl Grbl {
         std::mem::take(&mut self.out)
     }
 
+    /// Whether a complete line waits in the receive buffer.
+    pub fn has_line(&self) -> bool {
+        self.rx.peek().is_some()
+    }
+
     /// Room left in the receive buffer, bytes.
     pub fn rx_free(&self) -> usize {
         self.rx.free()
