@@ -40,6 +40,10 @@ class Server:
         if self.url is None or self.pty is None:
             self.proc.kill()
             raise RuntimeError("motet serve printed no address or no grbl pty")
+        # The nodes' clocks settle for a few seconds after the start; motion
+        # asked for meanwhile waits, which would count as machine time.
+        while self.get("/api/status")["connecting"] and time.monotonic() < deadline:
+            time.sleep(0.05)
 
     def get(self, path):
         with urllib.request.urlopen(self.url + path, timeout=5) as r:
