@@ -336,8 +336,8 @@ impl Planner {
             let mut piece = *m;
             if k < pieces {
                 let f = k as f64 / pieces as f64;
-                for i in 0..MAX_AXES {
-                    piece.target[i] = start[i] + (m.target[i] - start[i]) * f;
+                for (t, (a, b)) in piece.target.iter_mut().zip(start.iter().zip(&m.target)) {
+                    *t = a + (b - a) * f;
                 }
             }
             self.push_piece(&piece)?;

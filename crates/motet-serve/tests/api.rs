@@ -273,12 +273,15 @@ fn every_route_is_served_and_a_job_runs_from_upload_to_stop() {
     s.until("idle", Duration::from_secs(10));
 }
 
+/// A refused request: method, path, body, content type, status, words in
+/// the error.
+type Refused<'a> = (&'a str, &'a str, Option<&'a [u8]>, &'a str, u16, &'a str);
+
 #[test]
 fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
     let s = Running::start(None);
     let outside = b"G0 X10 Y10\nG1 X9000 Y10 F600\n";
-    let cases: &[(&str, &str, Option<&[u8]>, &str, u16, &str)] = &[
-        // method, path, body, content type, status, words in the error
+    let cases: &[Refused] = &[
         (
             "POST",
             "/api/jobs?name=part.docx",
