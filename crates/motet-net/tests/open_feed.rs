@@ -8,14 +8,12 @@ use common::*;
 use motet_net::loopback::Loopback;
 use motet_net::{NetConfig, Phase};
 
+/// (steps, net position) per actuator.
+type Steps = Vec<(u64, i64)>;
+
 /// Streams `cmds` into an open run `chunk` commands per simulated step,
 /// pushing only the first `fed` of them, then closes it if all were fed.
-fn stream(
-    machine: &str,
-    job: &str,
-    chunk: usize,
-    fed: usize,
-) -> (Vec<(u64, i64)>, Vec<(u64, i64)>, Phase, Loopback) {
+fn stream(machine: &str, job: &str, chunk: usize, fed: usize) -> (Steps, Steps, Phase, Loopback) {
     let (m, cmds) = load(machine, job);
     let fed = fed.min(cmds.len());
     let want = simulated(&m, &cmds[..fed]);

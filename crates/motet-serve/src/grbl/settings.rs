@@ -129,7 +129,7 @@ pub fn check(
         11 if value > 0.0 && value <= file.junction_deviation => {
             Ok(Write::Machine { setting: n, value })
         }
-        110..=119 | 120..=129 => {
+        110..=129 => {
             let base = if n < 120 { 110 } else { 120 };
             let Some(i) = axis(base) else {
                 return Err((code::INVALID_STATEMENT, format!("${n}: the machine has no such axis")));
