@@ -361,3 +361,14 @@ proptest! {
         prop_assert_eq!(replies(&out).len(), complete_lines(&bytes), "{:?}", out);
     }
 }
+
+#[test]
+fn an_endless_line_is_refused_once_and_not_kept() {
+    let mut d = device();
+    let long = format!("G0 X1{}", "9".repeat(100_000));
+    d.g.receive(long.as_bytes(), &mut d.s);
+    assert!(d.g.wants_input(), "the overlong line's bytes are not kept");
+    let out = d.send(b"\nG0 X2\n");
+    assert_eq!(replies(&out), ["error:11", "ok"]);
+    assert_eq!(position(&d), [2.0, 0.0]);
+}

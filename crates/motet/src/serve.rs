@@ -84,7 +84,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         if let Some(port) = &grbl {
             let at = server
                 .grbl(port)
-                .with_context(|| format!("--grbl {port:?}"))?;
+                .with_context(|| format!("--grbl {port}"))?;
             println!("grbl: {at}");
         }
         std::io::stdout().flush()?;

@@ -9,6 +9,9 @@ use std::collections::VecDeque;
 pub const RX_BUFFER: usize = 128;
 /// Longest line, characters (its end not counted); longer → `error:11`.
 pub const MAX_LINE: usize = 80;
+/// Most bytes kept, complete lines waiting included: past this the port
+/// stops reading (the sender's writes wait) rather than drop anything.
+pub const MAX_KEPT: usize = 4096;
 
 /// A complete line.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -25,6 +28,8 @@ pub struct RxBuffer {
     bytes: VecDeque<u8>,
     /// A `\r` ended the last line: a `\n` right after it ends nothing.
     after_cr: bool,
+    /// Bytes of the line not yet ended.
+    open_len: usize,
 }
 
 impl RxBuffer {
@@ -41,7 +46,21 @@ impl RxBuffer {
         if b < 0x20 && b != b'\n' && b != b'\r' && b != b'\t' {
             return;
         }
+        if b == b'\n' || b == b'\r' {
+            self.open_len = 0;
+        } else if self.open_len > MAX_LINE {
+            // Already too long: it will be refused whole; the rest of it
+            // need not be kept (grbl drops it too).
+            return;
+        } else {
+            self.open_len += 1;
+        }
         self.bytes.push_back(b);
+    }
+
+    /// Whether more bytes may be taken ([`MAX_KEPT`]).
+    pub fn has_room(&self) -> bool {
+        self.bytes.len() < MAX_KEPT
     }
 
     /// Room left of [`RX_BUFFER`], bytes.
@@ -70,5 +89,6 @@ impl RxBuffer {
     pub fn clear(&mut self) {
         self.bytes.clear();
         self.after_cr = false;
+        self.open_len = 0;
     }
 }

@@ -130,6 +130,12 @@ impl Grbl {
         std::mem::take(&mut self.out)
     }
 
+    /// Whether the port should read more bytes: false while a sender that
+    /// does not count characters has filled [`lines::MAX_KEPT`].
+    pub fn wants_input(&self) -> bool {
+        self.rx.has_room()
+    }
+
     /// Whether a complete line waits in the receive buffer.
     pub fn has_line(&self) -> bool {
         self.rx.peek().is_some()

@@ -22,6 +22,15 @@ pub enum Port {
     Tcp(SocketAddr),
 }
 
+impl std::fmt::Display for Port {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Port::Pty => f.write_str("pty"),
+            Port::Tcp(a) => write!(f, "tcp:{a}"),
+        }
+    }
+}
+
 impl std::str::FromStr for Port {
     type Err = String;
 
@@ -34,9 +43,9 @@ impl std::str::FromStr for Port {
                 "{s:?}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)"
             ));
         };
-        addr.parse()
-            .map(Port::Tcp)
-            .map_err(|e| format!("{s:?}: {e} (expected tcp:ADDRESS:PORT, e.g. tcp:127.0.0.1:23)"))
+        addr.parse().map(Port::Tcp).map_err(|e| {
+            format!("{s:?}: {e}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)")
+        })
     }
 }
 
@@ -106,20 +115,27 @@ fn pump<T: Read + Write>(shared: &Shared, io: &mut T, g: &mut Grbl) -> io::Resul
     let mut buf = [0u8; 1024];
     let mut out: Vec<u8> = Vec::new();
     while !shared.stopped() {
-        let n = match io.read(&mut buf) {
-            Ok(0) => return Ok(()),
-            Ok(n) => n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::WouldBlock
-                        | io::ErrorKind::TimedOut
-                        | io::ErrorKind::Interrupted
-                ) =>
-            {
-                0
+        // A sender that does not count characters and has filled the
+        // buffer waits (its writes block) until lines are taken.
+        let n = if !g.wants_input() {
+            std::thread::sleep(READ_WAIT);
+            0
+        } else {
+            match io.read(&mut buf) {
+                Ok(0) => return Ok(()),
+                Ok(n) => n,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock
+                            | io::ErrorKind::TimedOut
+                            | io::ErrorKind::Interrupted
+                    ) =>
+                {
+                    0
+                }
+                Err(e) => return Err(e),
             }
-            Err(e) => return Err(e),
         };
         {
             let mut s = shared.session();
