@@ -410,7 +410,11 @@ impl Session {
                 self.state = State::Holding;
                 Ok(())
             }
-            (State::Running, Activity::Stream) => self.stream_hold(),
+            (State::Running, Activity::Stream) | (State::Idle, Activity::None)
+                if self.streaming() =>
+            {
+                self.stream_hold()
+            }
             (state, _) => Err(ActionError::WrongState {
                 action: "pause",
                 state: *state,

@@ -260,6 +260,31 @@ fn a_hold_stops_on_the_path_and_resume_ends_where_the_file_does() {
 }
 
 #[test]
+fn a_program_end_leaves_the_next_program_free_to_run() {
+    let mut d = device();
+    let out = d.send(b"G21 G90 G1 X5 F600\nM30\nG0 X3\nG91 G0 X1\n");
+    assert_eq!(replies(&out), ["ok"; 4]);
+    assert_eq!(position(&d), [4.0, 0.0]);
+}
+
+#[test]
+fn a_hold_before_the_first_move_starts_holds_it_there() {
+    // Before the queued line's run starts, and while its run waits for the
+    // nodes' clocks to settle.
+    for after_us in [0, 200_000] {
+        let mut d = device();
+        d.start(b"G21 G90 G0 X5\n");
+        d.wait(after_us);
+        d.send(b"!");
+        assert_eq!(d.s.state(), State::Paused, "{after_us}: {}", d.out);
+        assert_eq!(position(&d), [0.0, 0.0], "{after_us}");
+        d.send(b"G0 Y3\n");
+        d.send(b"~");
+        assert_eq!(position(&d), [5.0, 3.0], "{after_us}");
+    }
+}
+
+#[test]
 fn a_soft_reset_while_moving_brakes_on_the_path_and_raises_alarm_3() {
     let mut d = device();
     d.start(b"G21 G90 G1 F3000\nG1 X200 Y0\n");

@@ -283,6 +283,21 @@ impl Grbl {
             return Step::Reply(Err(errors::of_gcode(&e.message)));
         }
         let mut commands: Vec<Located<Command>> = self.interp.drain().collect();
+        if self.interp.ended() {
+            // M2/M30 ends a program, not the connection: the next line
+            // starts the next program (grbl resets its modes the same way).
+            self.restart_interpreter();
+            self.interp.set_machine_position(
+                commands
+                    .iter()
+                    .rev()
+                    .find_map(|c| match c.item {
+                        Command::Move(m) => Some(m.target),
+                        _ => None,
+                    })
+                    .unwrap_or(from),
+            );
+        }
         self.apply_overrides(&mut commands);
         for c in &commands {
             match c.item {

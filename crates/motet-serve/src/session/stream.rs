@@ -201,6 +201,16 @@ impl Session {
     /// into the queue while it is held.
     pub fn stream_hold(&mut self) -> Result<(), ActionError> {
         match (self.state, &self.activity) {
+            // Lines queued, their run not started yet: it does not start.
+            (State::Idle, Activity::None) if !self.stream.waiting.is_empty() => {
+                self.stream.run.clear();
+                self.stream.held_at = Some(0);
+                self.activity = Activity::Stream;
+                self.state = State::Paused;
+                self.events
+                    .push(self.now, Level::Info, "held before moving".into());
+                Ok(())
+            }
             (State::Running, Activity::Stream) => {
                 self.stop(super::Stopping::Hold, "feed hold");
                 self.state = State::Holding;
