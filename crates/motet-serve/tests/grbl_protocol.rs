@@ -370,13 +370,15 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
 
     /// Random bytes never panic, and every complete line gets exactly one
-    /// reply (holds and resets, which wait or drop lines, left out).
+    /// reply (holds, resets and M0, which wait or drop lines, left out).
     #[test]
     fn random_bytes_get_one_reply_per_line(
         bytes in proptest::collection::vec(
             prop_oneof![
                 4 => proptest::sample::select(b"G0123XYZFJ$=. -\n\r?".to_vec()),
-                1 => any::<u8>().prop_filter("no hold, door or reset", |b| !matches!(b, b'!' | 0x84 | 0x18)),
+                1 => any::<u8>().prop_filter("no hold, door, reset or M0 (which wait for ~)", |b| {
+                    !matches!(b, b'!' | 0x84 | 0x18 | b'M' | b'm')
+                }),
             ],
             0..300,
         )
@@ -396,4 +398,26 @@ fn an_endless_line_is_refused_once_and_not_kept() {
     let out = d.send(b"\nG0 X2\n");
     assert_eq!(replies(&out), ["error:11", "ok"]);
     assert_eq!(position(&d), [2.0, 0.0]);
+}
+
+#[test]
+fn m0_pauses_after_the_motion_before_it_until_resumed() {
+    let mut d = device();
+    d.start(b"G21 G90 G0 X5\nM0\nG0 X10\n");
+    for _ in 0..10_000 {
+        d.wait(1_000);
+        if replies(&d.out).len() == 2 {
+            break;
+        }
+    }
+    // The M0 line is answered once the machine rests after X5; the line
+    // after it waits.
+    assert_eq!(replies(&d.out), ["ok", "ok"], "{}", d.out);
+    assert_eq!(position(&d), [5.0, 0.0]);
+    d.wait(500_000);
+    assert_eq!(position(&d), [5.0, 0.0], "nothing runs until ~");
+    assert!(d.send(b"?").contains("<Hold:0|"));
+    let out = d.send(b"~");
+    assert_eq!(replies(&out), ["ok"]);
+    assert_eq!(position(&d), [10.0, 0.0]);
 }

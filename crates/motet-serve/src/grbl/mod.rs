@@ -59,6 +59,11 @@ pub struct Grbl {
     startup: [String; 2],
     /// A `$H` move runs; its `ok` comes when it ends.
     homing: bool,
+    /// An `M0` line's motion before the pause was queued; its `ok` comes
+    /// when the machine has run it and rests.
+    pausing: bool,
+    /// Stopped by `M0`: lines wait until `~`.
+    program_paused: bool,
     /// Tool power last streamed, 0..=1.
     tool: f64,
     /// Lines answered so far (for tests and figures).
@@ -81,6 +86,8 @@ impl Grbl {
             check_mode: false,
             startup: Default::default(),
             homing: false,
+            pausing: false,
+            program_paused: false,
             tool: 0.0,
             replies: 0,
         }
@@ -169,6 +176,7 @@ impl Grbl {
                         wco: self.interp.modal().offset,
                         tool: self.tool,
                         check_mode: self.check_mode,
+                        program_paused: self.program_paused,
                         rx_free: self.rx.free(),
                     },
                 );
@@ -184,7 +192,9 @@ impl Grbl {
                 };
             }
             Realtime::Resume => {
-                if s.state() == State::Paused {
+                if self.program_paused {
+                    self.program_paused = false;
+                } else if s.state() == State::Paused {
                     let _ = s.resume(CLIENT);
                 }
             }
@@ -215,6 +225,8 @@ impl Grbl {
         self.rx.clear();
         self.check_mode = false;
         self.homing = false;
+        self.pausing = false;
+        self.program_paused = false;
         self.overrides = Overrides::default();
         self.restart_interpreter();
         self.open();
@@ -256,6 +268,18 @@ impl Grbl {
     }
 
     fn gcode(&mut self, t: &str, s: &mut Session) -> Step {
+        if self.pausing {
+            // Its motion is queued: the `ok` when the machine rests after it.
+            if s.streaming() || s.state() != State::Idle {
+                return Step::Wait;
+            }
+            self.pausing = false;
+            self.program_paused = true;
+            return Step::Reply(Ok(()));
+        }
+        if self.program_paused {
+            return Step::Wait;
+        }
         if !self.check_mode {
             match s.state() {
                 State::Alarm | State::Stopped => return Step::Reply(Err(code::LOCKED)),
@@ -283,6 +307,12 @@ impl Grbl {
             return Step::Reply(Err(errors::of_gcode(&e.message)));
         }
         let mut commands: Vec<Located<Command>> = self.interp.drain().collect();
+        // M0 pauses the program once everything before it has run (grbl's
+        // optional stop, M1, is off: it does nothing).
+        let pause = commands
+            .iter()
+            .any(|c| matches!(c.item, Command::Pause { optional: false }));
+        commands.retain(|c| !matches!(c.item, Command::Pause { .. }));
         if self.interp.ended() {
             // M2/M30 ends a program, not the connection: the next line
             // starts the next program (grbl resets its modes the same way).
@@ -321,6 +351,10 @@ impl Grbl {
             return Step::Reply(Ok(()));
         }
         match s.stream_push(commands, from) {
+            Ok(()) if pause => {
+                self.pausing = true;
+                Step::Wait
+            }
             Ok(()) => Step::Reply(Ok(())),
             Err(crate::session::ActionError::Unreachable(e)) => {
                 // grbl's soft limit: the machine stops on its path and

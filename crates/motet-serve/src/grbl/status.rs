@@ -7,8 +7,9 @@ use crate::session::{Session, State};
 use motet_trajectory::Point;
 
 /// grbl's name for what the machine is doing.
-pub fn state_name(s: &Session, check_mode: bool) -> &'static str {
+pub fn state_name(s: &Session, check_mode: bool, program_paused: bool) -> &'static str {
     match s.state() {
+        State::Idle if program_paused => "Hold:0",
         State::Idle if check_mode => "Check",
         State::Idle => "Idle",
         State::Running if s.jogging() => "Jog",
@@ -34,6 +35,8 @@ pub struct Report<'a> {
     pub tool: f64,
     /// Check mode.
     pub check_mode: bool,
+    /// Paused by `M0`.
+    pub program_paused: bool,
     /// Receive buffer room, bytes.
     pub rx_free: usize,
 }
@@ -53,7 +56,7 @@ pub fn report(s: &Session, r: &Report) -> String {
     let inches = r.local.inches;
     let mut out = format!(
         "<{}|{key}:{}",
-        state_name(s, r.check_mode),
+        state_name(s, r.check_mode, r.program_paused),
         Axes::format(&pos, inches)
     );
     if r.local.status_mask & 2 == 2 {
