@@ -5,6 +5,7 @@ mod arc_words;
 mod collect;
 mod diagnostics;
 mod execute;
+mod modal;
 mod motion;
 mod offsets;
 mod tools;
@@ -16,6 +17,7 @@ use motet_trajectory::{Point, MAX_AXES};
 use crate::codes::{Motion, Plane, AXIS_LETTERS};
 use crate::{GcodeOptions, Parsed, MAX_WARNINGS};
 use diagnostics::WarnKey;
+pub use modal::Modal;
 
 /// The working tool's state.
 #[derive(Clone, Copy, Debug, PartialEq)]

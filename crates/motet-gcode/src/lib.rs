@@ -162,6 +162,7 @@ mod lex;
 use motet_planner::{Command, JobTarget, Located, SourceError};
 
 use crate::interp::Interp;
+pub use crate::interp::Modal;
 
 /// Options for [`parse`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -264,6 +265,18 @@ impl Interpreter {
     /// The commands interpreted since the last call, in order.
     pub fn drain(&mut self) -> std::vec::Drain<'_, Located<Command>> {
         self.interp.out.drain(..)
+    }
+
+    /// The modal state and offsets after the last line.
+    pub fn modal(&self) -> Modal {
+        self.interp.modal()
+    }
+
+    /// The machine is at `p` (machine coordinates) after motion this
+    /// interpreter did not plan: the next line's relative moves and arcs
+    /// start there.
+    pub fn set_machine_position(&mut self, p: motet_trajectory::Point) {
+        self.interp.set_machine_position(p);
     }
 
     /// Whether M2 or M30 ended the program.

@@ -21,12 +21,18 @@ pub fn run_limits(machine: &Machine, min_move_s: f64) -> Limits {
 }
 
 /// Commands fed to the planner as its output is taken.
+///
+/// An open feed ([`PlanFeed::keep_open`]) takes more commands while it runs
+/// ([`PlanFeed::push`]): when it has planned every command it has, it
+/// gives nothing more (the planner keeps its lookahead) until more come or
+/// it is closed ([`PlanFeed::close`]), which plans what is held to rest.
 pub struct PlanFeed {
     commands: Vec<Located<Command>>,
     next_command: usize,
     planner: SourcedPlanner,
     finished: bool,
     exhausted: bool,
+    open: bool,
 }
 
 impl PlanFeed {
@@ -38,7 +44,34 @@ impl PlanFeed {
             planner: SourcedPlanner::new(Planner::new(limits, start, t0)),
             finished: false,
             exhausted: false,
+            open: false,
         }
+    }
+
+    /// Keeps the feed open for [`PlanFeed::push`] until [`PlanFeed::close`].
+    pub fn keep_open(&mut self) {
+        self.open = !self.finished;
+    }
+
+    /// Appends commands to an open feed; their indices follow the ones
+    /// before. Returns false (and takes nothing) once the feed is closed.
+    pub fn push(&mut self, commands: impl IntoIterator<Item = Located<Command>>) -> bool {
+        if !self.open {
+            return false;
+        }
+        self.commands.extend(commands);
+        true
+    }
+
+    /// No more commands come: what the planner holds is planned to rest.
+    pub fn close(&mut self) {
+        self.open = false;
+    }
+
+    /// Open, with every command given to the planner: what it holds waits
+    /// for more commands or the close.
+    pub fn starved(&self) -> bool {
+        self.open && self.next_command >= self.commands.len()
     }
 
     /// Commands planned so far and in all.
@@ -67,6 +100,8 @@ impl PlanFeed {
                     .push(self.next_command, &c.item)
                     .map_err(|e| (c.loc, e))?;
                 self.next_command += 1;
+            } else if self.open {
+                return Ok(None);
             } else if !self.finished {
                 self.planner.finish();
                 self.finished = true;

@@ -2,7 +2,8 @@
 //! ([`session::Session`]), with the jobs uploaded to it ([`jobs::JobStore`]),
 //! served over HTTP and a WebSocket to programs and to the browser page
 //! embedded here (`docs/api.md` documents the API; `openapi.json` is its
-//! schema).
+//! schema), and to G-code senders as a grbl 1.1 device on a pseudo-terminal
+//! or TCP ([`grbl`]; docs/compat.md).
 //!
 //! The session is plain, synchronous code driven by a clock thread
 //! ([`server::Server`]); the HTTP side (axum on tokio) only takes a lock,
@@ -11,6 +12,7 @@
 pub mod auth;
 pub mod engine;
 pub mod events;
+pub mod grbl;
 mod http;
 pub mod jobs;
 pub mod preview;

@@ -61,6 +61,11 @@ impl Shared {
         self.jobs.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// The server is shutting down: threads serving it end.
+    pub(crate) fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+
     /// Wakes the clock thread (an action started motion).
     pub(crate) fn wake(&self) {
         if let Some(t) = self

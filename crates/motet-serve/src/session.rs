@@ -20,6 +20,10 @@ use motet_trajectory::Point;
 use serde::Serialize;
 use std::sync::Arc;
 
+mod machine_edit;
+mod stream;
+pub use stream::{StreamStatus, STREAM_BLOCKS};
+
 /// What the machine is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -155,6 +159,8 @@ fn part_end(commands: &[Located<Command>], from: usize) -> usize {
 enum Activity {
     None,
     Job(JobRun),
+    /// Commands streamed a line at a time ([`stream`]).
+    Stream,
     Other(&'static str),
 }
 
@@ -225,6 +231,7 @@ pub struct Session {
     reason: Option<String>,
     controller: Option<String>,
     now: u64,
+    stream: stream::Stream,
     /// What happened, newest last, bounded.
     pub events: EventLog,
     history: std::collections::VecDeque<JobOutcome>,
@@ -250,6 +257,7 @@ impl Session {
             reason: None,
             controller: None,
             now: 0,
+            stream: stream::Stream::default(),
             events,
             history: std::collections::VecDeque::new(),
         }
@@ -290,6 +298,7 @@ impl Session {
         match self.nodes.advance(self.now) {
             Ok(next) => {
                 self.follow();
+                self.stream_tick();
                 next
             }
             Err(e) => {
@@ -335,6 +344,10 @@ impl Session {
                 let what = match &self.activity {
                     Activity::Job(j) => format!("job {} ({}) finished", j.job.id, j.job.name),
                     Activity::Other(what) => format!("{what} finished"),
+                    Activity::Stream => {
+                        self.stream_run_done();
+                        "streamed commands run, at rest".into()
+                    }
                     Activity::None => "run finished".into(),
                 };
                 self.end_activity("finished");
@@ -359,6 +372,9 @@ impl Session {
                 if let Activity::Job(j) = &mut self.activity {
                     let done = info.next_command.saturating_sub(j.prelude);
                     j.held_at = Some((j.base + done).min(j.job.commands.len()));
+                }
+                if let Activity::Stream = self.activity {
+                    self.stream_held(info.next_command);
                 }
                 self.state = State::Paused;
                 self.events
@@ -493,6 +509,11 @@ impl Session {
                 }
                 Ok(())
             }
+            (State::Running, Activity::Stream) | (State::Idle, Activity::None)
+                if self.streaming() =>
+            {
+                self.stream_hold()
+            }
             (state, _) => Err(ActionError::WrongState {
                 action: "pause",
                 state: *state,
@@ -504,6 +525,9 @@ impl Session {
     pub fn resume(&mut self, client: Client) -> Result<(), ActionError> {
         self.may_drive(client)?;
         let state = self.state;
+        if let Activity::Stream = self.activity {
+            return self.stream_resume();
+        }
         let Activity::Job(j) = &self.activity else {
             return Err(ActionError::WrongState {
                 action: "resume",
@@ -537,6 +561,10 @@ impl Session {
     /// Cancels the job (or jog): the machine brakes on its path and rests.
     pub fn cancel(&mut self, client: Client) -> Result<(), ActionError> {
         self.may_drive(client)?;
+        // Streamed commands not yet run go with what runs.
+        if matches!(self.state, State::Running | State::Holding) {
+            self.stream_clear();
+        }
         match self.state {
             State::Running | State::Holding => {
                 if self.stop(Stopping::Cancel, "cancel") {
@@ -545,6 +573,7 @@ impl Session {
                 Ok(())
             }
             State::Paused => {
+                self.stream_clear();
                 self.end_activity("cancelled");
                 self.state = State::Idle;
                 self.events.push(self.now, Level::Info, "cancelled".into());
@@ -562,6 +591,7 @@ impl Session {
     pub fn estop(&mut self) {
         self.events
             .push(self.now, Level::Warn, "emergency stop requested".into());
+        self.stream_clear();
         match self.state {
             State::Running | State::Holding | State::Stopping => {
                 if self.stop(Stopping::EStop, "emergency stop") {
@@ -620,6 +650,9 @@ impl Session {
             Stopping::Hold => {
                 if let Activity::Job(j) = &mut self.activity {
                     j.held_at = Some(j.base);
+                }
+                if let Activity::Stream = self.activity {
+                    self.stream_held(0);
                 }
                 self.state = State::Paused;
             }

@@ -39,6 +39,11 @@ pub struct ServeArgs {
     /// Require the token on loopback too.
     #[arg(long)]
     token: bool,
+    /// Also be a grbl 1.1 device for G-code senders: `pty` (a
+    /// pseudo-terminal; its path is printed) or `tcp:ADDRESS:PORT`
+    /// (docs/compat.md). Same machine, same state as the web page.
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    grbl: Option<motet_serve::grbl::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -67,6 +72,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         NodesAt::Spawn => "spawned",
         NodesAt::Paired => "paired",
     };
+    let grbl = args.grbl;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -84,6 +90,12 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         let addr = listener.local_addr()?;
         let server = Server::start(machine, nodes, &cfg)?;
         println!("motet serve: machine {name} on {where_} nodes at http://{addr}/");
+        if let Some(port) = &grbl {
+            let at = server
+                .grbl(port)
+                .with_context(|| format!("--grbl {port}"))?;
+            println!("grbl: {at}");
+        }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
         println!("motet serve: stopped");

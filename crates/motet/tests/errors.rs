@@ -163,6 +163,13 @@ const CASES: &[Case] = &[
         files: &[("file", b"")],
         args: &["run", "examples/plotter.toml", "examples/jobs/drawing.svg", "-q", "--out", "%/file/out"],
         place: "file/out",
+    },    // The grbl device's port.
+    Case { files: &[], args: &["serve", "examples/plotter.toml", "--grbl", "tcp:nowhere"], place: "--grbl" },
+    Case { files: &[], args: &["serve", "examples/plotter.toml", "--grbl", "serial"], place: "--grbl" },
+    Case {
+        files: &[],
+        args: &["serve", "examples/plotter.toml", "--listen", "127.0.0.1:0", "--dir", "%/srv", "--grbl", "tcp:192.0.2.1:1"],
+        place: "--grbl tcp:192.0.2.1:1",
     },
 ];
 

@@ -183,6 +183,10 @@ pub struct NetRun {
     /// The job, until streaming starts and the feed takes it.
     commands: Vec<Located<Command>>,
     feed: Option<PlanFeed>,
+    /// More commands may come ([`NetRun::keep_feed_open`]).
+    feed_open: bool,
+    /// Host time the feed's trajectory starts at, µs.
+    feed_t0: f64,
     start_point: Point,
     /// Routed to the nodes but not sealed.
     pending: Vec<Committed>,
@@ -253,6 +257,8 @@ impl NetRun {
             dist: Distributor::new(machine),
             commands,
             feed: None,
+            feed_open: false,
+            feed_t0: f64::NEG_INFINITY,
             start_point: start,
             pending: Vec::new(),
             pending_events: 0,
@@ -323,6 +329,44 @@ impl NetRun {
     /// is left with none and must not be polled again.
     pub fn take_peers(&mut self) -> Vec<Peer> {
         std::mem::take(&mut self.peers)
+    }
+
+    /// Keeps the run open for more commands ([`NetRun::push_commands`]),
+    /// as a sender streams them: before the first poll. While no command is
+    /// waiting to be planned when the committed window needs more, the run
+    /// plans what it holds to rest and takes no more (its feed closes), so
+    /// the nodes never reach their tails while the host waits for input;
+    /// the run then ends as any run does ([`Phase::Done`]).
+    pub fn keep_feed_open(&mut self) {
+        self.feed_open = true;
+    }
+
+    /// Appends commands to an open run; their indices follow the ones
+    /// before. Returns false, taking nothing, once the feed has closed.
+    pub fn push_commands(&mut self, commands: Vec<Located<Command>>) -> bool {
+        if !self.feed_open {
+            return false;
+        }
+        match self.feed.as_mut() {
+            Some(f) => f.push(commands),
+            None => {
+                self.commands.extend(commands);
+                true
+            }
+        }
+    }
+
+    /// No more commands come: the run plans what it holds to rest and ends.
+    pub fn close_feed(&mut self) {
+        self.feed_open = false;
+        if let Some(f) = self.feed.as_mut() {
+            f.close();
+        }
+    }
+
+    /// Whether the run still takes commands.
+    pub fn feed_open(&self) -> bool {
+        self.feed_open
     }
 
     /// Commands planned so far and in all.
@@ -605,7 +649,12 @@ impl NetRun {
             let commands = std::mem::take(&mut self.commands);
             let mut limits = run_limits(&self.machine, min_move_s);
             limits.max_move_s = self.cfg.max_move_us as f64 * 1e-6;
-            self.feed = Some(PlanFeed::new(limits, self.start_point, t0, commands));
+            let mut feed = PlanFeed::new(limits, self.start_point, t0, commands);
+            if self.feed_open {
+                feed.keep_open();
+            }
+            self.feed = Some(feed);
+            self.feed_t0 = t0;
             self.phase = Phase::Streaming;
             self.fill(now)?;
         }

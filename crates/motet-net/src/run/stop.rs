@@ -74,6 +74,9 @@ impl NetRun {
         for p in self.peers.iter_mut() {
             p.drop_unsealed();
         }
+        // An open feed's planner holds commands for lookahead: closing it
+        // plans them, so the first command not sealed is found among them.
+        self.close_feed();
         let next_command = self.first_unsealed_command();
         self.pending.clear();
         self.pending_events = 0;

@@ -117,6 +117,13 @@ impl NetRun {
                 break;
             }
             let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
+            if self.pending.is_empty() && self.pending_events == 0 && self.starving(t + lead) {
+                // An open feed with nothing to plan while the window needs
+                // more: plan what the planner holds to rest now, while the
+                // seal still arrives before the tail would start.
+                self.close_feed();
+                continue;
+            }
             if self.pending.is_empty() && self.pending_events == 0 {
                 if !grew && self.feed.as_ref().is_some_and(|f| f.exhausted()) {
                     self.phase = Phase::Draining;
@@ -126,6 +133,18 @@ impl NetRun {
             self.seal(now)?;
         }
         Ok(())
+    }
+
+    /// An open feed has nothing left to plan and the committed window (or,
+    /// before anything is committed, the feed's start) reaches no further
+    /// than `needed`.
+    fn starving(&self, needed: f64) -> bool {
+        let reach = if self.committed.is_empty() {
+            self.feed_t0
+        } else {
+            self.deadline
+        };
+        self.feed_open && self.feed.as_ref().is_some_and(|f| f.starved()) && reach < needed
     }
 
     /// Routes planned items into the pending window until its tail would start
