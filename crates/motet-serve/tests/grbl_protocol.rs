@@ -421,3 +421,10 @@ fn m0_pauses_after_the_motion_before_it_until_resumed() {
     assert_eq!(replies(&out), ["ok"]);
     assert_eq!(position(&d), [10.0, 0.0]);
 }
+
+#[test]
+fn queued_lines_report_run_before_their_run_starts() {
+    let mut d = device();
+    d.start(b"G21 G90 G0 X5\n");
+    assert!(d.send(b"?").contains("<Run|"), "{}", d.out);
+}
