@@ -86,7 +86,7 @@ fn a_sender_drives_the_machine_over_a_pty_and_over_tcp() {
         let at = srv.grbl(&port.parse::<Port>().unwrap()).unwrap();
         let mut s = connect(&at);
         s.expect(b"\x18", "\r\nGrbl 1.1h ['$' for help]\r\n");
-        s.expect(b"$I\n", "[VER:1.1h.motet:]\r\n[OPT:V,32,128]\r\nok\r\n");
+        s.expect(b"$I\n", "[VER:1.1h.motet:]\r\n[OPT:V,128,128]\r\nok\r\n");
         s.expect(b"G21 G90\nG0 X5 Y4\n", "ok\r\nok\r\n");
         // Motion waits for the nodes' clocks to settle (a few seconds).
         let end = Instant::now() + Duration::from_secs(15);

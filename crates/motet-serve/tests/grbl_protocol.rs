@@ -140,7 +140,7 @@ const CASES: &[(&[&str], &str, &str, &str)] = &[
     (&["G1 X500 F100"], "G0 X1", "error:9", ""),
     (&["G1 X500 F100"], "$X", "ok", "[MSG:Caution: Unlocked]"),
     (&[], "$", "ok", "[HLP:"),
-    (&[], "$I", "ok", "[VER:1.1h.motet:]\r\n[OPT:V,32,128]"),
+    (&[], "$I", "ok", "[VER:1.1h.motet:]\r\n[OPT:V,128,128]"),
     (
         &[],
         "$G",
@@ -333,7 +333,7 @@ fn status_reports_work_positions_under_10_rules() {
     d.line("G0 X1 Y1");
     let out = d.send(b"?");
     assert!(
-        out.contains("<Idle|MPos:6.000,7.000,0.000|Bf:32,128|"),
+        out.contains("<Idle|MPos:6.000,7.000,0.000|Bf:128,128|"),
         "{out}"
     );
     assert!(out.contains("|WCO:5.000,6.000,0.000>"), "{out}");
@@ -420,4 +420,11 @@ fn m0_pauses_after_the_motion_before_it_until_resumed() {
     let out = d.send(b"~");
     assert_eq!(replies(&out), ["ok"]);
     assert_eq!(position(&d), [10.0, 0.0]);
+}
+
+#[test]
+fn queued_lines_report_run_before_their_run_starts() {
+    let mut d = device();
+    d.start(b"G21 G90 G0 X5\n");
+    assert!(d.send(b"?").contains("<Run|"), "{}", d.out);
 }

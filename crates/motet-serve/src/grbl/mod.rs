@@ -13,6 +13,7 @@
 
 pub mod axes;
 pub mod errors;
+mod gcode;
 mod jog;
 pub mod lines;
 pub mod port;
@@ -27,7 +28,6 @@ use errors::{alarm, code};
 use lines::{Line, RxBuffer};
 use motet_gcode::{GcodeOptions, Interpreter};
 use motet_host::Machine;
-use motet_planner::{Command, Located, MoveKind};
 use realtime::{classify, ignored, Overrides, Realtime};
 use settings::Local;
 
@@ -265,136 +265,6 @@ impl Grbl {
             return self.system(t, s);
         }
         self.gcode(t, s)
-    }
-
-    fn gcode(&mut self, t: &str, s: &mut Session) -> Step {
-        if self.pausing {
-            // Its motion is queued: the `ok` when the machine rests after it.
-            if s.streaming() || s.state() != State::Idle {
-                return Step::Wait;
-            }
-            self.pausing = false;
-            self.program_paused = true;
-            return Step::Reply(Ok(()));
-        }
-        if self.program_paused {
-            return Step::Wait;
-        }
-        if !self.check_mode {
-            match s.state() {
-                State::Alarm | State::Stopped => return Step::Reply(Err(code::LOCKED)),
-                _ if s.jogging() => return Step::Reply(Err(code::LOCKED)),
-                State::Stopping => return Step::Wait,
-                State::Running | State::Holding | State::Paused if !s.streaming() => {
-                    return Step::Reply(Err(code::LOCKED))
-                }
-                _ => {}
-            }
-            if s.stream_status().blocks_free == 0 {
-                return Step::Wait;
-            }
-            if s.state() == State::Idle && !s.streaming() {
-                // Moved by something else since the last line (a jog, a
-                // hold cancelled, the web page): relative moves start here.
-                self.interp.set_machine_position(s.rest());
-            }
-        }
-        let from = self.interp.modal().machine;
-        self.line_no = self.line_no.wrapping_add(1);
-        if let Err(e) = self.interp.line(t, self.line_no) {
-            self.message(&format!("column {}: {}", e.loc.column, e.message));
-            self.interp.drain();
-            return Step::Reply(Err(errors::of_gcode(&e.message)));
-        }
-        let mut commands: Vec<Located<Command>> = self.interp.drain().collect();
-        // M0 pauses the program once everything before it has run (grbl's
-        // optional stop, M1, is off: it does nothing).
-        let pause = commands
-            .iter()
-            .any(|c| matches!(c.item, Command::Pause { optional: false }));
-        commands.retain(|c| !matches!(c.item, Command::Pause { .. }));
-        if self.interp.ended() {
-            // M2/M30 ends a program, not the connection: the next line
-            // starts the next program (grbl resets its modes the same way).
-            self.restart_interpreter();
-            self.interp.set_machine_position(
-                commands
-                    .iter()
-                    .rev()
-                    .find_map(|c| match c.item {
-                        Command::Move(m) => Some(m.target),
-                        _ => None,
-                    })
-                    .unwrap_or(from),
-            );
-        }
-        self.apply_overrides(&mut commands);
-        for c in &commands {
-            match c.item {
-                Command::Tool { value, .. } | Command::ToolPerSpeed { value, .. } => {
-                    self.tool = f64::from(value)
-                }
-                _ => {}
-            }
-        }
-        if self.check_mode {
-            let mut at = from;
-            for c in &commands {
-                if let Command::Move(m) = c.item {
-                    if let Err(e) = motet_host::check_move(s.machine(), &at, &m.target) {
-                        self.message(&e.to_string());
-                        return Step::Reply(Err(code::INVALID_TARGET));
-                    }
-                    at = m.target;
-                }
-            }
-            return Step::Reply(Ok(()));
-        }
-        match s.stream_push(commands, from) {
-            Ok(()) if pause => {
-                self.pausing = true;
-                Step::Wait
-            }
-            Ok(()) => Step::Reply(Ok(())),
-            Err(crate::session::ActionError::Unreachable(e)) => {
-                // grbl's soft limit: the machine stops on its path and
-                // nothing more runs until `$X`.
-                self.push_line(&format!("ALARM:{}", alarm::SOFT_LIMIT));
-                self.message(&e.to_string());
-                s.estop();
-                Step::Reply(Err(code::LOCKED))
-            }
-            Err(e) => {
-                self.message(&e.to_string());
-                Step::Reply(Err(code::LOCKED))
-            }
-        }
-    }
-
-    /// Feed and spindle overrides scale what is streamed after they change;
-    /// a rapid override caps rapids at that share of the slowest path
-    /// axis's speed.
-    fn apply_overrides(&self, commands: &mut [Located<Command>]) {
-        let o = self.overrides;
-        let slowest = self
-            .file
-            .axes
-            .iter()
-            .filter(|a| a.path)
-            .map(|a| a.max_velocity)
-            .fold(f64::INFINITY, f64::min);
-        for c in commands {
-            match &mut c.item {
-                Command::Move(m) if m.kind == MoveKind::Feed => m.feed *= f64::from(o.feed) / 100.0,
-                Command::Move(m) if o.rapid < 100 && slowest.is_finite() => {
-                    m.feed = m.feed.min(slowest * f64::from(o.rapid) / 100.0)
-                }
-                Command::Tool { value, .. } | Command::ToolPerSpeed { value, .. } => {
-                    *value = (*value * f32::from(o.spindle) / 100.0).min(1.0)
-                }
-                _ => {}
-            }
-        }
     }
 }
 

@@ -10,6 +10,9 @@ use motet_trajectory::Point;
 pub fn state_name(s: &Session, check_mode: bool, program_paused: bool) -> &'static str {
     match s.state() {
         State::Idle if program_paused => "Hold:0",
+        // Lines queued, their run about to start: grbl starts its cycle as
+        // soon as a block is queued, and senders wait for Idle to finish.
+        State::Idle if s.streaming() => "Run",
         State::Idle if check_mode => "Check",
         State::Idle => "Idle",
         State::Running if s.jogging() => "Jog",

@@ -16,7 +16,7 @@ use std::collections::VecDeque;
 
 /// Blocks (lines with motion or tool commands) the queue holds: lines
 /// accepted and not yet run by the machine.
-pub const STREAM_BLOCKS: usize = 32;
+pub const STREAM_BLOCKS: usize = 128;
 
 /// A first line waits this long for more before its run starts, µs, so the
 /// planner starts with lookahead (as grbl does with its planner buffer).

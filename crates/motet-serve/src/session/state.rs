@@ -1,0 +1,98 @@
+//! What a session's machine is doing, and why an action was refused.
+
+use motet_host::MoveError;
+use serde::Serialize;
+
+/// What the machine is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum State {
+    /// At rest, ready.
+    Idle,
+    /// Moving: a job, a jog or a tool change.
+    Running,
+    /// A feed hold: braking on the path.
+    Holding,
+    /// A held job at rest on its path; it can resume or be cancelled.
+    Paused,
+    /// A cancel or an emergency stop: braking on the path.
+    Stopping,
+    /// Stopped by an emergency stop, at rest; ready for a new action.
+    Stopped,
+    /// Something went wrong (a node lost, a run that could not start):
+    /// where the machine is may not be known. Cleared by [`Session::unlock`].
+    Alarm,
+}
+
+impl std::fmt::Display for State {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            State::Idle => "idle",
+            State::Running => "running",
+            State::Holding => "holding",
+            State::Paused => "paused",
+            State::Stopping => "stopping",
+            State::Stopped => "stopped",
+            State::Alarm => "in alarm",
+        })
+    }
+}
+
+/// Why an action was refused. Nothing changed.
+#[derive(Debug, thiserror::Error)]
+pub enum ActionError {
+    /// The action does not fit what the machine is doing.
+    #[error("cannot {action} while the machine is {state}")]
+    WrongState {
+        /// The action asked for.
+        action: &'static str,
+        /// What the machine is doing.
+        state: State,
+    },
+    /// Another client has control; take it first.
+    #[error("another client controls the machine: take control first")]
+    NotController,
+    /// An axis the machine does not have.
+    #[error("no axis `{name}` (the machine's axes: {axes})")]
+    UnknownAxis {
+        /// The name asked for.
+        name: String,
+        /// The machine's axes.
+        axes: String,
+    },
+    /// A tool the machine does not have.
+    #[error("no tool `{name}` (the machine's tools: {tools})")]
+    UnknownTool {
+        /// The name asked for.
+        name: String,
+        /// The machine's tools.
+        tools: String,
+    },
+    /// A value out of its range (a feed, a tool value, a coordinate).
+    #[error("{what} = {value} is out of range ({range})")]
+    OutOfRange {
+        /// Which value.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it may be.
+        range: String,
+    },
+    /// The target is beyond the machine's travel or reach.
+    #[error("{0}")]
+    Unreachable(#[from] MoveError),
+    /// No job with this id.
+    #[error("no job {0}")]
+    UnknownJob(u64),
+    /// No node of this name.
+    #[error("no node `{name}` (the machine's nodes: {nodes})")]
+    UnknownNode {
+        /// The name asked for.
+        name: String,
+        /// The machine's nodes.
+        nodes: String,
+    },
+}
+
+/// Who asks: a client id (any string the client chose) for control.
+pub type Client<'a> = Option<&'a str>;
