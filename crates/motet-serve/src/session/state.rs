@@ -20,7 +20,7 @@ pub enum State {
     /// Stopped by an emergency stop, at rest; ready for a new action.
     Stopped,
     /// Something went wrong (a node lost, a run that could not start):
-    /// where the machine is may not be known. Cleared by [`Session::unlock`].
+    /// where the machine is may not be known. Cleared by [`Session::unlock`](super::Session::unlock).
     Alarm,
 }
 
