@@ -10,6 +10,7 @@
 //! acts, and answers, so nothing a client does can hold the machine up.
 
 pub mod auth;
+pub mod device;
 pub mod engine;
 pub mod events;
 pub mod grbl;

@@ -1,7 +1,7 @@
 //! The grbl device on its ports, on a running server: a pseudo-terminal
 //! and TCP, each connected to as a sender would, driving the same session.
 
-use motet_serve::grbl::port::Port;
+use motet_serve::device::port::Port;
 use motet_serve::{serve_config, Server, ServerConfig, SimNodes};
 use std::io::{Read, Write};
 use std::sync::mpsc;

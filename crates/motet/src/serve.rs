@@ -43,7 +43,7 @@ pub struct ServeArgs {
     /// pseudo-terminal; its path is printed) or `tcp:ADDRESS:PORT`
     /// (docs/compat.md). Same machine, same state as the web page.
     #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
-    grbl: Option<motet_serve::grbl::port::Port>,
+    grbl: Option<motet_serve::device::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its

@@ -16,12 +16,13 @@ pub mod errors;
 mod gcode;
 mod jog;
 pub mod lines;
-pub mod port;
 pub mod realtime;
 pub mod settings;
 pub mod status;
 mod system;
 
+use crate::device::{port::Port, Device};
+use crate::server::Server;
 use crate::session::{Session, State};
 use axes::Axes;
 use errors::{alarm, code};
@@ -265,6 +266,33 @@ impl Grbl {
             return self.system(t, s);
         }
         self.gcode(t, s)
+    }
+}
+
+impl Device for Grbl {
+    fn open(&mut self) {
+        Grbl::open(self)
+    }
+    fn receive(&mut self, bytes: &[u8], s: &mut Session) {
+        Grbl::receive(self, bytes, s)
+    }
+    fn poll(&mut self, s: &mut Session) {
+        Grbl::poll(self, s)
+    }
+    fn take_output(&mut self) -> Vec<u8> {
+        Grbl::take_output(self)
+    }
+    fn wants_input(&self) -> bool {
+        Grbl::wants_input(self)
+    }
+}
+
+impl Server {
+    /// Opens a grbl device on `port` for this server's session; returns
+    /// where senders connect (the pty's path, or `tcp:ADDRESS:PORT`).
+    pub fn grbl(&self, port: &Port) -> std::io::Result<String> {
+        let machine = self.shared.machine.as_ref().clone();
+        self.device("grbl", port, move || Grbl::new(&machine))
     }
 }
 

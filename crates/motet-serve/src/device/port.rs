@@ -1,0 +1,170 @@
+//! Where a program connects to a [`Device`]: a pseudo-terminal (its path is
+//! printed; programs open it as a serial port) or a TCP port (loopback
+//! unless told otherwise; one program at a time). A thread per port moves
+//! bytes between the program and its device, which acts on the server's
+//! session.
+
+use super::{pty, Device};
+use crate::server::{Server, Shared};
+use std::io::{self, Read, Write};
+use std::net::{SocketAddr, TcpListener};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// How long a read waits for bytes: the latency of a `?` or `!`.
+pub(super) const READ_WAIT: Duration = Duration::from_millis(2);
+
+/// Where programs connect.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Port {
+    /// A new pseudo-terminal.
+    Pty,
+    /// TCP on this address.
+    Tcp(SocketAddr),
+}
+
+impl std::fmt::Display for Port {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Port::Pty => f.write_str("pty"),
+            Port::Tcp(a) => write!(f, "tcp:{a}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Port {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Port, String> {
+        if s == "pty" {
+            return Ok(Port::Pty);
+        }
+        let Some(addr) = s.strip_prefix("tcp:") else {
+            return Err(format!(
+                "{s:?}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)"
+            ));
+        };
+        addr.parse().map(Port::Tcp).map_err(|e| {
+            format!("{s:?}: {e}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)")
+        })
+    }
+}
+
+impl Server {
+    /// Opens a device on `port` for this server's session, one made by
+    /// `make` for each program that connects (a pty has one for its
+    /// lifetime); returns where programs connect (the pty's path, or
+    /// `tcp:ADDRESS:PORT`). `name` names the port's thread.
+    pub fn device<D, F>(&self, name: &str, port: &Port, make: F) -> io::Result<String>
+    where
+        D: Device,
+        F: Fn() -> D + Send + 'static,
+    {
+        let shared = self.shared.clone();
+        match port {
+            Port::Pty => {
+                let (master, path) = pty::open()?;
+                std::thread::Builder::new()
+                    .name(format!("motet-{name}-pty"))
+                    .spawn(move || {
+                        let mut io = master;
+                        let mut g = make();
+                        g.open();
+                        // A program closing the pty is no error: the slave
+                        // stays open here, so the next one finds it.
+                        while !shared.stopped() {
+                            if pump(&shared, &mut io, &mut g).is_err() {
+                                std::thread::sleep(Duration::from_millis(20));
+                            }
+                        }
+                    })?;
+                Ok(path)
+            }
+            Port::Tcp(addr) => {
+                let listener = TcpListener::bind(addr)?;
+                let local = listener.local_addr()?;
+                listener.set_nonblocking(true)?;
+                std::thread::Builder::new()
+                    .name(format!("motet-{name}-tcp"))
+                    .spawn(move || serve_tcp(&shared, &listener, &make))?;
+                Ok(format!("tcp:{local}"))
+            }
+        }
+    }
+}
+
+fn serve_tcp<D: Device>(shared: &Arc<Shared>, listener: &TcpListener, make: &dyn Fn() -> D) {
+    while !shared.stopped() {
+        match listener.accept() {
+            Ok((mut stream, _)) => {
+                let ready = stream
+                    .set_nonblocking(false)
+                    .and_then(|()| stream.set_read_timeout(Some(READ_WAIT)))
+                    .and_then(|()| stream.set_nodelay(true));
+                if ready.is_err() {
+                    continue;
+                }
+                let mut g = make();
+                g.open();
+                let _ = pump(shared, &mut stream, &mut g);
+            }
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                std::thread::sleep(Duration::from_millis(20))
+            }
+            Err(_) => std::thread::sleep(Duration::from_millis(100)),
+        }
+    }
+}
+
+/// Moves bytes until the program goes (`Ok`) or the link fails.
+fn pump<T: Read + Write, D: Device>(shared: &Shared, io: &mut T, g: &mut D) -> io::Result<()> {
+    let mut buf = [0u8; 1024];
+    let mut out: Vec<u8> = Vec::new();
+    while !shared.stopped() {
+        // A program that has filled the device's buffer (a grbl sender
+        // that does not count characters) waits, its writes blocking,
+        // until lines are taken.
+        let n = if !g.wants_input() {
+            std::thread::sleep(READ_WAIT);
+            0
+        } else {
+            match io.read(&mut buf) {
+                Ok(0) => return Ok(()),
+                Ok(n) => n,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock
+                            | io::ErrorKind::TimedOut
+                            | io::ErrorKind::Interrupted
+                    ) =>
+                {
+                    0
+                }
+                Err(e) => return Err(e),
+            }
+        };
+        {
+            let mut s = shared.session();
+            if n > 0 {
+                g.receive(&buf[..n], &mut s);
+            }
+            g.poll(&mut s);
+        }
+        shared.wake();
+        out.extend(g.take_output());
+        while !out.is_empty() {
+            match io.write(&out) {
+                Ok(0) => return Ok(()),
+                Ok(k) => {
+                    out.drain(..k);
+                }
+                // A program that does not read: keep it for later.
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    Ok(())
+}
