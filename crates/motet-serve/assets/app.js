@@ -311,7 +311,11 @@ async function main() {
   $("cancel").onclick = () => act("POST", "/api/cancel");
   $("unlock").onclick = () => act("POST", "/api/unlock");
   $("control").onclick = () => act("POST", "/api/control");
-  $("estop").onclick = () => act("POST", "/api/estop");
+  $("estop").onclick = () => {
+    // When the person pressed it, for the stop's own figure (docs/api.md).
+    window.motetStats.estopPressedWall = Date.now();
+    return act("POST", "/api/estop");
+  };
   $("zero").onclick = () => act("POST", "/api/position", { axes: Object.fromEntries(machine.axes.map((a) => [a.name, 0])) });
   connect();
   refreshNodes();

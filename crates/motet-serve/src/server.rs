@@ -39,6 +39,9 @@ pub(crate) struct Shared {
     pub(crate) token: Option<String>,
     pub(crate) started: Instant,
     pub(crate) updates: broadcast::Sender<Arc<str>>,
+    /// Something a screen should see at once happened (an event: a stop,
+    /// a state change): the pusher sends without waiting for its tick.
+    pub(crate) changed: tokio::sync::Notify,
     stop: AtomicBool,
     driver: Mutex<Option<std::thread::Thread>>,
 }
@@ -102,6 +105,7 @@ impl Server {
             token: cfg.token.clone(),
             started: Instant::now(),
             updates,
+            changed: tokio::sync::Notify::new(),
             stop: AtomicBool::new(false),
             driver: Mutex::new(None),
         });
@@ -165,11 +169,16 @@ impl Server {
 
 /// The clock thread: ticks the session as often as its run needs.
 fn drive(shared: &Shared) {
+    let mut seen = 0;
     while !shared.stop.load(Ordering::Relaxed) {
         let now = shared.now();
         let (next, busy) = {
             let mut s = shared.session.lock().unwrap_or_else(|e| e.into_inner());
             let next = s.tick(now);
+            if s.events.last_seq() != seen {
+                seen = s.events.last_seq();
+                shared.changed.notify_one();
+            }
             let resting = matches!(
                 s.state(),
                 State::Idle | State::Stopped | State::Alarm | State::Paused

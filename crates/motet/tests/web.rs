@@ -99,6 +99,10 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     assert_eq!(seen["still_when_paused"], true, "{seen}");
     assert_eq!(seen["final_state"], "stopped", "{seen}");
     assert_eq!(seen["stop_event"], true, "{seen}");
+    assert!(
+        seen["click_to_braking_ms"].is_number(),
+        "no braking time in the stop event: {seen}"
+    );
     let off = seen["off_path"].as_f64().unwrap();
     assert!(off < 1e-3, "stopped {off} mm off the path");
     assert_eq!(seen["phone_estop_visible"], true, "{seen}");

@@ -1,6 +1,8 @@
 //! The WebSocket: the machine's status pushed to every client as it moves
-//! (one message every [`PUSH_INTERVAL_US`]), events as they happen. A slow
-//! client skips status messages instead of holding the others up.
+//! (one message every [`PUSH_INTERVAL_US`]), and at once when an event
+//! happens (a stop, a state change), so a screen shows an emergency stop
+//! without waiting for the next tick. A slow client skips status messages
+//! instead of holding the others up.
 
 use crate::server::{Shared, PUSH_INTERVAL_US};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -71,7 +73,10 @@ pub(crate) async fn push_status(sh: Arc<Shared>) {
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut seen = 0;
     loop {
-        tick.tick().await;
+        tokio::select! {
+            _ = tick.tick() => {}
+            () = sh.changed.notified() => {}
+        }
         if sh.updates.receiver_count() == 0 {
             // Nobody listens: note where the events are, nothing more (the
             // clock thread ticks the session).

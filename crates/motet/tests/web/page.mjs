@@ -69,19 +69,34 @@ try {
   await page.click("#estop");
   await waitState("stopped");
   out.click_to_rest_ms = Date.now() - clicked;
-  // When braking began, on the trajectory's clock: the first pushed speed
-  // below the speed at the click (pushes are 20 ms apart: the figure is
-  // good to about that).
-  out.click_to_braking_ms = await page.evaluate((clickedWall) => {
+  // The click on the trajectory's clock (the pushes carry both clocks),
+  // against when the nodes began braking there (the server's stop event:
+  // its request time plus the delay it reports).
+  const clickUs = await page.evaluate(() => {
+    const clickedWall = window.motetStats.estopPressedWall;
     const sp = window.motetStats.speeds;
     const last = sp[sp.length - 1];
     const offset = last[2] - last[0] / 1000; // wall ms minus server ms
-    const clickUs = (clickedWall - offset) * 1000;
+    return (clickedWall - offset) * 1000;
+  });
+  const stopEvents = await page.evaluate(async () => {
+    const r = await fetch("/api/events", { headers: { "X-Motet-Client": "test" } });
+    return await r.json();
+  });
+  const stopEvent = stopEvents
+    .map((e) => [e, /emergency stop: braking (-?\d+(?:\.\d+)?) ms/.exec(e.message)])
+    .find(([, m]) => m);
+  out.click_to_braking_ms = stopEvent ? (stopEvent[0].t_us + Number(stopEvent[1][1]) * 1000 - clickUs) / 1000 : null;
+  // As the page saw it: the first pushed speed below the speed at the
+  // click (pushes are 20 ms apart and speed is taken over 10 ms, so this
+  // is later than the braking itself).
+  out.click_to_slowing_seen_ms = await page.evaluate((clickUs) => {
+    const sp = window.motetStats.speeds;
     const atClick = sp.filter((p) => p[0] <= clickUs).pop();
     const v0 = atClick ? atClick[1] : 0;
-    const braking = sp.find((p) => p[0] > clickUs && p[1] < v0 * 0.99);
-    return braking ? (braking[0] - clickUs) / 1000 : null;
-  }, clicked);
+    const slowing = sp.find((p) => p[0] > clickUs && p[1] < v0 * 0.99);
+    return slowing ? (slowing[0] - clickUs) / 1000 : null;
+  }, clickUs);
   out.final_state = await state();
   // At rest on the job's path: the distance from the rest point to the
   // nearest segment of the preview.
@@ -104,7 +119,7 @@ try {
   const events = await page.$$eval("#events li", (lis) => lis.map((l) => l.textContent));
   out.stop_event = events.some((e) => e.includes("every node at rest on the path"));
   // The server's own figure: when the tail took over after the request.
-  const braking = events.map((e) => /emergency stop: braking (-?\d+) ms/.exec(e)).find((m) => m);
+  const braking = events.map((e) => /emergency stop: braking (-?\d+(?:\.\d+)?) ms/.exec(e)).find((m) => m);
   out.request_to_braking_ms = braking ? Number(braking[1]) : null;
   step("stopped");
 
