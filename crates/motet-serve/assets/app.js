@@ -165,6 +165,9 @@ function showStatus(s, wallMs) {
   $("time-left").textContent = j ? fmtTime(j.left_s) + " left" : "";
   const busy = ["running", "holding", "paused", "stopping"].includes(s.state);
   $("start").disabled = !job || busy || s.state === "alarm";
+  $("enqueue").disabled = !job;
+  $("queue-start").disabled = !s.queued || busy || s.state === "alarm";
+  if (s.queued !== lastQueued) { lastQueued = s.queued; refreshQueue(); }
   $("pause").disabled = s.state !== "running" || !j;
   $("resume").disabled = s.state !== "paused";
   $("cancel").disabled = !["running", "holding", "paused"].includes(s.state);
@@ -206,6 +209,7 @@ function connect() {
     if (msg.type === "status") {
       showStatus(msg.status, msg.wall_ms);
       addEvents(msg.events || []);
+      if ((msg.events || []).length) refreshQueue();
     }
   };
   ws.onclose = () => { $("state").textContent = "disconnected"; setTimeout(connect, 1000); };
@@ -277,6 +281,33 @@ function buildJog() {
   }
 }
 
+let lastQueued = null;
+
+// The queue and the history, read again when the queue or an event changes
+// them (the status says how many are queued).
+async function refreshQueue() {
+  try {
+    const q = await api("GET", "/api/queue");
+    $("queue").replaceChildren(...q.jobs.map((j, i) => {
+      const li = document.createElement("li");
+      li.textContent = j.name + " ";
+      const b = document.createElement("button");
+      b.textContent = "remove";
+      b.onclick = () => act("DELETE", "/api/queue/" + i).then(refreshQueue);
+      li.appendChild(b);
+      return li;
+    }));
+    const h = await api("GET", "/api/history");
+    $("history").replaceChildren(...h.slice(-20).reverse().map((e) => {
+      const li = document.createElement("li");
+      li.className = e.outcome === "finished" ? "info" : "warn";
+      const when = e.ended_wall_ms ? new Date(e.ended_wall_ms).toLocaleString() + "  " : "";
+      li.textContent = when + e.name + ": " + e.outcome;
+      return li;
+    }));
+  } catch (_) { /* shown by the state badge */ }
+}
+
 async function refreshNodes() {
   try {
     const nodes = await api("GET", "/api/nodes");
@@ -306,6 +337,8 @@ async function main() {
   $("file").onchange = (e) => e.target.files[0] && upload(e.target.files[0]);
   $("replace").onclick = () => lastFile && upload(lastFile);
   $("start").onclick = () => { trail = []; if (job) act("POST", "/api/jobs/" + job.id + "/start"); };
+  $("enqueue").onclick = () => job && act("POST", "/api/queue", { job: job.id }).then(refreshQueue);
+  $("queue-start").onclick = () => { trail = []; act("POST", "/api/queue/start"); };
   $("pause").onclick = () => act("POST", "/api/pause");
   $("resume").onclick = () => act("POST", "/api/resume");
   $("cancel").onclick = () => act("POST", "/api/cancel");

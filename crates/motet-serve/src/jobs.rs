@@ -7,7 +7,7 @@ use crate::preview::Preview;
 use motet_api::{load_job, JobKind, JobOptions};
 use motet_host::Machine;
 use motet_planner::{Command, Located};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -78,11 +78,46 @@ pub struct StoredJob {
     /// Its commands, in machine space.
     #[serde(skip)]
     pub commands: Vec<Located<Command>>,
+    /// How it was read (kept so a restarted server reads it the same way).
+    #[serde(skip)]
+    pub options: ReadOptions,
     /// What it draws.
     #[serde(skip)]
     pub preview: Preview,
     #[serde(skip)]
     file: PathBuf,
+}
+
+/// How an upload is read: [`JobOptions`] in a form kept on disk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ReadOptions {
+    /// Unsupported G-codes skipped with a warning.
+    #[serde(default)]
+    pub allow_unknown: bool,
+    /// Fit margin, mm.
+    pub fit: Option<f64>,
+    /// Scale factor.
+    pub scale: Option<f64>,
+    /// Turn, degrees counter-clockwise.
+    #[serde(default)]
+    pub rotate_deg: f64,
+    /// Lower-left corner, machine x, y.
+    pub origin: Option<[f64; 2]>,
+}
+
+impl ReadOptions {
+    /// The options as the job reader takes them.
+    pub fn job_options(&self) -> JobOptions {
+        JobOptions {
+            allow_unknown: self.allow_unknown,
+            placement: motet_api::Placement {
+                fit_margin_mm: self.fit,
+                scale: self.scale,
+                rotate_deg: self.rotate_deg,
+                origin: self.origin,
+            },
+        }
+    }
 }
 
 /// Where a placed drawing landed.
@@ -151,6 +186,79 @@ impl JobStore {
     pub fn list(&self) -> Vec<Arc<StoredJob>> {
         self.jobs.iter().cloned().collect()
     }
+
+    /// The next id a job will get.
+    pub fn next_id(&self) -> u64 {
+        self.next
+    }
+
+    /// Reads again the jobs a server kept before it restarted, from their
+    /// files under this store's folder. A job whose file is gone or no
+    /// longer reads (the machine file changed) is left out; the reasons
+    /// come back, one per job.
+    pub fn restore(&mut self, machine: &Machine, saved: &[SavedJob], next: u64) -> Vec<String> {
+        let mut problems = Vec::new();
+        for j in saved.iter().rev().take(KEPT_JOBS).rev() {
+            let read = match self.saved_file(j) {
+                Ok(file) => read_file(machine, &file, j.id, &j.name, &j.options),
+                Err(e) => Err(e),
+            };
+            match read {
+                Ok(job) => self.jobs.push_back(Arc::new(job)),
+                Err(e) => problems.push(format!("job {} ({}): {e}", j.id, j.name)),
+            }
+        }
+        let highest = saved.iter().map(|j| j.id + 1).max().unwrap_or(1);
+        self.next = next.max(highest).max(self.next);
+        problems
+    }
+
+    /// The file of a kept job: a name this server made, checked again
+    /// since the index is a file on disk.
+    fn saved_file(&self, j: &SavedJob) -> Result<PathBuf, UploadError> {
+        let made = j.file.split_once('.').is_some_and(|(id, ext)| {
+            id == j.id.to_string()
+                && !ext.is_empty()
+                && ext.chars().all(|c| c.is_ascii_alphanumeric() || c == '.')
+        });
+        if !made || j.file.contains("..") {
+            return Err(UploadError::Name(j.file.clone()));
+        }
+        Ok(self.dir.join(&j.file))
+    }
+
+    /// What to keep of each job across restarts.
+    pub fn saved(&self) -> Vec<SavedJob> {
+        self.jobs
+            .iter()
+            .map(|j| SavedJob {
+                id: j.id,
+                name: j.name.clone(),
+                file: j
+                    .file
+                    .file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                bytes: j.bytes,
+                options: j.options,
+            })
+            .collect()
+    }
+}
+
+/// A job as a server keeps it across restarts: its file and how to read it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SavedJob {
+    /// Its id.
+    pub id: u64,
+    /// The name it was uploaded as.
+    pub name: String,
+    /// Its file's name in the jobs folder (`ID.EXT`).
+    pub file: String,
+    /// Bytes uploaded.
+    pub bytes: usize,
+    /// How it is read.
+    pub options: ReadOptions,
 }
 
 /// Stores `bytes` as job `id` in `dir` and reads it for `machine`. `name`
@@ -162,7 +270,7 @@ pub fn read_upload(
     id: u64,
     name: &str,
     bytes: &[u8],
-    opts: &JobOptions,
+    opts: &ReadOptions,
 ) -> Result<StoredJob, UploadError> {
     let name = display_name(name)?;
     if bytes.is_empty() {
@@ -180,33 +288,50 @@ pub fn read_upload(
         None => (lower.as_str(), ""),
     };
     let ext = stem.rsplit_once('.').map_or("", |(_, e)| e);
-    let kind = JobKind::of(Path::new(&lower)).map_err(|_| UploadError::Kind {
+    JobKind::of(Path::new(&lower)).map_err(|_| UploadError::Kind {
         name: name.clone(),
         ext: ext.to_string(),
     })?;
     // The extension passed the kinds' list: letters only, safe in a path.
     let file = dir.join(format!("{id}.{ext}{gz}"));
     std::fs::write(&file, bytes)?;
-    let read = load_job(machine, &file, opts).map_err(|e| {
+    read_file(machine, &file, id, &name, opts).inspect_err(|_| {
         let _ = std::fs::remove_file(&file);
-        UploadError::Job(e.to_string().replace(&file.display().to_string(), &name))
-    });
-    let job = read?;
+    })
+}
+
+/// Reads job `id`'s stored `file` for `machine`; `name` is how the person
+/// knows it, used in messages instead of the server's path.
+fn read_file(
+    machine: &Machine,
+    file: &Path,
+    id: u64,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<StoredJob, UploadError> {
+    let lower = name.to_ascii_lowercase();
+    let kind = JobKind::of(Path::new(&lower)).map_err(|_| UploadError::Kind {
+        name: name.to_string(),
+        ext: lower.rsplit_once('.').map_or("", |(_, e)| e).to_string(),
+    })?;
+    let bytes = std::fs::metadata(file)?.len() as usize;
+    let job = load_job(machine, file, &opts.job_options())
+        .map_err(|e| UploadError::Job(e.to_string().replace(&file.display().to_string(), name)))?;
     let preview = Preview::of(machine, &job.commands);
     let warnings = job
         .warnings
         .iter()
-        .map(|w| w.replace(&file.display().to_string(), &name))
+        .map(|w| w.replace(&file.display().to_string(), name))
         .collect();
     Ok(StoredJob {
         id,
-        name,
+        name: name.to_string(),
         kind: match kind {
             JobKind::Gcode => "gcode",
             JobKind::Svg => "svg",
             JobKind::Image => "image",
         },
-        bytes: bytes.len(),
+        bytes,
         planned_s: job.planned_s.unwrap_or(0.0),
         warnings,
         command_count: job.commands.len(),
@@ -218,8 +343,9 @@ pub fn read_upload(
             clamped_moves: p.clamps.moves,
         }),
         commands: job.commands,
+        options: *opts,
         preview,
-        file,
+        file: file.to_path_buf(),
     })
 }
 

@@ -3,7 +3,9 @@
 //! status to WebSocket clients.
 
 use crate::engine::Nodes;
+use crate::events::Level;
 use crate::jobs::JobStore;
+use crate::persist;
 use crate::session::{Session, State};
 use motet_host::Machine;
 use std::net::SocketAddr;
@@ -42,6 +44,10 @@ pub(crate) struct Shared {
     /// Something a screen should see at once happened (an event: a stop,
     /// a state change): the pusher sends without waiting for its tick.
     pub(crate) changed: tokio::sync::Notify,
+    /// The server's folder (uploads, the token, the kept state).
+    dir: PathBuf,
+    /// Serialises writes of the kept state.
+    saving: Mutex<()>,
     stop: AtomicBool,
     driver: Mutex<Option<std::thread::Thread>>,
 }
@@ -62,6 +68,35 @@ impl Shared {
 
     pub(crate) fn jobs(&self) -> MutexGuard<'_, JobStore> {
         self.jobs.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Writes what the server keeps across restarts (the jobs, the queue,
+    /// the history). The session and the job store are locked one after
+    /// the other, never together. A failed write is an event: the server
+    /// goes on, and the next change writes again.
+    pub(crate) fn save(&self) {
+        let _one = self.saving.lock().unwrap_or_else(|e| e.into_inner());
+        let (queue, history) = {
+            let s = self.session.lock().unwrap_or_else(|e| e.into_inner());
+            (s.queued_ids(), s.history().cloned().collect())
+        };
+        let (next, jobs) = {
+            let j = self.jobs();
+            (j.next_id(), j.saved())
+        };
+        let saved = persist::Saved::new(next, jobs, queue, history);
+        if let Err(e) = persist::store(&self.dir, &saved) {
+            let mut s = self.session.lock().unwrap_or_else(|e| e.into_inner());
+            let now = s.status().t_us;
+            s.events.push(
+                now,
+                Level::Error,
+                format!(
+                    "cannot keep the jobs and history in {}: {e}",
+                    self.dir.display()
+                ),
+            );
+        }
     }
 
     /// The server is shutting down: threads serving it end.
@@ -98,14 +133,19 @@ impl Server {
     ) -> std::io::Result<Server> {
         let machine = Arc::new(machine);
         let (updates, _) = broadcast::channel(64);
+        let mut session = Session::new(machine.clone(), nodes);
+        let mut jobs = JobStore::new(&cfg.dir)?;
+        restore(&cfg.dir, &machine, &mut session, &mut jobs);
         let shared = Arc::new(Shared {
-            session: Mutex::new(Session::new(machine.clone(), nodes)),
-            jobs: Mutex::new(JobStore::new(&cfg.dir)?),
+            session: Mutex::new(session),
+            jobs: Mutex::new(jobs),
             machine,
             token: cfg.token.clone(),
             started: Instant::now(),
             updates,
             changed: tokio::sync::Notify::new(),
+            dir: cfg.dir.clone(),
+            saving: Mutex::new(()),
             stop: AtomicBool::new(false),
             driver: Mutex::new(None),
         });
@@ -167,9 +207,48 @@ impl Server {
     }
 }
 
+/// Puts back what the server kept before it restarted; whatever cannot be
+/// read is said in the events and left on disk.
+fn restore(dir: &std::path::Path, machine: &Machine, s: &mut Session, jobs: &mut JobStore) {
+    let saved = match persist::load(dir) {
+        Ok(Some(saved)) => saved,
+        Ok(None) => return,
+        Err(e) => {
+            let aside = persist::set_aside(dir).map_or_else(
+                |e| format!(" (not set aside: {e})"),
+                |p| format!(", set aside as {}", p.display()),
+            );
+            s.events
+                .push(0, Level::Error, format!("kept state not read: {e}{aside}"));
+            return;
+        }
+    };
+    for problem in jobs.restore(machine, &saved.jobs, saved.next_job) {
+        s.events.push(
+            0,
+            Level::Warn,
+            format!("kept job not read again: {problem}"),
+        );
+    }
+    let queued: Vec<_> = saved.queue.iter().filter_map(|&id| jobs.get(id)).collect();
+    s.events.push(
+        0,
+        Level::Info,
+        format!(
+            "kept from before: {} jobs, {} queued, {} in the history",
+            jobs.list().len(),
+            queued.len(),
+            saved.history.len()
+        ),
+    );
+    s.restore_queue(queued);
+    s.restore_history(saved.history);
+}
+
 /// The clock thread: ticks the session as often as its run needs.
 fn drive(shared: &Shared) {
     let mut seen = 0;
+    let mut saved = 0;
     while !shared.stop.load(Ordering::Relaxed) {
         let now = shared.now();
         let (next, busy) = {
@@ -178,6 +257,13 @@ fn drive(shared: &Shared) {
             if s.events.last_seq() != seen {
                 seen = s.events.last_seq();
                 shared.changed.notify_one();
+            }
+            let version = s.saved_version();
+            if version != saved {
+                saved = version;
+                drop(s);
+                shared.save();
+                s = shared.session.lock().unwrap_or_else(|e| e.into_inner());
             }
             let resting = matches!(
                 s.state(),

@@ -22,10 +22,12 @@ use std::sync::Arc;
 mod history;
 mod machine_edit;
 mod manual;
+mod queue;
 mod state;
 mod status;
 mod stream;
 pub use history::{JobOutcome, KEPT_HISTORY};
+pub use queue::{QueueView, QueuedJob, MAX_QUEUED};
 pub use state::{ActionError, Client, State};
 pub use status::{JobProgress, Status};
 pub use stream::{StreamStatus, STREAM_BLOCKS};
@@ -92,6 +94,10 @@ pub struct Session {
     /// What happened, newest last, bounded.
     pub events: EventLog,
     history: std::collections::VecDeque<JobOutcome>,
+    queue: queue::Queue,
+    /// Counts changes to what a server keeps across restarts (the queue,
+    /// the history), so it saves only when something changed.
+    saved_version: u64,
 }
 
 impl Session {
@@ -117,6 +123,8 @@ impl Session {
             stream: stream::Stream::default(),
             events,
             history: std::collections::VecDeque::new(),
+            queue: queue::Queue::default(),
+            saved_version: 0,
         }
     }
 
@@ -138,6 +146,15 @@ impl Session {
     /// The nodes' links are being set up and their clocks measured.
     pub fn status_connecting(&self) -> bool {
         matches!(self.nodes.run().phase(), Phase::Starting)
+    }
+
+    /// Counts changes to what a server keeps across restarts.
+    pub fn saved_version(&self) -> u64 {
+        self.saved_version
+    }
+
+    fn changed(&mut self) {
+        self.saved_version += 1;
     }
 
     /// The job on the machine (running, held or paused), if any.
@@ -207,10 +224,14 @@ impl Session {
                     }
                     Activity::None => "run finished".into(),
                 };
+                let job_finished = matches!(self.activity, Activity::Job(_));
                 self.end_activity("finished");
                 self.events.push(self.now, Level::Info, what);
                 self.state = State::Idle;
                 self.stopping = None;
+                if job_finished {
+                    self.queue_advance();
+                }
             }
             Phase::Stopped(info) => self.stopped(info),
             _ => {}

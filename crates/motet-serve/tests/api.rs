@@ -16,15 +16,19 @@ fn root() -> &'static Path {
 struct Running {
     base: String,
     token: Option<String>,
-    dir: tempfile::TempDir,
+    dir: Option<tempfile::TempDir>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
 impl Running {
     fn start(token: Option<&str>) -> Running {
+        Running::start_in(token, tempfile::tempdir().unwrap())
+    }
+
+    /// A server on `dir`, as one restarted on the same folder.
+    fn start_in(token: Option<&str>, dir: tempfile::TempDir) -> Running {
         let m = motet_host::Machine::load(&root().join("examples/plotter.toml")).unwrap();
-        let dir = tempfile::tempdir().unwrap();
         let cfg = ServerConfig {
             listen: "127.0.0.1:0".parse().unwrap(),
             dir: dir.path().to_path_buf(),
@@ -51,7 +55,7 @@ impl Running {
         Running {
             base: format!("http://{addr}"),
             token: token.map(String::from),
-            dir,
+            dir: Some(dir),
             stop: Some(tx),
             thread: Some(thread),
         }
@@ -135,6 +139,20 @@ impl Running {
             );
             std::thread::sleep(Duration::from_millis(20));
         }
+    }
+}
+
+impl Running {
+    fn dir(&self) -> &Path {
+        self.dir.as_ref().unwrap().path()
+    }
+
+    /// Stops this server and starts another on the same folder.
+    fn restart(mut self) -> Running {
+        let dir = self.dir.take().unwrap();
+        let token = self.token.clone();
+        drop(self);
+        Running::start_in(token.as_deref(), dir)
     }
 }
 
@@ -486,9 +504,9 @@ fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
     let (code, job) = s.upload("../../escape.svg", &svg);
     assert_eq!(code, 201, "{job}");
     assert_eq!(job["name"], "escape.svg");
-    assert!(!s.dir.path().join("../escape.svg").exists());
-    assert!(!s.dir.path().join("../../escape.svg").exists());
-    let stored: Vec<String> = std::fs::read_dir(s.dir.path().join("jobs"))
+    assert!(!s.dir().join("../escape.svg").exists());
+    assert!(!s.dir().join("../../escape.svg").exists());
+    let stored: Vec<String> = std::fs::read_dir(s.dir().join("jobs"))
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
         .collect();
@@ -590,10 +608,129 @@ fn hundreds_of_watchers_and_a_client_gone_mid_upload_leave_the_machine_safe() {
     // The half upload left nothing behind.
     let (_, jobs) = s.call("GET", "/api/jobs", None, "a");
     assert_eq!(jobs, json!([]));
-    assert_eq!(
-        std::fs::read_dir(s.dir.path().join("jobs"))
+    assert_eq!(std::fs::read_dir(s.dir().join("jobs")).unwrap().count(), 0);
+}
+
+/// Polls the history until it holds `n` entries.
+fn history_of(s: &Running, n: usize, max: Duration) -> Vec<Value> {
+    let end = Instant::now() + max;
+    loop {
+        let (_, h) = s.call("GET", "/api/history", None, "a");
+        let h = h.as_array().unwrap().clone();
+        if h.len() >= n {
+            return h;
+        }
+        assert!(Instant::now() < end, "history {h:?} after {max:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn the_queue_runs_jobs_in_turn_and_a_restarted_server_keeps_jobs_queue_and_history() {
+    let s = Running::start(None);
+    let mut ids = Vec::new();
+    for (name, gcode) in [
+        ("one.gcode", "G0 X10 Y10\nG1 X20 F6000\n"),
+        ("two.gcode", "G0 X30 Y10\nG1 Y20 F6000\n"),
+    ] {
+        let (code, job) = s.upload(name, gcode.as_bytes());
+        assert_eq!(code, 201, "{job}");
+        ids.push(job["id"].as_u64().unwrap());
+    }
+    for &id in &ids {
+        let (code, q) = s.call("POST", "/api/queue", Some(json!({ "job": id })), "a");
+        assert_eq!(code, 200, "{q}");
+        check_schema("Queue", &q);
+    }
+    // Refusals change nothing.
+    for (method, path, body, want) in [
+        ("POST", "/api/queue", Some(json!({ "job": 999 })), 404),
+        ("POST", "/api/queue", Some(json!({ "id": ids[0] })), 400),
+        ("DELETE", "/api/queue/2", None, 404),
+        ("DELETE", "/api/queue/x", None, 404),
+    ] {
+        let (code, body) = s.call(method, path, body, "a");
+        assert_eq!(code, want, "{method} {path}: {body}");
+    }
+    assert_eq!(s.status()["queued"], 2);
+
+    let (code, q) = s.call("POST", "/api/queue/start", None, "a");
+    assert_eq!(code, 200, "{q}");
+    assert_eq!(q["running"], true);
+    let h = history_of(&s, 2, Duration::from_secs(30));
+    let ran: Vec<_> = h
+        .iter()
+        .map(|e| (e["id"].as_u64().unwrap(), e["outcome"].as_str().unwrap()))
+        .collect();
+    assert_eq!(ran, [(ids[0], "finished"), (ids[1], "finished")]);
+    for e in &h {
+        check_schema("JobOutcome", e);
+    }
+    let (_, q) = s.call("GET", "/api/queue", None, "a");
+    assert_eq!(q, json!({ "running": false, "jobs": [] }));
+    let end = s.status();
+    assert_eq!(end["position"][0], 30.0, "the second job's end: {end}");
+    assert_eq!(end["position"][1], 20.0, "the second job's end: {end}");
+    let (code, body) = s.call("POST", "/api/queue/start", None, "a");
+    assert_eq!(code, 409, "an empty queue: {body}");
+
+    // Queue both again; a restarted server has the jobs (same ids), the
+    // queue (halted) and the history, and gives new uploads new ids.
+    for &id in ids.iter().rev() {
+        s.call("POST", "/api/queue", Some(json!({ "job": id })), "a");
+    }
+    let s = s.restart();
+    let (_, jobs) = s.call("GET", "/api/jobs", None, "a");
+    let kept: Vec<_> = jobs
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["id"].as_u64().unwrap())
+        .collect();
+    assert_eq!(kept, ids);
+    let (_, q) = s.call("GET", "/api/queue", None, "a");
+    let queued: Vec<_> = q["jobs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["id"].as_u64().unwrap())
+        .collect();
+    assert_eq!(queued, [ids[1], ids[0]]);
+    assert_eq!(q["running"], false);
+    assert_eq!(history_of(&s, 2, Duration::ZERO), h);
+    let (code, job) = s.upload("three.gcode", b"G0 X5 Y5\n");
+    assert_eq!(code, 201, "{job}");
+    assert_eq!(job["id"].as_u64().unwrap(), ids[1] + 1);
+
+    // A kept state that does not read is set aside, not lost, and said.
+    std::fs::write(s.dir().join("state.json"), "{ not json").unwrap();
+    let s = s.restart();
+    let (_, ev) = s.call("GET", "/api/events?since=0", None, "a");
+    assert!(s.dir().join("state.json.bad").exists(), "{ev}");
+    let (_, events) = s.call("GET", "/api/events?since=0", None, "a");
+    let said = events.as_array().unwrap().iter().any(|e| {
+        e["message"]
+            .as_str()
             .unwrap()
-            .count(),
-        0
-    );
+            .contains("kept state not read")
+    });
+    assert!(said, "{events}");
+    let (_, jobs) = s.call("GET", "/api/jobs", None, "a");
+    assert_eq!(jobs, json!([]));
+
+    // A job that does not finish halts the queue; the rest wait.
+    for name in ["long.gcode", "next.gcode"] {
+        let (_, job) = s.upload(name, b"G0 X10 Y10\nG1 X200 F600\n");
+        let id = job["id"].as_u64().unwrap();
+        s.call("POST", "/api/queue", Some(json!({ "job": id })), "a");
+    }
+    let (code, _) = s.call("POST", "/api/queue/start", None, "a");
+    assert_eq!(code, 200);
+    s.call("POST", "/api/estop", None, "b");
+    s.until("stopped", Duration::from_secs(10));
+    let (_, q) = s.call("GET", "/api/queue", None, "a");
+    assert_eq!(q["running"], false, "{q}");
+    assert_eq!(q["jobs"][0]["name"], "next.gcode", "{q}");
+    let h = history_of(&s, 1, Duration::ZERO);
+    assert_eq!(h[0]["outcome"], "emergency stop", "{h:?}");
 }

@@ -2,7 +2,7 @@
 //! JSON; a refused action answers with its reason and changes nothing.
 
 use super::ApiError;
-use crate::jobs::{read_upload, StoredJob, UploadError};
+use crate::jobs::{read_upload, ReadOptions, StoredJob, UploadError};
 use crate::server::Shared;
 use crate::session::Client;
 use axum::body::Bytes;
@@ -21,7 +21,7 @@ type Answer = Result<Json<Value>, ApiError>;
 /// The header a client names itself in (any string it chose), for control.
 pub(crate) const CLIENT_HEADER: &str = "x-motet-client";
 
-fn client(headers: &HeaderMap) -> Option<String> {
+pub(super) fn client(headers: &HeaderMap) -> Option<String> {
     headers
         .get(CLIENT_HEADER)
         .and_then(|v| v.to_str().ok())
@@ -148,7 +148,7 @@ pub(super) async fn jobs(State(sh): Shared_) -> Json<Value> {
     Json(json!(list))
 }
 
-fn find(sh: &Shared, id: &str) -> Result<Arc<StoredJob>, ApiError> {
+pub(super) fn find(sh: &Shared, id: &str) -> Result<Arc<StoredJob>, ApiError> {
     let n: u64 = id
         .parse()
         .map_err(|_| ApiError(StatusCode::NOT_FOUND, format!("no job {id:?}")))?;
@@ -210,9 +210,13 @@ pub(super) async fn upload(
     let q = q.map_err(|e| ApiError(StatusCode::BAD_REQUEST, e.body_text()))?;
     // Too large, or the client went away mid-upload: nothing is stored.
     let body = body.map_err(|e| ApiError(e.status(), e.body_text()))?;
-    let opts = motet_api::JobOptions {
+    let p = q.placement()?;
+    let opts = ReadOptions {
         allow_unknown: q.allow_unknown,
-        placement: q.placement()?,
+        fit: p.fit_margin_mm,
+        scale: p.scale,
+        rotate_deg: p.rotate_deg,
+        origin: p.origin,
     };
     let (id, dir) = sh.jobs().reserve();
     let machine = sh.machine.clone();
@@ -232,8 +236,15 @@ pub(super) async fn upload(
         };
         ApiError(code, e.to_string())
     })?;
-    let running = sh.session().job_id();
-    let job = sh.jobs().insert(job, |id| running == Some(id));
+    // The job on the machine and those queued stay whatever the uploads.
+    let (running, queued) = {
+        let s = sh.session();
+        (s.job_id(), s.queued_ids())
+    };
+    let job = sh
+        .jobs()
+        .insert(job, |id| running == Some(id) || queued.contains(&id));
+    sh.save();
     Ok((StatusCode::CREATED, Json(job_json(&job))))
 }
 

@@ -3,6 +3,7 @@
 
 mod api;
 mod assets;
+mod queue;
 mod ws;
 
 use crate::server::Shared;
@@ -10,7 +11,7 @@ use axum::extract::{DefaultBodyLimit, Request, State};
 use axum::http::{header, StatusCode};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
-use axum::routing::{get, post};
+use axum::routing::{delete, get, post};
 use axum::{Json, Router};
 use std::sync::Arc;
 
@@ -30,6 +31,10 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/jobs/{id}"),
     ("get", "/api/jobs/{id}/preview"),
     ("post", "/api/jobs/{id}/start"),
+    ("get", "/api/queue"),
+    ("post", "/api/queue"),
+    ("delete", "/api/queue/{index}"),
+    ("post", "/api/queue/start"),
     ("post", "/api/pause"),
     ("post", "/api/resume"),
     ("post", "/api/cancel"),
@@ -60,6 +65,9 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/jobs/{id}", get(api::job))
         .route("/api/jobs/{id}/preview", get(api::preview))
         .route("/api/jobs/{id}/start", post(api::start))
+        .route("/api/queue", get(queue::list).post(queue::add))
+        .route("/api/queue/{index}", delete(queue::remove))
+        .route("/api/queue/start", post(queue::start))
         .route("/api/pause", post(api::pause))
         .route("/api/resume", post(api::resume))
         .route("/api/cancel", post(api::cancel))
@@ -96,8 +104,12 @@ impl From<crate::session::ActionError> for ApiError {
     fn from(e: crate::session::ActionError) -> ApiError {
         use crate::session::ActionError as E;
         let code = match e {
-            E::WrongState { .. } | E::NotController => StatusCode::CONFLICT,
-            E::UnknownJob(_) | E::UnknownNode { .. } => StatusCode::NOT_FOUND,
+            E::WrongState { .. } | E::NotController | E::QueueFull(_) | E::QueueEmpty => {
+                StatusCode::CONFLICT
+            }
+            E::UnknownJob(_) | E::UnknownNode { .. } | E::NoSuchEntry { .. } => {
+                StatusCode::NOT_FOUND
+            }
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
             | E::OutOfRange { .. }

@@ -92,6 +92,20 @@ pub enum ActionError {
         /// The machine's nodes.
         nodes: String,
     },
+    /// The queue holds as many jobs as it takes.
+    #[error("the queue is full ({0} jobs)")]
+    QueueFull(usize),
+    /// The queue has no job to start.
+    #[error("the queue is empty")]
+    QueueEmpty,
+    /// No queue entry at this place.
+    #[error("no queue entry {index} (the queue holds {len})")]
+    NoSuchEntry {
+        /// The place asked for, from 0.
+        index: usize,
+        /// Jobs in the queue.
+        len: usize,
+    },
 }
 
 /// Who asks: a client id (any string the client chose) for control.
