@@ -79,10 +79,17 @@ fn spawned_nodes_run_a_job_to_the_end() {
     let _serial = serial();
     let tmp = scratch("spawn");
     let out = tmp.path();
+    // Short, with every axis (so every node) moving, alone and together.
+    let job = out.join("short.gcode");
+    std::fs::write(
+        &job,
+        "G0 Z5\nG0 X40 Y40\nM3 S800\nG1 Z-2 F600\nG2 X40 Y40 Z-4 I-10 J0 F900\nG1 X80 Y70 Z0 F900\nG0 Z10\nM5\n",
+    )
+    .unwrap();
     let mut args = vec![
         "run",
         "examples/gestalt-3axis.toml",
-        "examples/jobs/gestalt-3d.gcode",
+        job.to_str().unwrap(),
         "--nodes",
         "spawn",
         "-q",
@@ -144,11 +151,18 @@ fn scan_pair_and_run_on_paired_nodes_over_udp_and_a_pty() {
             "{stdout}"
         );
 
+        // A short job: what is tested is that paired nodes run one.
+        let job = dir.join("square.gcode");
+        std::fs::write(
+            &job,
+            "G0 X20 Y20\nM3\nG1 X60 F3000\nG1 Y60\nG1 X20\nG1 Y20\nM5\n",
+        )
+        .unwrap();
         let out = dir.join(format!("out-{}", listen.len()));
         let mut args = vec![
             "run",
             machine.to_str().unwrap(),
-            "examples/jobs/drawing.svg",
+            job.to_str().unwrap(),
             "--nodes",
             "paired",
             "-q",
