@@ -96,11 +96,19 @@ function drawView() {
     g.beginPath();
     g.strokeStyle = "#1d3557";
     g.lineWidth = 1.6 * d;
-    trail.forEach((p, i) => { const q = T(p); i ? g.lineTo(q[0], q[1]) : g.moveTo(q[0], q[1]); });
+    // A null breaks the line: the pen went up.
+    let up = true;
+    for (const p of trail) {
+      if (!p) { up = true; continue; }
+      const q = T(p);
+      up ? g.moveTo(q[0], q[1]) : g.lineTo(q[0], q[1]);
+      up = false;
+    }
     g.stroke();
   }
-  if (lastStatus) {
-    const q = T(lastStatus.position);
+  const here = graphPos || (lastStatus && lastStatus.position);
+  if (here) {
+    const q = T(here);
     g.beginPath();
     g.fillStyle = "#e63946";
     g.arc(q[0], q[1], 5 * d, 0, 2 * Math.PI);
@@ -173,7 +181,9 @@ function showStatus(s, wallMs) {
   $("cancel").disabled = !["running", "holding", "paused"].includes(s.state);
   $("unlock").disabled = !["alarm", "stopped"].includes(s.state);
   $("control").disabled = !s.controller || s.controller === client;
-  for (const b of document.querySelectorAll(".pad button, #zero, #tools button")) b.disabled = busy || s.state === "alarm";
+  // A hand-driven machine takes no jobs, jogs or tool changes.
+  for (const b of document.querySelectorAll(".pad button, #zero, #tools button")) b.disabled = busy || s.state === "alarm" || graphMode;
+  if (graphMode) $("start").disabled = $("queue-start").disabled = true;
   if (s.reason) $("state").title = s.reason;
   const stats = window.motetStats;
   stats.updates += 1;
@@ -208,6 +218,7 @@ function connect() {
     const msg = JSON.parse(m.data);
     if (msg.type === "status") {
       showStatus(msg.status, msg.wall_ms);
+      if (msg.graph) showGraph(msg.graph);
       addEvents(msg.events || []);
       if ((msg.events || []).length) refreshQueue();
     }
@@ -308,6 +319,64 @@ async function refreshQueue() {
   } catch (_) { /* shown by the state badge */ }
 }
 
+// ---- a hand-driven machine: the graph's inputs as sliders -------------------
+
+let graphPos = null;
+let graphMode = false;
+const RANGES = { analog: [0, 1023, 1], encoder: [-4000, 4000, 1] };
+
+function buildGraph(g) {
+  graphMode = true;
+  $("graph-panel").hidden = false;
+  $("graph-file").textContent = g.file;
+  const box = $("graph-inputs");
+  for (const inp of g.inputs) {
+    if (inp.kind === "stream") continue;
+    const label = document.createElement("label");
+    const name = document.createElement("span");
+    name.textContent = inp.name;
+    const out = document.createElement("output");
+    out.textContent = inp.value;
+    const el = document.createElement("input");
+    el.id = "graph-" + inp.name;
+    if (inp.kind === "digital") {
+      el.type = "checkbox";
+      el.checked = inp.value !== 0;
+    } else {
+      const [lo, hi, step] = RANGES[inp.kind];
+      Object.assign(el, { type: "range", min: lo, max: hi, step, value: inp.value });
+    }
+    let pending = null;
+    // Sends the newest value at most every 30 ms while the slider moves.
+    const send = () => {
+      const v = el.type === "checkbox" ? (el.checked ? 1 : 0) : Number(el.value);
+      out.textContent = v;
+      if (pending) return;
+      pending = setTimeout(async () => {
+        pending = null;
+        const now = el.type === "checkbox" ? (el.checked ? 1 : 0) : Number(el.value);
+        try { $("graph-error").textContent = ""; await api("POST", "/api/graph/inputs", { [inp.name]: now }); }
+        catch (e) { $("graph-error").textContent = String(e.message || e); }
+      }, 30);
+    };
+    el.oninput = send;
+    el.onchange = send;
+    label.append(name, el, out);
+    box.appendChild(label);
+  }
+}
+
+function showGraph(g) {
+  const p = g.position;
+  if (!graphPos || graphPos[0] !== p[0] || graphPos[1] !== p[1]) {
+    trail.push(g.pen_down ? p : null);
+    if (trail.length > 50000) trail = trail.slice(-40000);
+  }
+  graphPos = p;
+  $("position").textContent = "x " + p[0].toFixed(2) + "  y " + p[1].toFixed(2) + (g.pen_down ? "" : "  (pen up)");
+  if (g.error) $("graph-error").textContent = "the graph stopped: " + g.error;
+}
+
 async function refreshNodes() {
   try {
     const nodes = await api("GET", "/api/nodes");
@@ -350,6 +419,7 @@ async function main() {
     return act("POST", "/api/estop");
   };
   $("zero").onclick = () => act("POST", "/api/position", { axes: Object.fromEntries(machine.axes.map((a) => [a.name, 0])) });
+  try { buildGraph(await api("GET", "/api/graph")); } catch (_) { /* no graph: a job machine */ }
   connect();
   refreshNodes();
   setInterval(refreshNodes, 2000);

@@ -13,6 +13,7 @@ pub mod auth;
 pub mod device;
 pub mod engine;
 pub mod events;
+pub mod graph;
 pub mod grbl;
 mod http;
 pub mod jobs;

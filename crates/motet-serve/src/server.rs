@@ -48,6 +48,8 @@ pub(crate) struct Shared {
     dir: PathBuf,
     /// Serialises writes of the kept state.
     saving: Mutex<()>,
+    /// The graph driving the machine by hand, if one does.
+    pub(crate) graph: std::sync::OnceLock<crate::graph::GraphRun>,
     stop: AtomicBool,
     driver: Mutex<Option<std::thread::Thread>>,
 }
@@ -146,6 +148,7 @@ impl Server {
             changed: tokio::sync::Notify::new(),
             dir: cfg.dir.clone(),
             saving: Mutex::new(()),
+            graph: std::sync::OnceLock::new(),
             stop: AtomicBool::new(false),
             driver: Mutex::new(None),
         });
@@ -158,6 +161,22 @@ impl Server {
             shared,
             driver: Some(driver),
         })
+    }
+
+    /// Drives the machine by hand through `graph` from now on: it runs on a
+    /// simulated node, paced to the wall clock, its inputs set over the API
+    /// (`/api/graph`); the session takes no jobs meanwhile.
+    pub fn drive_by_graph(
+        &self,
+        graph: motet_graph::GraphFile,
+    ) -> Result<(), crate::graph::StartError> {
+        let file = graph.file.clone();
+        let run = crate::graph::GraphRun::start(self.shared.machine.as_ref().clone(), graph)?;
+        if self.shared.graph.set(run).is_err() {
+            return Err(std::io::Error::other("a graph drives this machine already").into());
+        }
+        self.shared.session().hand_driven(&file);
+        Ok(())
     }
 
     /// The HTTP routes, the page and the WebSocket.

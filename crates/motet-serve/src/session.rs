@@ -98,6 +98,8 @@ pub struct Session {
     /// Counts changes to what a server keeps across restarts (the queue,
     /// the history), so it saves only when something changed.
     saved_version: u64,
+    /// The graph file that drives the machine by hand, if one does.
+    hand_driven: Option<String>,
 }
 
 impl Session {
@@ -125,6 +127,7 @@ impl Session {
             history: std::collections::VecDeque::new(),
             queue: queue::Queue::default(),
             saved_version: 0,
+            hand_driven: None,
         }
     }
 
@@ -305,7 +308,24 @@ impl Session {
         }
     }
 
+    /// A graph drives the machine from now on (`motet serve --graph`): jobs,
+    /// jogs and tool changes are refused.
+    pub fn hand_driven(&mut self, graph: &str) {
+        self.hand_driven = Some(graph.to_string());
+        self.events.push(
+            self.now,
+            Level::Info,
+            format!("driven by hand through the graph {graph}"),
+        );
+    }
+
     fn ready(&self, action: &'static str) -> Result<(), ActionError> {
+        if let Some(graph) = &self.hand_driven {
+            return Err(ActionError::HandDriven {
+                action,
+                graph: graph.clone(),
+            });
+        }
         match self.state {
             State::Idle | State::Stopped => Ok(()),
             state => Err(ActionError::WrongState { action, state }),

@@ -28,7 +28,19 @@ impl Running {
 
     /// A server on `dir`, as one restarted on the same folder.
     fn start_in(token: Option<&str>, dir: tempfile::TempDir) -> Running {
-        let m = motet_host::Machine::load(&root().join("examples/plotter.toml")).unwrap();
+        Running::start_with(token, dir, "examples/plotter.toml", None)
+    }
+
+    /// A server for the machine file `machine`, driven by hand through
+    /// `graph` if given.
+    fn start_with(
+        token: Option<&str>,
+        dir: tempfile::TempDir,
+        machine: &str,
+        graph: Option<&str>,
+    ) -> Running {
+        let m = motet_host::Machine::load(&root().join(machine)).unwrap();
+        let graph = graph.map(|g| motet_graph::GraphFile::load(&root().join(g)).unwrap());
         let cfg = ServerConfig {
             listen: "127.0.0.1:0".parse().unwrap(),
             dir: dir.path().to_path_buf(),
@@ -43,6 +55,9 @@ impl Running {
                 addr_tx.send(listener.local_addr().unwrap()).unwrap();
                 let nodes = Box::new(SimNodes::new(&m, m.start, serve_config()));
                 let server = Server::start(m, nodes, &cfg).unwrap();
+                if let Some(g) = graph {
+                    server.drive_by_graph(g).unwrap();
+                }
                 server
                     .serve(listener, async {
                         let _ = rx.await;
@@ -733,4 +748,102 @@ fn the_queue_runs_jobs_in_turn_and_a_restarted_server_keeps_jobs_queue_and_histo
     assert_eq!(q["jobs"][0]["name"], "next.gcode", "{q}");
     let h = history_of(&s, 1, Duration::ZERO);
     assert_eq!(h[0]["outcome"], "emergency stop", "{h:?}");
+}
+
+/// Inputs that hold still.
+struct Held(Vec<f64>);
+
+impl motet_sim::dance::InputSource for Held {
+    fn values(&mut self, _: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.0);
+    }
+}
+
+#[test]
+fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
+    let (machine, graph) = (
+        "examples/dance/game-controller/machine.toml",
+        "examples/dance/game-controller/graph.toml",
+    );
+    let s = Running::start_with(None, tempfile::tempdir().unwrap(), machine, Some(graph));
+    let (code, g) = s.call("GET", "/api/graph", None, "a");
+    assert_eq!(code, 200, "{g}");
+    check_schema("Graph", &g);
+    let inputs: Vec<_> = g["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| {
+            (
+                i["name"].as_str().unwrap(),
+                i["kind"].as_str().unwrap(),
+                i["value"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        inputs,
+        [
+            ("joy_x", "analog", 512.0),
+            ("joy_y", "analog", 512.0),
+            ("knob_x", "encoder", 0.0),
+            ("knob_y", "encoder", 0.0)
+        ]
+    );
+    // Turn the knobs; the machine ends where the same graph, fed the same
+    // values offline, puts it.
+    let (code, g) = s.call(
+        "POST",
+        "/api/graph/inputs",
+        Some(json!({"knob_x": 300, "knob_y": -200})),
+        "b",
+    );
+    assert_eq!(code, 200, "{g}");
+    let m = motet_host::Machine::load(&root().join(machine)).unwrap();
+    let gf = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
+    let mut held = Held(vec![512.0, 512.0, 300.0, -200.0]);
+    let want = motet_sim::dance::run_dance(&m, &gf, &mut held, 3.0, &mut |_| {})
+        .unwrap()
+        .report
+        .final_xy;
+    let end = Instant::now() + Duration::from_secs(30);
+    let got = loop {
+        let (_, g) = s.call("GET", "/api/graph", None, "a");
+        let p = [
+            g["position"][0].as_f64().unwrap(),
+            g["position"][1].as_f64().unwrap(),
+        ];
+        if (p[0] - want[0]).hypot(p[1] - want[1]) < 1e-9 {
+            break p;
+        }
+        assert!(Instant::now() < end, "at {p:?}, want {want:?}: {g}");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(
+        got[0].hypot(got[1]) > 5.0,
+        "the knobs moved nothing: {got:?}"
+    );
+
+    // Wrong inputs change nothing; the machine takes no jobs meanwhile.
+    for (body, want) in [
+        (json!({"knob_x": 5, "nope": 1}), 422),
+        (json!({"knob_x": "five"}), 400),
+        (json!([1, 2]), 400),
+    ] {
+        let (code, answer) = s.call("POST", "/api/graph/inputs", Some(body.clone()), "a");
+        assert_eq!(code, want, "{body}: {answer}");
+    }
+    let (_, g) = s.call("GET", "/api/graph", None, "a");
+    assert_eq!(g["inputs"][2]["value"], 300.0);
+    let (code, job) = s.upload("one.gcode", b"G0 X1 Y1\n");
+    assert_eq!(code, 201, "{job}");
+    let id = job["id"].as_u64().unwrap();
+    let (code, answer) = s.call("POST", &format!("/api/jobs/{id}/start"), None, "a");
+    assert_eq!(code, 409, "{answer}");
+    assert!(
+        answer["error"].as_str().unwrap().contains("by hand"),
+        "{answer}"
+    );
+    let (code, _) = s.call("POST", "/api/jog", Some(json!({"axes": {"x": 1}})), "a");
+    assert_eq!(code, 409);
 }

@@ -44,6 +44,12 @@ pub struct ServeArgs {
     /// (docs/compat.md). Same machine, same state as the web page.
     #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
     grbl: Option<motet_serve::device::port::Port>,
+    /// Drive the machine by hand through this motion-stream graph (as
+    /// `motet dance`): it runs on a simulated node, paced to the wall
+    /// clock, its `[inputs]` set live from the page's sliders or
+    /// `/api/graph/inputs`. The machine then takes no jobs.
+    #[arg(long, value_name = "GRAPH.toml", conflicts_with = "grbl")]
+    graph: Option<PathBuf>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -64,6 +70,10 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         Some(t)
     } else {
         None
+    };
+    let graph = match &args.graph {
+        Some(p) => Some(motet_graph::GraphFile::load(p)?),
+        None => None,
     };
     let nodes = nodes(&machine, &args.machine, args.nodes)?;
     let name = machine.name.clone();
@@ -89,6 +99,13 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         };
         let addr = listener.local_addr()?;
         let server = Server::start(machine, nodes, &cfg)?;
+        if let Some(g) = graph {
+            let file = g.file.clone();
+            server
+                .drive_by_graph(g)
+                .with_context(|| format!("--graph {file}"))?;
+            println!("graph: {file}, inputs set from the page or /api/graph/inputs");
+        }
         println!("motet serve: machine {name} on {where_} nodes at http://{addr}/");
         if let Some(port) = &grbl {
             let at = server

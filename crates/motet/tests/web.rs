@@ -4,7 +4,9 @@
 //! sees the position move, pauses, resumes and presses the emergency stop;
 //! the machine must rest on the job's path. `./scripts/test` installs
 //! chromium and the script's npm package. A screenshot of the running page
-//! is written to `target/web/serve.png` (the README shows a copy).
+//! is written to `target/web/serve.png` (the README shows a copy). A
+//! hand-driven machine's page (`--graph`, `tests/web/graph.mjs`) shows the
+//! graph's inputs as sliders, and moving them moves the machine.
 
 mod common;
 
@@ -43,8 +45,12 @@ fn answers(addr: &str, path: &str) -> bool {
     text.starts_with("HTTP/1.1 200")
 }
 
+/// One browser at a time: the figures one prints are its own.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn the_page_drives_the_plotter_in_a_real_browser() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let web = root().join("crates/motet/tests/web");
     assert!(
         web.join("node_modules/playwright-core").exists(),
@@ -111,5 +117,81 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     assert!(
         terminate(&mut serve.child),
         "motet serve did not stop cleanly on SIGTERM"
+    );
+}
+
+/// Inputs that hold still.
+struct Held(Vec<f64>);
+
+impl motet_sim::dance::InputSource for Held {
+    fn values(&mut self, _: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.0);
+    }
+}
+
+#[test]
+fn a_hand_driven_machine_moves_with_the_page_sliders() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let web = root().join("crates/motet/tests/web");
+    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    let (machine, graph) = (
+        "examples/dance/game-controller/machine.toml",
+        "examples/dance/game-controller/graph.toml",
+    );
+    let dir = common::scratch("web", "graph");
+    let mut serve = common::serve(
+        &[machine, "--graph", graph, "--listen", "127.0.0.1:0"],
+        dir.path(),
+    );
+    let url = format!("http://{}/", serve.addr);
+    let shot = root().join("target/web/serve-graph.png");
+    std::fs::create_dir_all(shot.parent().unwrap()).unwrap();
+    let out = Command::new("node")
+        .arg(web.join("graph.mjs"))
+        .arg(&url)
+        .arg(r#"{"knob_x": 250, "knob_y": 400}"#)
+        .arg(&shot)
+        .env("CHROMIUM", &chromium)
+        .output()
+        .expect("node (Node.js) runs the browser script");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "graph.mjs failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let seen: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    eprintln!("the browser saw: {seen}");
+    assert_eq!(seen["page_errors"], serde_json::json!([]));
+    assert_eq!(
+        seen["sliders"],
+        serde_json::json!([
+            "graph-joy_x:range",
+            "graph-joy_y:range",
+            "graph-knob_x:range",
+            "graph-knob_y:range"
+        ])
+    );
+    assert_eq!(seen["inputs"]["knob_x"], 250.0, "{seen}");
+    assert_eq!(seen["inputs"]["knob_y"], 400.0, "{seen}");
+    // Where the same graph fed the same values offline puts the machine.
+    let m = motet_host::Machine::load(&root().join(machine)).unwrap();
+    let g = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
+    let mut held = Held(vec![512.0, 512.0, 250.0, 400.0]);
+    let want = motet_sim::dance::run_dance(&m, &g, &mut held, 3.0, &mut |_| {})
+        .unwrap()
+        .report
+        .final_xy;
+    let got = [
+        seen["position"][0].as_f64().unwrap(),
+        seen["position"][1].as_f64().unwrap(),
+    ];
+    assert!(
+        (got[0] - want[0]).hypot(got[1] - want[1]) < 1e-6,
+        "at {got:?}, want {want:?}"
+    );
+    assert!(
+        terminate(&mut serve.child),
+        "motet serve did not stop cleanly"
     );
 }

@@ -3,6 +3,7 @@
 
 mod api;
 mod assets;
+mod graph;
 mod queue;
 mod ws;
 
@@ -31,6 +32,8 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/jobs/{id}"),
     ("get", "/api/jobs/{id}/preview"),
     ("post", "/api/jobs/{id}/start"),
+    ("get", "/api/graph"),
+    ("post", "/api/graph/inputs"),
     ("get", "/api/queue"),
     ("post", "/api/queue"),
     ("delete", "/api/queue/{index}"),
@@ -65,6 +68,8 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/jobs/{id}", get(api::job))
         .route("/api/jobs/{id}/preview", get(api::preview))
         .route("/api/jobs/{id}/start", post(api::start))
+        .route("/api/graph", get(graph::view))
+        .route("/api/graph/inputs", post(graph::set_inputs))
         .route("/api/queue", get(queue::list).post(queue::add))
         .route("/api/queue/{index}", delete(queue::remove))
         .route("/api/queue/start", post(queue::start))
@@ -104,9 +109,11 @@ impl From<crate::session::ActionError> for ApiError {
     fn from(e: crate::session::ActionError) -> ApiError {
         use crate::session::ActionError as E;
         let code = match e {
-            E::WrongState { .. } | E::NotController | E::QueueFull(_) | E::QueueEmpty => {
-                StatusCode::CONFLICT
-            }
+            E::WrongState { .. }
+            | E::NotController
+            | E::QueueFull(_)
+            | E::QueueEmpty
+            | E::HandDriven { .. } => StatusCode::CONFLICT,
             E::UnknownJob(_) | E::UnknownNode { .. } | E::NoSuchEntry { .. } => {
                 StatusCode::NOT_FOUND
             }

@@ -58,12 +58,15 @@ fn push_message(sh: &Shared, seen: u64) -> (String, u64) {
     let wall_ms = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64() * 1e3);
-    let msg = json!({
+    let mut msg = json!({
         "type": "status",
         "wall_ms": wall_ms,
         "status": status,
         "events": events,
     });
+    if let Some(g) = sh.graph.get() {
+        msg["graph"] = json!(g.view());
+    }
     (msg.to_string(), last)
 }
 

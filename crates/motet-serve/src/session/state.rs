@@ -92,6 +92,14 @@ pub enum ActionError {
         /// The machine's nodes.
         nodes: String,
     },
+    /// A graph drives the machine by hand (`motet serve --graph`).
+    #[error("cannot {action}: the machine is driven by hand through its graph ({graph})")]
+    HandDriven {
+        /// The action asked for.
+        action: &'static str,
+        /// The graph file.
+        graph: String,
+    },
     /// The queue holds as many jobs as it takes.
     #[error("the queue is full ({0} jobs)")]
     QueueFull(usize),

@@ -99,15 +99,21 @@ impl<'a> Drawing<'a> {
     /// channel's net step `counts`.
     pub fn sample(&mut self, joints: &[f64], counts: &[i64], t_us: f64) {
         let p = self.xy(joints);
-        let tool_on = match (self.pen, self.job_pen) {
-            (Some(k), _) => (counts[k] as f64) < self.pen_down_below,
-            (None, Some(j)) => j.tool_on(t_us),
-            (None, None) => true,
-        };
+        let tool_on = self.pen_down(counts, t_us);
         let mut pt: Point = [0.0; MAX_AXES];
         pt[0] = p[0];
         pt[1] = p[1];
         self.path.sample(&pt, tool_on);
+    }
+
+    /// Whether the pen is down at `t_us`, given each graph channel's net
+    /// step `counts`.
+    pub fn pen_down(&self, counts: &[i64], t_us: f64) -> bool {
+        match (self.pen, self.job_pen) {
+            (Some(k), _) => (counts[k] as f64) < self.pen_down_below,
+            (None, Some(j)) => j.tool_on(t_us),
+            (None, None) => true,
+        }
     }
 
     /// The strokes drawn.

@@ -18,6 +18,7 @@ mod report;
 mod run;
 mod stages;
 mod trace;
+mod watch;
 
 pub use inputs::InputSource;
 pub use job::PlannedJob;
@@ -26,6 +27,7 @@ pub use recording::Recording;
 pub use report::{DanceChannel, DanceReport, DanceResult, StageMark};
 pub use run::{run_dance, run_dance_with, run_dance_with_job, DanceOptions};
 pub use trace::CsvTrace;
+pub use watch::{watch_dance, DanceMoment};
 
 use motet_planner::{PlanError, SourceLoc};
 

@@ -84,7 +84,7 @@ pub fn run_dance_with(
 }
 
 /// A dance in progress: the node and everything fed to it or taken from it.
-struct Dance<'a> {
+pub(super) struct Dance<'a> {
     machine: &'a Machine,
     graph: &'a GraphFile,
     job: Option<&'a PlannedJob>,
@@ -103,7 +103,7 @@ impl<'a> Dance<'a> {
     /// Maps the channels on the machine, builds the graph on a new node (with
     /// the recording in its tape) and readies the job's feed, in that order:
     /// the first that fails is the error.
-    fn new(
+    pub(super) fn new(
         machine: &'a Machine,
         graph: &'a GraphFile,
         options: DanceOptions<'a>,
@@ -132,7 +132,11 @@ impl<'a> Dance<'a> {
     /// The frame starting at `t_us`: inputs, stages and job segments reach
     /// the node, it runs to the frame's end, and the drawing follows any
     /// steps it made.
-    fn frame(&mut self, t_us: f64, source: &mut dyn InputSource) -> Result<(), DanceError> {
+    pub(super) fn frame(
+        &mut self,
+        t_us: f64,
+        source: &mut dyn InputSource,
+    ) -> Result<(), DanceError> {
         let node = &mut self.node;
         self.inputs.update(t_us * 1e-6, source, self.graph, node)?;
         self.stages
@@ -148,8 +152,25 @@ impl<'a> Dance<'a> {
         Ok(())
     }
 
+    /// The pen's x, y now, mm.
+    pub(super) fn xy(&self) -> [f64; 2] {
+        self.drawing.xy(&self.joints.now)
+    }
+
+    /// Drops the strokes drawn so far (a dance that runs for days keeps
+    /// its memory bounded; its watcher keeps what it needs).
+    pub(super) fn forget_drawing(&mut self) {
+        self.drawing.take();
+    }
+
+    /// Whether the pen is down now.
+    pub(super) fn pen_down(&self) -> bool {
+        let t_us = self.node.graph_frames() as f64 * self.graph.frame_us;
+        self.drawing.pen_down(&self.board.counts, t_us)
+    }
+
     /// The report after `n_frames` frames, the drawing and the node's tape.
-    fn finish(mut self, n_frames: u64) -> DanceResult {
+    pub(super) fn finish(mut self, n_frames: u64) -> DanceResult {
         let g = self.node.graph().expect("committed");
         self.joints.update(&self.board.counts);
         let report = DanceReport {

@@ -1,0 +1,287 @@
+//! A hand-driven machine: the server runs a motion-stream graph on a
+//! simulated node, paced to the wall clock, with the graph's inputs
+//! (knobs, joysticks, buttons: its `[inputs]`) set live over the API and
+//! from the page's sliders, as `motet dance --live` takes them from a
+//! terminal. While the graph runs, the machine is the graph's: the session
+//! takes no jobs, jogs or tool changes.
+
+use motet_graph::GraphFile;
+use motet_host::Machine;
+use motet_sim::dance::{watch_dance, DanceMoment, DanceOptions, InputSource};
+use motet_wire::message::GraphInputKind;
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+/// How often the running graph says where the pen is, frames (1 ms at the
+/// default 40 µs frame).
+const WATCH_EVERY: u64 = 25;
+/// How far the graph may run ahead of the wall clock, s: it sleeps when it
+/// is further ahead (and falls behind, losing nothing, when it cannot keep
+/// up).
+const AHEAD_S: f64 = 0.002;
+/// Points of the pen's path kept for a screen that connects late.
+const KEPT_TRAIL: usize = 20_000;
+
+/// Why an input could not be set. Nothing changed.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// No input of that name.
+    #[error("the graph has no input `{name}` (its inputs: {inputs})")]
+    Unknown {
+        /// The name given.
+        name: String,
+        /// The graph's inputs.
+        inputs: String,
+    },
+    /// Not a finite number.
+    #[error("input `{0}`: the value must be a finite number")]
+    NotFinite(String),
+}
+
+/// Why a graph could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// The graph does not fit the machine, or the node refused it.
+    #[error("{0}")]
+    Dance(#[from] motet_sim::dance::DanceError),
+    /// Its thread could not start.
+    #[error("starting the graph's thread: {0}")]
+    Thread(#[from] std::io::Error),
+}
+
+/// One input as a screen shows it.
+#[derive(Clone, Debug, Serialize)]
+pub struct InputView {
+    /// Its name in the graph's `[inputs]`.
+    pub name: String,
+    /// `encoder`, `analog`, `digital` or `stream`.
+    pub kind: &'static str,
+    /// Its value now.
+    pub value: f64,
+}
+
+/// The graph as a screen shows it.
+#[derive(Clone, Debug, Serialize)]
+pub struct GraphView {
+    /// The graph file.
+    pub file: String,
+    /// Its frame, µs.
+    pub frame_us: f64,
+    /// Its inputs.
+    pub inputs: Vec<InputView>,
+    /// The node's time, s.
+    pub t_s: f64,
+    /// The pen's x, y, mm.
+    pub position: [f64; 2],
+    /// Whether the pen is down.
+    pub pen_down: bool,
+    /// Why the graph stopped, if it did (a node refusal).
+    pub error: Option<String>,
+}
+
+struct Live {
+    values: Vec<f64>,
+    moment: DanceMoment,
+    trail: Vec<[f64; 3]>,
+    error: Option<String>,
+}
+
+/// A graph running on its own thread.
+pub struct GraphRun {
+    file: String,
+    frame_us: f64,
+    names: Vec<String>,
+    kinds: Vec<GraphInputKind>,
+    live: Arc<Mutex<Live>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+/// The inputs as the graph reads them: the values set last, with the run
+/// kept to the wall clock.
+struct Paced {
+    live: Arc<Mutex<Live>>,
+    start: Instant,
+}
+
+impl InputSource for Paced {
+    fn values(&mut self, t_s: f64, out: &mut [f64]) {
+        let ahead = t_s - self.start.elapsed().as_secs_f64();
+        if ahead > AHEAD_S {
+            std::thread::sleep(Duration::from_secs_f64(ahead - AHEAD_S / 2.0));
+        }
+        let l = self.live.lock().unwrap_or_else(|e| e.into_inner());
+        out.copy_from_slice(&l.values);
+    }
+}
+
+/// Where an input starts: an analog input (a joystick, a potentiometer;
+/// read 0..=1023) in the middle, so a joystick starts at rest; the others
+/// at 0.
+pub fn start_value(k: GraphInputKind) -> f64 {
+    match k {
+        GraphInputKind::Analog => ANALOG_MIDDLE,
+        _ => 0.0,
+    }
+}
+
+/// The middle of an analog input's range (0..=1023).
+pub const ANALOG_MIDDLE: f64 = 512.0;
+
+fn kind_name(k: GraphInputKind) -> &'static str {
+    match k {
+        GraphInputKind::Encoder => "encoder",
+        GraphInputKind::Analog => "analog",
+        GraphInputKind::Digital => "digital",
+        GraphInputKind::Stream => "stream",
+    }
+}
+
+impl GraphRun {
+    /// Starts `graph` on `machine`: it runs until the run is dropped. It is
+    /// built and run for one frame first, so a graph that does not fit the
+    /// machine is an error here, not later on its thread.
+    pub fn start(machine: Machine, graph: GraphFile) -> Result<GraphRun, StartError> {
+        struct Rest;
+        impl InputSource for Rest {
+            fn values(&mut self, _: f64, out: &mut [f64]) {
+                out.fill(0.0);
+            }
+        }
+        watch_dance(
+            &machine,
+            &graph,
+            &mut Rest,
+            DanceOptions::default(),
+            1,
+            &mut |_| false,
+        )?;
+        let names: Vec<String> = graph.inputs.iter().map(|i| i.name.clone()).collect();
+        let kinds: Vec<GraphInputKind> = graph.inputs.iter().map(|i| i.kind).collect();
+        let live = Arc::new(Mutex::new(Live {
+            values: kinds.iter().map(|k| start_value(*k)).collect(),
+            moment: DanceMoment {
+                t_s: 0.0,
+                xy: [0.0; 2],
+                pen_down: false,
+            },
+            trail: Vec::new(),
+            error: None,
+        }));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (file, frame_us) = (graph.file.clone(), graph.frame_us);
+        let (l, s) = (live.clone(), stop.clone());
+        let thread = std::thread::Builder::new()
+            .name("motet-graph".into())
+            .spawn(move || run(&machine, &graph, &l, &s))?;
+        Ok(GraphRun {
+            file,
+            frame_us,
+            names,
+            kinds,
+            live,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    fn live(&self) -> MutexGuard<'_, Live> {
+        self.live.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Sets inputs by name; all or none (a bad one changes nothing).
+    pub fn set_inputs(&self, given: &[(String, f64)]) -> Result<(), InputError> {
+        let mut at = Vec::with_capacity(given.len());
+        for (name, value) in given {
+            let Some(k) = self.names.iter().position(|n| n == name) else {
+                return Err(InputError::Unknown {
+                    name: name.clone(),
+                    inputs: self.names.join(", "),
+                });
+            };
+            if !value.is_finite() {
+                return Err(InputError::NotFinite(name.clone()));
+            }
+            at.push((k, *value));
+        }
+        let mut l = self.live();
+        for (k, v) in at {
+            l.values[k] = v;
+        }
+        Ok(())
+    }
+
+    /// The graph now.
+    pub fn view(&self) -> GraphView {
+        let l = self.live();
+        GraphView {
+            file: self.file.clone(),
+            frame_us: self.frame_us,
+            inputs: self
+                .names
+                .iter()
+                .zip(&self.kinds)
+                .zip(&l.values)
+                .map(|((n, k), v)| InputView {
+                    name: n.clone(),
+                    kind: kind_name(*k),
+                    value: *v,
+                })
+                .collect(),
+            t_s: l.moment.t_s,
+            position: l.moment.xy,
+            pen_down: l.moment.pen_down,
+            error: l.error.clone(),
+        }
+    }
+
+    /// The pen's path so far (x, y, 1 when down else 0), the newest
+    /// [`KEPT_TRAIL`] points.
+    pub fn trail(&self) -> Vec<[f64; 3]> {
+        self.live().trail.clone()
+    }
+}
+
+impl Drop for GraphRun {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The graph's thread: frames until stopped; a refusal by the node ends
+/// the run and is kept for the screen.
+fn run(machine: &Machine, graph: &GraphFile, live: &Arc<Mutex<Live>>, stop: &AtomicBool) {
+    let mut inputs = Paced {
+        live: live.clone(),
+        start: Instant::now(),
+    };
+    let mut watch = |m: &DanceMoment| {
+        let mut l = live.lock().unwrap_or_else(|e| e.into_inner());
+        let moved = l.moment.xy != m.xy || l.moment.pen_down != m.pen_down;
+        l.moment = *m;
+        if moved {
+            if l.trail.len() == KEPT_TRAIL {
+                l.trail.drain(..KEPT_TRAIL / 4);
+            }
+            l.trail
+                .push([m.xy[0], m.xy[1], f64::from(u8::from(m.pen_down))]);
+        }
+        !stop.load(Ordering::Relaxed)
+    };
+    let options = DanceOptions::default();
+    if let Err(e) = watch_dance(
+        machine,
+        graph,
+        &mut inputs,
+        options,
+        WATCH_EVERY,
+        &mut watch,
+    ) {
+        live.lock().unwrap_or_else(|e| e.into_inner()).error = Some(e.to_string());
+    }
+}

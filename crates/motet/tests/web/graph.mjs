@@ -1,0 +1,43 @@
+// Drives a hand-driven machine's page (`motet serve MACHINE --graph GRAPH`)
+// in Debian's chromium: the graph's inputs are sliders; moving two of them
+// moves the machine. Prints one JSON line of what it saw (the Rust test
+// checks the machine's position against the same graph run offline).
+// Usage: node graph.mjs URL INPUTS_JSON SCREENSHOT
+import { chromium } from "playwright-core";
+
+const [url, inputsJson, shot] = process.argv.slice(2);
+const inputs = JSON.parse(inputsJson);
+const out = {};
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
+  headless: true,
+  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  await page.goto(url);
+  await page.waitForSelector("body[data-ready='1']", { timeout: 10000 });
+  out.sliders = await page.$$eval("#graph-inputs input", (els) => els.map((e) => e.id + ":" + e.type));
+  for (const [name, value] of Object.entries(inputs)) {
+    // As a person dragging the slider: its value changes, then `input`.
+    await page.$eval("#graph-" + name, (el, v) => {
+      el.value = String(v);
+      el.dispatchEvent(new Event("input", { bubbles: true }));
+    }, value);
+  }
+  // What the server took, once the page's sends have gone out.
+  await page.waitForTimeout(300);
+  const took = await page.evaluate(async () => (await (await fetch("/api/graph")).json()).inputs);
+  out.inputs = Object.fromEntries(took.map((i) => [i.name, i.value]));
+  await page.waitForTimeout(1200);
+  out.position = await page.evaluate(async () => (await (await fetch("/api/graph")).json()).position);
+  await page.screenshot({ path: shot });
+  out.page_errors = errors;
+} finally {
+  await browser.close();
+}
+console.log(JSON.stringify(out));
