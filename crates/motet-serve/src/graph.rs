@@ -238,7 +238,7 @@ impl GraphRun {
     }
 
     /// The pen's path so far (x, y, 1 when down else 0), the newest
-    /// [`KEPT_TRAIL`] points.
+    /// 20,000 points.
     pub fn trail(&self) -> Vec<[f64; 3]> {
         self.live().trail.clone()
     }

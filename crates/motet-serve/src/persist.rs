@@ -15,7 +15,7 @@ const VERSION: u32 = 1;
 /// What is kept.
 #[derive(Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Saved {
-    /// Format version ([`VERSION`]).
+    /// Format version (1).
     pub version: u32,
     /// The id the next upload gets (ids are never reused).
     pub next_job: u64,
