@@ -16,6 +16,7 @@ pub mod events;
 pub mod grbl;
 mod http;
 pub mod jobs;
+pub mod klipper;
 pub mod preview;
 pub mod server;
 pub mod session;
