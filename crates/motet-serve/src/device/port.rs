@@ -134,7 +134,11 @@ fn serve_tcp<D: Device>(shared: &Arc<Shared>, listener: &TcpListener, make: &dyn
 }
 
 /// Moves bytes until the program goes (`Ok`) or the link fails.
-pub(super) fn pump<T: Read + Write, D: Device>(shared: &Shared, io: &mut T, g: &mut D) -> io::Result<()> {
+pub(super) fn pump<T: Read + Write, D: Device>(
+    shared: &Shared,
+    io: &mut T,
+    g: &mut D,
+) -> io::Result<()> {
     let mut buf = [0u8; 1024];
     let mut out: Vec<u8> = Vec::new();
     while !shared.stopped() {

@@ -2,7 +2,7 @@
 
 use super::frame::Request;
 use super::objects::{self, webhooks_state};
-use super::{Klipper, Script, Subscription, CLIENT};
+use super::{Klipper, ObjectList, Script, Subscription, CLIENT};
 use crate::session::Session;
 use serde_json::{json, Map, Value};
 use std::os::unix::fs::MetadataExt;
@@ -45,7 +45,7 @@ const HELP: &[(&str, &str)] = &[
 ];
 
 /// The `objects` parameter: names and their fields (`None`: all).
-fn objects_param(p: &Map<String, Value>) -> Result<Vec<(String, Option<Vec<String>>)>, String> {
+fn objects_param(p: &Map<String, Value>) -> Result<ObjectList, String> {
     let Some(o) = p.get("objects") else {
         return Err("Missing Argument [objects]".into());
     };
@@ -60,9 +60,15 @@ fn objects_param(p: &Map<String, Value>) -> Result<Vec<(String, Option<Vec<Strin
                     a.iter()
                         .map(|f| f.as_str().map(str::to_string))
                         .collect::<Option<Vec<_>>>()
-                        .ok_or(format!("Invalid Argument Type [objects.{name}]: expected field names"))?,
+                        .ok_or(format!(
+                            "Invalid Argument Type [objects.{name}]: expected field names"
+                        ))?,
                 ),
-                _ => return Err(format!("Invalid Argument Type [objects.{name}]: expected a list or null")),
+                _ => {
+                    return Err(format!(
+                        "Invalid Argument Type [objects.{name}]: expected a list or null"
+                    ))
+                }
             };
             Ok((name.clone(), fields))
         })

@@ -42,7 +42,9 @@ pub fn command_word(line: &str) -> String {
 /// Whether `word` is traditional G-code (a letter and a number).
 fn traditional(word: &str) -> bool {
     let b = word.as_bytes();
-    b.len() >= 2 && b[0].is_ascii_alphabetic() && b[1..].iter().all(|c| c.is_ascii_digit() || *c == b'.')
+    b.len() >= 2
+        && b[0].is_ascii_alphabetic()
+        && b[1..].iter().all(|c| c.is_ascii_digit() || *c == b'.')
 }
 
 /// The value of `KEY=value` (or `KEY="quoted value"`) in an extended
@@ -143,7 +145,8 @@ impl Klipper {
                 Step::Done(Ok(()))
             }
             "STATUS" => {
-                self.hub.respond(&format!("// motet: the machine is {}", s.state()));
+                self.hub
+                    .respond(&format!("// motet: the machine is {}", s.state()));
                 Step::Done(Ok(()))
             }
             // Display messages and fan speeds: nothing to show them on.
@@ -197,9 +200,7 @@ impl Klipper {
     fn gcode(&mut self, line: &str, s: &mut Session) -> Step {
         match s.state() {
             State::Alarm | State::Stopped => {
-                return Step::Done(Err(
-                    "Printer is shutdown: FIRMWARE_RESTART to go on".into()
-                ))
+                return Step::Done(Err("Printer is shutdown: FIRMWARE_RESTART to go on".into()))
             }
             State::Stopping => return Step::Wait,
             State::Running | State::Holding | State::Paused if !s.streaming() => {
@@ -222,7 +223,10 @@ impl Klipper {
         self.line_no = self.line_no.wrapping_add(1);
         if let Err(e) = self.interp.line(line, self.line_no) {
             self.interp.drain();
-            return Step::Done(Err(format!("{line}: column {}: {}", e.loc.column, e.message)));
+            return Step::Done(Err(format!(
+                "{line}: column {}: {}",
+                e.loc.column, e.message
+            )));
         }
         let mut commands: Vec<Located<Command>> = self.interp.drain().collect();
         // A pause for the person has no meaning line by line here.

@@ -6,9 +6,9 @@
 //! Messages are JSON objects ended by 0x03 ([`frame`]). Queries
 //! (`info`, `objects/query`, …) are answered at once from the session's
 //! status ([`objects`]); `gcode/script` runs its lines in order as the
-//! machine takes them ([`gcode`]), its answer coming when the last is
+//! machine takes them (`gcode.rs`), its answer coming when the last is
 //! taken; a file in the host's G-code folder prints as a job of the
-//! server's own ([`print`]). Subscriptions get what changed every
+//! server's own (`print.rs`). Subscriptions get what changed every
 //! [`PUSH_US`].
 
 mod endpoints;
@@ -82,9 +82,12 @@ struct Script {
     lines: VecDeque<String>,
 }
 
+/// Objects asked for, each with its fields (`None`: all of them).
+pub(crate) type ObjectList = Vec<(String, Option<Vec<String>>)>;
+
 /// An `objects/subscribe`: what to push, how, and what was last pushed.
 struct Subscription {
-    objects: Vec<(String, Option<Vec<String>>)>,
+    objects: ObjectList,
     template: Map<String, Value>,
     last: Map<String, Value>,
     next_us: u64,
@@ -234,7 +237,11 @@ impl Klipper {
     /// The objects asked for (those that exist), cut to their fields.
     fn status(&self, s: &Session, objects: &[(String, Option<Vec<String>>)]) -> Map<String, Value> {
         let status = s.status();
-        let st = self.hub.lock();
+        let mut st = self.hub.lock();
+        // Up to date with the session, whatever came since the last poll.
+        if let Some(p) = &mut st.print {
+            p.follow(s);
+        }
         let modal = self.interp.modal();
         let view = objects::View {
             s,

@@ -89,7 +89,8 @@ impl View<'_> {
     }
 
     fn printing(&self) -> bool {
-        self.print.is_some_and(|p| p.ended.is_none() && p.paused_since.is_none())
+        self.print
+            .is_some_and(|p| p.ended.is_none() && p.paused_since.is_none())
     }
 
     /// The object `name`'s whole status, if there is such an object.
@@ -126,7 +127,9 @@ impl View<'_> {
             }),
             "print_stats" => self.print_stats(),
             "virtual_sdcard" => {
-                let p = self.print.filter(|p| p.ended.is_none() || p.state() == "complete");
+                let p = self
+                    .print
+                    .filter(|p| p.ended.is_none() || p.state() == "complete");
                 json!({
                     "file_path": p.map(|p| p.path.display().to_string()),
                     "progress": p.map_or(0.0, |p| p.progress),
@@ -247,4 +250,3 @@ pub fn select(status: Value, fields: Option<&[String]>) -> Value {
         (v, _) => v,
     }
 }
-

@@ -112,7 +112,9 @@ pub(crate) fn resolve(gcodes: &Path, name: &str) -> Result<PathBuf, String> {
         .components()
         .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
     if name.trim().is_empty() || !inside {
-        return Err(format!("Unable to open file {name:?}: not in the G-code folder"));
+        return Err(format!(
+            "Unable to open file {name:?}: not in the G-code folder"
+        ));
     }
     let path = gcodes.join(rel);
     if !path.is_file() {
