@@ -3,7 +3,8 @@
 //! served over HTTP and a WebSocket to programs and to the browser page
 //! embedded here (`docs/api.md` documents the API; `openapi.json` is its
 //! schema), and to G-code senders as a grbl 1.1 device on a pseudo-terminal
-//! or TCP ([`grbl`]; docs/compat.md).
+//! or TCP ([`grbl`]; docs/compat.md), and to printer hosts (Moonraker) as
+//! Klipper's API server on a Unix socket ([`klipper`]).
 //!
 //! The session is plain, synchronous code driven by a clock thread
 //! ([`server::Server`]); the HTTP side (axum on tokio) only takes a lock,
@@ -17,6 +18,7 @@ pub mod graph;
 pub mod grbl;
 mod http;
 pub mod jobs;
+pub mod klipper;
 pub mod persist;
 pub mod preview;
 pub mod server;

@@ -160,6 +160,12 @@ impl Session {
         self.saved_version += 1;
     }
 
+    /// Something kept across restarts changed outside the session (a job
+    /// stored while the session is locked): the server writes it out soon.
+    pub fn mark_changed(&mut self) {
+        self.changed();
+    }
+
     /// The job on the machine (running, held or paused), if any.
     pub fn job_id(&self) -> Option<u64> {
         match &self.activity {

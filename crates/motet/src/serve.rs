@@ -48,8 +48,17 @@ pub struct ServeArgs {
     /// `motet dance`): it runs on a simulated node, paced to the wall
     /// clock, its `[inputs]` set live from the page's sliders or
     /// `/api/graph/inputs`. The machine then takes no jobs.
-    #[arg(long, value_name = "GRAPH.toml", conflicts_with = "grbl")]
+    #[arg(long, value_name = "GRAPH.toml", conflicts_with_all = ["grbl", "klipper_api"])]
     graph: Option<PathBuf>,
+    /// Also be Klipper's API server for a printer host (Moonraker, and
+    /// through it Mainsail or Fluidd): its Unix socket, Moonraker's
+    /// `klippy_uds_address` (docs/compat.md).
+    #[arg(long, value_name = "PATH")]
+    klipper_api: Option<PathBuf>,
+    /// The folder the printer host keeps G-code files in (Klipper's
+    /// `[virtual_sdcard] path`) [default: ~/printer_data/gcodes].
+    #[arg(long, value_name = "DIR", requires = "klipper_api")]
+    klipper_gcodes: Option<PathBuf>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -83,6 +92,13 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         NodesAt::Paired => "paired",
     };
     let grbl = args.grbl;
+    let klipper = args.klipper_api.map(|sock| {
+        let gcodes = args.klipper_gcodes.unwrap_or_else(|| {
+            let home = std::env::var_os("HOME").map_or_else(|| PathBuf::from("."), PathBuf::from);
+            home.join("printer_data/gcodes")
+        });
+        (sock, gcodes)
+    });
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -112,6 +128,12 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 .grbl(port)
                 .with_context(|| format!("--grbl {port}"))?;
             println!("grbl: {at}");
+        }
+        if let Some((sock, gcodes)) = &klipper {
+            let at = server
+                .klipper(sock, gcodes)
+                .with_context(|| format!("--klipper-api {}", sock.display()))?;
+            println!("klipper api: {at} (G-code folder {})", gcodes.display());
         }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;

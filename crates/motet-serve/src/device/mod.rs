@@ -11,6 +11,7 @@
 
 pub mod port;
 mod pty;
+mod unix;
 
 use crate::session::Session;
 

@@ -1,13 +1,15 @@
 //! Where a program connects to a [`Device`]: a pseudo-terminal (its path is
-//! printed; programs open it as a serial port) or a TCP port (loopback
-//! unless told otherwise; one program at a time). A thread per port moves
-//! bytes between the program and its device, which acts on the server's
-//! session.
+//! printed; programs open it as a serial port), a TCP port (loopback
+//! unless told otherwise; one program at a time) or a Unix socket (several
+//! programs at once, a device each). A thread per port (and per Unix
+//! connection) moves bytes between the program and its device, which acts
+//! on the server's session.
 
 use super::{pty, Device};
 use crate::server::{Server, Shared};
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpListener};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -21,6 +23,9 @@ pub enum Port {
     Pty,
     /// TCP on this address.
     Tcp(SocketAddr),
+    /// A Unix socket at this path (made with mode 0600; a stale socket file
+    /// left by a server that went is replaced).
+    Unix(PathBuf),
 }
 
 impl std::fmt::Display for Port {
@@ -28,6 +33,7 @@ impl std::fmt::Display for Port {
         match self {
             Port::Pty => f.write_str("pty"),
             Port::Tcp(a) => write!(f, "tcp:{a}"),
+            Port::Unix(p) => write!(f, "unix:{}", p.display()),
         }
     }
 }
@@ -39,13 +45,16 @@ impl std::str::FromStr for Port {
         if s == "pty" {
             return Ok(Port::Pty);
         }
+        if let Some(p) = s.strip_prefix("unix:").filter(|p| !p.is_empty()) {
+            return Ok(Port::Unix(PathBuf::from(p)));
+        }
         let Some(addr) = s.strip_prefix("tcp:") else {
             return Err(format!(
-                "{s:?}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)"
+                "{s:?}: expected `pty`, `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23) or `unix:PATH`"
             ));
         };
         addr.parse().map(Port::Tcp).map_err(|e| {
-            format!("{s:?}: {e}: expected `pty` or `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23)")
+            format!("{s:?}: {e}: expected `pty`, `tcp:ADDRESS:PORT` (e.g. tcp:127.0.0.1:23) or `unix:PATH`")
         })
     }
 }
@@ -89,6 +98,14 @@ impl Server {
                     .spawn(move || serve_tcp(&shared, &listener, &make))?;
                 Ok(format!("tcp:{local}"))
             }
+            Port::Unix(path) => {
+                let listener = super::unix::bind(path)?;
+                let name = name.to_string();
+                std::thread::Builder::new()
+                    .name(format!("motet-{name}-unix"))
+                    .spawn(move || super::unix::serve(&shared, &listener, &name, make))?;
+                Ok(format!("unix:{}", path.display()))
+            }
         }
     }
 }
@@ -117,7 +134,11 @@ fn serve_tcp<D: Device>(shared: &Arc<Shared>, listener: &TcpListener, make: &dyn
 }
 
 /// Moves bytes until the program goes (`Ok`) or the link fails.
-fn pump<T: Read + Write, D: Device>(shared: &Shared, io: &mut T, g: &mut D) -> io::Result<()> {
+pub(super) fn pump<T: Read + Write, D: Device>(
+    shared: &Shared,
+    io: &mut T,
+    g: &mut D,
+) -> io::Result<()> {
     let mut buf = [0u8; 1024];
     let mut out: Vec<u8> = Vec::new();
     while !shared.stopped() {
