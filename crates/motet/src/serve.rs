@@ -44,6 +44,10 @@ pub struct ServeArgs {
     /// (docs/compat.md). Same machine, same state as the web page.
     #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
     grbl: Option<motet_serve::device::port::Port>,
+    /// Also be an EiBotBoard for the AxiDraw software and plotink: `pty`
+    /// or `tcp:ADDRESS:PORT` (docs/compat.md). May be given with --grbl.
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    ebb: Option<motet_serve::device::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -73,6 +77,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         NodesAt::Paired => "paired",
     };
     let grbl = args.grbl;
+    let ebb = args.ebb;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -95,6 +100,10 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 .grbl(port)
                 .with_context(|| format!("--grbl {port}"))?;
             println!("grbl: {at}");
+        }
+        if let Some(port) = &ebb {
+            let at = server.ebb(port).with_context(|| format!("--ebb {port}"))?;
+            println!("ebb: {at}");
         }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
