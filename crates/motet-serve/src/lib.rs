@@ -12,7 +12,6 @@
 
 pub mod auth;
 pub mod device;
-/// The EiBotBoard (AxiDraw) device.
 pub mod ebb;
 pub mod engine;
 pub mod events;

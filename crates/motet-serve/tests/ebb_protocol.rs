@@ -182,7 +182,7 @@ fn bad_commands_get_the_boards_errors_in_both_syntaxes() {
             "SM",
         ),
     ];
-    for (cmd, err, name) in cases {
+    for (cmd, err, _) in cases {
         assert_eq!(
             d.now(format!("{cmd}\r").as_bytes()),
             format!("{err}\r\n"),

@@ -320,7 +320,10 @@ impl Ebb {
         match s.stream_push(commands, from) {
             Ok(()) => Ok(true),
             Err(ActionError::OutOfRange { .. }) => Ok(false),
-            Err(ActionError::WrongState { state, .. }) if state == State::Stopping => Ok(false),
+            Err(ActionError::WrongState {
+                state: State::Stopping,
+                ..
+            }) => Ok(false),
             // Beyond the machine's travel, or refused: the board's own
             // error for a value it cannot use; nothing was queued.
             Err(_) => Err(EbbError::Invalid),

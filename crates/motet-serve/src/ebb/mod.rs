@@ -11,7 +11,7 @@
 //! AxiDraw's step geometry mapped to the machine's own axes ([`motion`]);
 //! a line the machine cannot take yet (the stream queue is full) waits,
 //! and the port stops reading, so nothing is lost. Queries read the
-//! session ([`queries`]).
+//! session (`queries.rs`).
 
 mod commands;
 pub mod motion;

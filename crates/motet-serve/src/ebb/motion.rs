@@ -54,9 +54,9 @@ impl Steps {
 
     /// Takes `d` steps (current mode) on each motor.
     pub fn take(&mut self, d: [i64; 2]) {
-        for k in 0..2 {
-            self.micro[k] += d[k] * self.factor;
-            self.counters[k] += d[k];
+        for (k, dk) in d.into_iter().enumerate() {
+            self.micro[k] += dk * self.factor;
+            self.counters[k] += dk;
         }
     }
 
