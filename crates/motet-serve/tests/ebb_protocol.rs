@@ -176,6 +176,7 @@ fn bad_commands_get_the_boards_errors_in_both_syntaxes() {
         ("QS,1", "!7 Err: Extra parameter", "QS"),
         ("BB", "!8 Err: Unknown command 'BB:4242'", "BB"),
         ("B", "!8 Err: Unknown command 'B:42'", "B"),
+        ("HELLO,1", "!8 Err: Unknown command 'HE:4845'", "HE"),
         (
             "SM,99999999999,1,1",
             "!6 Err: Invalid parameter value",

@@ -150,7 +150,14 @@ impl Ebb {
                 Err(e) => Step::Reply(self.syntax.error("", &e)),
                 Ok(t) if t.is_empty() => Step::Reply(String::new()),
                 Ok(t) => match parse::split(&t) {
-                    Err(e) => Step::Reply(self.syntax.error(&t, &e)),
+                    // Only an unknown name fails here: it heads the error.
+                    Err(e) => {
+                        let name = match &e {
+                            EbbError::Unknown(n) => n.clone(),
+                            _ => String::new(),
+                        };
+                        Step::Reply(self.syntax.error(&name, &e))
+                    }
                     Ok(l) => match self.command(&l, s) {
                         Ok(step) => step,
                         Err(e) => Step::Reply(self.syntax.error(&l.name, &e)),

@@ -24,7 +24,8 @@ pub fn split(text: &str) -> Result<Line, EbbError> {
     let name = head.to_ascii_uppercase();
     let letters = name.chars().all(|c| c.is_ascii_alphanumeric());
     if name.is_empty() || name.len() > 2 || !letters {
-        return Err(EbbError::Unknown(name));
+        // The board reads a name's first two characters and no more.
+        return Err(EbbError::Unknown(name.chars().take(2).collect()));
     }
     let params = match rest {
         Some(r) => r.split(',').map(str::to_string).collect(),

@@ -94,6 +94,7 @@ impl Syntax {
     pub fn error(self, name: &str, e: &EbbError) -> String {
         match self {
             Syntax::Legacy => format!("{e}\r\n"),
+            Syntax::Future if name.is_empty() => format!("{e}\n"),
             Syntax::Future => format!("{name},{e}\n"),
         }
     }
