@@ -2,9 +2,11 @@
 //! ([`session::Session`]), with the jobs uploaded to it ([`jobs::JobStore`]),
 //! served over HTTP and a WebSocket to programs and to the browser page
 //! embedded here (`docs/api.md` documents the API; `openapi.json` is its
-//! schema), and to G-code senders as a grbl 1.1 device on a pseudo-terminal
-//! or TCP ([`grbl`]; docs/compat.md), and to printer hosts (Moonraker) as
-//! Klipper's API server on a Unix socket ([`klipper`]).
+//! schema), and to other programs through protocol adapters
+//! ([`device`]; docs/compat.md): to G-code senders as a grbl 1.1 device
+//! ([`grbl`]), to the AxiDraw software as an EiBotBoard ([`ebb`]), and to
+//! printer hosts (Moonraker) as Klipper's API server on a Unix socket
+//! ([`klipper`]).
 //!
 //! The session is plain, synchronous code driven by a clock thread
 //! ([`server::Server`]); the HTTP side (axum on tokio) only takes a lock,
@@ -12,6 +14,7 @@
 
 pub mod auth;
 pub mod device;
+pub mod ebb;
 pub mod engine;
 pub mod events;
 pub mod graph;

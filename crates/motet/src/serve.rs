@@ -48,7 +48,7 @@ pub struct ServeArgs {
     /// `motet dance`): it runs on a simulated node, paced to the wall
     /// clock, its `[inputs]` set live from the page's sliders or
     /// `/api/graph/inputs`. The machine then takes no jobs.
-    #[arg(long, value_name = "GRAPH.toml", conflicts_with_all = ["grbl", "klipper_api"])]
+    #[arg(long, value_name = "GRAPH.toml", conflicts_with_all = ["grbl", "klipper_api", "ebb"])]
     graph: Option<PathBuf>,
     /// Also be Klipper's API server for a printer host (Moonraker, and
     /// through it Mainsail or Fluidd): its Unix socket, Moonraker's
@@ -59,6 +59,10 @@ pub struct ServeArgs {
     /// `[virtual_sdcard] path`) [default: ~/printer_data/gcodes].
     #[arg(long, value_name = "DIR", requires = "klipper_api")]
     klipper_gcodes: Option<PathBuf>,
+    /// Also be an EiBotBoard for the AxiDraw software and plotink: `pty`
+    /// or `tcp:ADDRESS:PORT` (docs/compat.md). May be given with --grbl.
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    ebb: Option<motet_serve::device::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -99,6 +103,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         });
         (sock, gcodes)
     });
+    let ebb = args.ebb;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -134,6 +139,10 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 .klipper(sock, gcodes)
                 .with_context(|| format!("--klipper-api {}", sock.display()))?;
             println!("klipper api: {at} (G-code folder {})", gcodes.display());
+        }
+        if let Some(port) = &ebb {
+            let at = server.ebb(port).with_context(|| format!("--ebb {port}"))?;
+            println!("ebb: {at}");
         }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
