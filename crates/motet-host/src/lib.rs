@@ -2,6 +2,7 @@
 //! checks, and the distribution of the trajectory to nodes.
 
 pub mod distribute;
+pub mod heater;
 pub mod job;
 pub mod machine;
 mod machine_build;

@@ -19,12 +19,14 @@ use motet_planner::{Command, Located};
 use motet_trajectory::Point;
 use std::sync::Arc;
 
+mod heaters;
 mod history;
 mod machine_edit;
 mod manual;
 mod state;
 mod status;
 mod stream;
+pub use heaters::HeaterState;
 pub use history::{JobOutcome, KEPT_HISTORY};
 pub use state::{ActionError, Client, State};
 pub use status::{JobProgress, Status};
@@ -92,6 +94,7 @@ pub struct Session {
     /// What happened, newest last, bounded.
     pub events: EventLog,
     history: std::collections::VecDeque<JobOutcome>,
+    heaters: heaters::Heaters,
 }
 
 impl Session {
@@ -105,6 +108,7 @@ impl Session {
             format!("machine {} on {} nodes", machine.name, nodes.kind()),
         );
         Session {
+            heaters: heaters::Heaters::of(&machine),
             machine,
             nodes,
             state: State::Idle,
@@ -156,6 +160,7 @@ impl Session {
             Ok(next) => {
                 self.follow();
                 self.stream_tick();
+                self.heaters_tick(false);
                 next
             }
             Err(e) => {
@@ -179,6 +184,7 @@ impl Session {
         }
         match self.nodes.run().phase().clone() {
             Phase::Done => {
+                self.heaters_tick(true);
                 if let Some(p) = self.nodes.run().position_at(f64::INFINITY) {
                     self.rest = p;
                 }
@@ -219,6 +225,7 @@ impl Session {
 
     fn stopped(&mut self, info: StopInfo) {
         self.rest = info.point;
+        self.heaters_run_stopped();
         let stopping = self.stopping.take();
         if !info.all_at_rest() {
             self.end_activity("lost: the machine may have moved");
@@ -292,6 +299,7 @@ impl Session {
     }
 
     fn begin(&mut self, commands: Vec<Located<Command>>, activity: Activity, client: Client) {
+        self.heaters_track_run(&commands);
         self.nodes.begin(&self.machine, commands, self.rest);
         self.activity = activity;
         self.state = State::Running;
@@ -427,6 +435,7 @@ impl Session {
         self.events
             .push(self.now, Level::Warn, "emergency stop requested".into());
         self.stream_clear();
+        self.heaters_off();
         match self.state {
             State::Running | State::Holding | State::Stopping => {
                 if self.stop(Stopping::EStop, "emergency stop") {
@@ -475,6 +484,7 @@ impl Session {
     /// would have started.
     fn settle_unmoved(&mut self, how: Stopping, reason: &str) {
         self.nodes.begin(&self.machine, Vec::new(), self.rest);
+        self.heaters_run_stopped();
         self.stopping = None;
         self.events.push(
             self.now,

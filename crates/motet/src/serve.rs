@@ -44,6 +44,10 @@ pub struct ServeArgs {
     /// (docs/compat.md). Same machine, same state as the web page.
     #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
     grbl: Option<motet_serve::device::port::Port>,
+    /// Also be a Marlin-style printer for print hosts (OctoPrint): `pty`
+    /// or `tcp:ADDRESS:PORT` (docs/compat.md).
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    marlin: Option<motet_serve::device::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -73,6 +77,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         NodesAt::Paired => "paired",
     };
     let grbl = args.grbl;
+    let marlin = args.marlin;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -95,6 +100,12 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 .grbl(port)
                 .with_context(|| format!("--grbl {port}"))?;
             println!("grbl: {at}");
+        }
+        if let Some(port) = &marlin {
+            let at = server
+                .marlin(port)
+                .with_context(|| format!("--marlin {port}"))?;
+            println!("marlin: {at}");
         }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;
