@@ -40,6 +40,8 @@ pub struct Status {
     pub controller: Option<String>,
     /// Sequence number of the newest event.
     pub event_seq: u64,
+    /// The machine's heaters (none on a machine without an extruder).
+    pub heaters: Vec<super::HeaterState>,
 }
 
 impl Session {
@@ -84,6 +86,7 @@ impl Session {
             reason: self.reason.clone(),
             controller: self.controller.clone(),
             event_seq: self.events.last_seq(),
+            heaters: self.heaters().to_vec(),
         }
     }
 

@@ -14,8 +14,11 @@ import subprocess
 import tempfile
 import time
 import urllib.request
+import sys
 import uuid
 
+# The motet server, its poller and the reference run are the grbl tests'.
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
 from grbl_common import ROOT, Poller, Server, distance_to_polyline, reference
 
 MACHINE = os.path.join(ROOT, "examples", "printer.toml")
