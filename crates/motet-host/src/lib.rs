@@ -11,4 +11,4 @@ mod machine_kinematics;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};
-pub use machine::{Actuator, Axis, Joint, Machine, MachineError, NodeSpec, Tool};
+pub use machine::{Actuator, Axis, Heater, Joint, Machine, MachineError, NodeSpec, Tool};

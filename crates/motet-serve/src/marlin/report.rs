@@ -66,22 +66,29 @@ pub fn firmware(machine: &str, extruders: usize) -> Vec<String> {
 /// reports) or during a wait: `T:25.00 /0.00 B:25.00 /0.00 @:0 B@:0`.
 /// Empty for a machine without heaters.
 pub fn temperatures(heaters: &[HeaterState]) -> String {
-    let mut temps = Vec::new();
-    let mut powers = Vec::new();
-    for h in heaters {
-        let (t, p) = match h.channel {
-            AuxChannel::Hotend(0) => ("T".to_string(), "@".to_string()),
-            AuxChannel::Hotend(i) => (format!("T{i}"), format!("@{i}")),
-            AuxChannel::Bed => ("B".into(), "B@".into()),
-            AuxChannel::Chamber => ("C".into(), "C@".into()),
-            _ => continue,
-        };
-        temps.push(format!("{t}:{:.2} /{:.2}", h.temp, h.target));
-        // Marlin's power scale: 0..=127.
-        powers.push(format!("{p}:{}", (h.power * 127.0).round() as u32));
-    }
-    temps.extend(powers);
-    temps.join(" ")
+    // Marlin's order, whatever the machine file's: hot ends, bed, chamber.
+    let mut rows: Vec<(u16, String, String)> = heaters
+        .iter()
+        .filter_map(|h| {
+            let (rank, t, p) = match h.channel {
+                AuxChannel::Hotend(0) => (0, "T".to_string(), "@".to_string()),
+                AuxChannel::Hotend(i) => (u16::from(i), format!("T{i}"), format!("@{i}")),
+                AuxChannel::Bed => (300, "B".into(), "B@".into()),
+                AuxChannel::Chamber => (301, "C".into(), "C@".into()),
+                _ => return None,
+            };
+            // Marlin's power scale: 0..=127.
+            Some((
+                rank,
+                format!("{t}:{:.2} /{:.2}", h.temp, h.target),
+                format!("{p}:{}", (h.power * 127.0).round() as u32),
+            ))
+        })
+        .collect();
+    rows.sort_by_key(|r| r.0);
+    let temps = rows.iter().map(|r| r.1.clone());
+    let powers = rows.iter().map(|r| r.2.clone());
+    temps.chain(powers).collect::<Vec<_>>().join(" ")
 }
 
 /// The `M114` reply: `X:… Y:… Z:… E:…` in program coordinates.

@@ -6,9 +6,9 @@
 //! ([`Session::set_heater_target`]), which also reads whether a heater is
 //! ready ([`Session::heater_ready`]) to hold a wait.
 //!
-//! Which heaters a machine has: a machine with an extruder axis `e` has a
-//! hot end (`hotend`, channel `Hotend(0)`, at most [`HOTEND_MAX_C`]) and a
-//! bed (`bed`, at most [`BED_MAX_C`]); other machines have none.
+//! Which heaters a machine has: its machine file's `[heaters.NAME]`
+//! ([`motet_host::Heater`]); without that section, a machine with an
+//! extruder axis `e` has a hot end and a bed, others none.
 //!
 //! The simulation does not hold motion for a waiting command (M109 in a
 //! job sets the target where the machine reaches it; the machine does not
@@ -21,15 +21,6 @@ use motet_host::heater::Heater;
 use motet_planner::{AuxChannel, Command, Located};
 use serde::Serialize;
 use std::collections::VecDeque;
-
-/// Hot end: highest target, °C.
-pub const HOTEND_MAX_C: f64 = 275.0;
-/// Hot end: time constant, s.
-pub const HOTEND_TAU_S: f64 = 20.0;
-/// Bed: highest target, °C.
-pub const BED_MAX_C: f64 = 120.0;
-/// Bed: time constant, s.
-pub const BED_TAU_S: f64 = 60.0;
 
 /// One heater as a screen or a protocol reports it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -75,9 +66,8 @@ impl Heaters {
     /// The heaters of `machine` (see the module documentation), cold.
     pub(crate) fn of(machine: &motet_host::Machine) -> Heaters {
         let mut h = Heaters::default();
-        if machine.axes.iter().any(|a| a.name == "e") {
-            h.add("hotend", AuxChannel::Hotend(0), HOTEND_MAX_C, HOTEND_TAU_S);
-            h.add("bed", AuxChannel::Bed, BED_MAX_C, BED_TAU_S);
+        for spec in &machine.heaters {
+            h.add(&spec.name, spec.channel, spec.max_c, spec.tau_s);
         }
         h
     }
