@@ -107,3 +107,34 @@ fn a_cancelled_job_sets_nothing_it_did_not_reach_and_an_emergency_stop_cools() {
     }
     assert!(r.s.heaters()[1].temp < before, "cooling");
 }
+
+#[test]
+fn targets_out_of_range_or_for_missing_heaters_are_refused_and_change_nothing() {
+    let mut r = rig();
+    let e =
+        r.s.set_heater_target(AuxChannel::Hotend(0), 300.0)
+            .unwrap_err();
+    assert!(e.to_string().contains("out of range (0 to 275)"), "{e}");
+    let e =
+        r.s.set_heater_target(AuxChannel::Chamber, 40.0)
+            .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "no chamber heater (the machine's heaters: hotend, bed)"
+    );
+    assert!(r.s.set_heater_target(AuxChannel::Bed, -1.0).is_err());
+    assert!(r.s.heaters().iter().all(|h| h.target == 0.0));
+    // A job asking for too much: the machine runs, the target stays, and
+    // the event log says why.
+    r.start("M104 S400\nG1 X20 F3000\n");
+    while r.s.state() != State::Idle {
+        r.step();
+    }
+    assert_eq!(r.target(AuxChannel::Hotend(0)), 0.0);
+    assert!(r
+        .s
+        .events
+        .since(0)
+        .into_iter()
+        .any(|e| e.message.starts_with("temperature not set")));
+}

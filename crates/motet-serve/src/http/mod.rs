@@ -100,6 +100,7 @@ impl From<crate::session::ActionError> for ApiError {
             E::UnknownJob(_) | E::UnknownNode { .. } => StatusCode::NOT_FOUND,
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
+            | E::UnknownHeater { .. }
             | E::OutOfRange { .. }
             | E::Unreachable(_) => StatusCode::UNPROCESSABLE_ENTITY,
         };

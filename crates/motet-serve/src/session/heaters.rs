@@ -41,13 +41,18 @@ pub struct HeaterState {
 }
 
 fn channel_name<S: serde::Serializer>(c: &AuxChannel, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(&match c {
+    s.serialize_str(&channel_label(*c))
+}
+
+/// A channel as the status and errors name it: `hotend0`, `bed`, `chamber`.
+fn channel_label(c: AuxChannel) -> String {
+    match c {
         AuxChannel::Hotend(i) => format!("hotend{i}"),
         AuxChannel::Bed => "bed".into(),
         AuxChannel::Chamber => "chamber".into(),
         AuxChannel::Fan(i) => format!("fan{i}"),
         AuxChannel::Coolant => "coolant".into(),
-    })
+    }
 }
 
 /// The heaters and the temperature commands of the current run not yet
@@ -137,11 +142,19 @@ impl Session {
         channel: AuxChannel,
         target: f64,
     ) -> Result<(), ActionError> {
-        let k = self.heaters.index(channel).ok_or(ActionError::OutOfRange {
-            what: "heater",
-            value: f64::NAN,
-            range: "one of the machine's heaters".into(),
-        })?;
+        let k = self
+            .heaters
+            .index(channel)
+            .ok_or_else(|| ActionError::UnknownHeater {
+                channel: channel_label(channel),
+                heaters: self
+                    .heaters
+                    .states
+                    .iter()
+                    .map(|h| h.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })?;
         let max = self.heaters.states[k].max;
         if !(0.0..=max).contains(&target) {
             return Err(ActionError::OutOfRange {
