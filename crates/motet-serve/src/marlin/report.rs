@@ -18,7 +18,7 @@ pub const CAPABILITIES: &[(&str, bool)] = &[
     ("AUTOREPORT_POS", false),
     ("AUTOREPORT_TEMP", true),
     ("PROGRESS", false),
-    ("PRINT_JOB", true),
+    ("PRINT_JOB", false),
     ("AUTOLEVEL", false),
     ("RUNOUT", false),
     ("Z_PROBE", false),
