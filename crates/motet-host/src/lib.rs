@@ -2,6 +2,7 @@
 //! checks, and the distribution of the trajectory to nodes.
 
 pub mod distribute;
+pub mod heater;
 pub mod job;
 pub mod machine;
 mod machine_build;
@@ -10,4 +11,4 @@ mod machine_kinematics;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};
-pub use machine::{Actuator, Axis, Joint, Machine, MachineError, NodeSpec, Tool};
+pub use machine::{Actuator, Axis, Heater, Joint, Machine, MachineError, NodeSpec, Tool};

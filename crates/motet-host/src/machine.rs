@@ -105,6 +105,44 @@ pub struct Tool {
     pub on_value: f32,
 }
 
+/// One simulated heater (`[heaters.NAME]`): a first-order lag toward its
+/// target ([`crate::heater`]). A machine file without `[heaters]` gets a
+/// hot end and a bed when it has an extruder axis `e`
+/// ([`Heater::default_printer`]), none otherwise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Heater {
+    /// Its name in the machine file.
+    pub name: String,
+    /// Which temperature commands set it (M104/M109 with T, M140/M190,
+    /// M141/M191).
+    pub channel: motet_planner::AuxChannel,
+    /// Highest target it takes, °C.
+    pub max_c: f64,
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+impl Heater {
+    /// A printer's heaters when the file names none: hot end (at most
+    /// 275 °C, 20 s) and bed (at most 120 °C, 60 s).
+    pub fn default_printer() -> Vec<Heater> {
+        vec![
+            Heater {
+                name: "hotend".into(),
+                channel: motet_planner::AuxChannel::Hotend(0),
+                max_c: 275.0,
+                tau_s: 20.0,
+            },
+            Heater {
+                name: "bed".into(),
+                channel: motet_planner::AuxChannel::Bed,
+                max_c: 120.0,
+                tau_s: 60.0,
+            },
+        ]
+    }
+}
+
 /// One node (`[nodes.NAME]`): the board that steps some actuators and
 /// switches some tools. A file without `[nodes]` gets one node `main` with
 /// everything.
@@ -175,6 +213,8 @@ pub struct Machine {
     /// Moves within which the machine can always come to rest (0: off); see
     /// [`motet_planner::Limits::stop_horizon`].
     pub stop_horizon: usize,
+    /// Simulated heaters (`[heaters.NAME]`; see [`Heater`]).
+    pub heaters: Vec<Heater>,
 }
 
 impl Machine {

@@ -24,6 +24,8 @@ pub struct MachineFile {
     pub tools: BTreeMap<String, Spanned<ToolFile>>,
     #[serde(default)]
     pub nodes: BTreeMap<String, Spanned<NodeFile>>,
+    #[serde(default)]
+    pub heaters: BTreeMap<String, Spanned<HeaterFile>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -164,6 +166,22 @@ pub struct ToolFile {
     /// Value for "on" when a job gives none (pen down = 1, full power = 1).
     #[serde(default)]
     pub on_value: Option<Spanned<f32>>,
+}
+
+/// A simulated heater: which temperature commands set it, its highest
+/// target, its time constant.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeaterFile {
+    /// `hotend` (with `index`), `bed` or `chamber`.
+    pub channel: Spanned<String>,
+    /// The extruder a hot end heats (M104 T), default 0.
+    #[serde(default)]
+    pub index: Option<Spanned<i64>>,
+    /// °C.
+    pub max: Spanned<f64>,
+    /// Seconds.
+    pub time_constant: Spanned<f64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -4,9 +4,10 @@
 //! embedded here (`docs/api.md` documents the API; `openapi.json` is its
 //! schema), and to other programs through protocol adapters
 //! ([`device`]; docs/compat.md): to G-code senders as a grbl 1.1 device
-//! ([`grbl`]), to the AxiDraw software as an EiBotBoard ([`ebb`]), and to
+//! ([`grbl`]), to the AxiDraw software as an EiBotBoard ([`ebb`]), to
 //! printer hosts (Moonraker) as Klipper's API server on a Unix socket
-//! ([`klipper`]).
+//! ([`klipper`]) and to print hosts (OctoPrint) as a Marlin-style printer
+//! ([`marlin`]).
 //!
 //! The session is plain, synchronous code driven by a clock thread
 //! ([`server::Server`]); the HTTP side (axum on tokio) only takes a lock,
@@ -22,6 +23,7 @@ pub mod grbl;
 mod http;
 pub mod jobs;
 pub mod klipper;
+pub mod marlin;
 pub mod persist;
 pub mod preview;
 pub mod server;

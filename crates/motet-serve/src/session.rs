@@ -19,6 +19,7 @@ use motet_planner::{Command, Located};
 use motet_trajectory::Point;
 use std::sync::Arc;
 
+mod heaters;
 mod history;
 mod machine_edit;
 mod manual;
@@ -26,6 +27,7 @@ mod queue;
 mod state;
 mod status;
 mod stream;
+pub use heaters::HeaterState;
 pub use history::{JobOutcome, KEPT_HISTORY};
 pub use queue::{QueueView, QueuedJob, MAX_QUEUED};
 pub use state::{ActionError, Client, State};
@@ -100,6 +102,7 @@ pub struct Session {
     saved_version: u64,
     /// The graph file that drives the machine by hand, if one does.
     hand_driven: Option<String>,
+    heaters: heaters::Heaters,
 }
 
 impl Session {
@@ -113,6 +116,7 @@ impl Session {
             format!("machine {} on {} nodes", machine.name, nodes.kind()),
         );
         Session {
+            heaters: heaters::Heaters::of(&machine),
             machine,
             nodes,
             state: State::Idle,
@@ -182,6 +186,7 @@ impl Session {
             Ok(next) => {
                 self.follow();
                 self.stream_tick();
+                self.heaters_tick(false);
                 next
             }
             Err(e) => {
@@ -205,6 +210,7 @@ impl Session {
         }
         match self.nodes.run().phase().clone() {
             Phase::Done => {
+                self.heaters_tick(true);
                 if let Some(p) = self.nodes.run().position_at(f64::INFINITY) {
                     self.rest = p;
                 }
@@ -249,6 +255,7 @@ impl Session {
 
     fn stopped(&mut self, info: StopInfo) {
         self.rest = info.point;
+        self.heaters_run_stopped();
         let stopping = self.stopping.take();
         if !info.all_at_rest() {
             self.end_activity("lost: the machine may have moved");
@@ -339,6 +346,7 @@ impl Session {
     }
 
     fn begin(&mut self, commands: Vec<Located<Command>>, activity: Activity, client: Client) {
+        self.heaters_track_run(&commands);
         self.nodes.begin(&self.machine, commands, self.rest);
         self.activity = activity;
         self.state = State::Running;
@@ -474,6 +482,7 @@ impl Session {
         self.events
             .push(self.now, Level::Warn, "emergency stop requested".into());
         self.stream_clear();
+        self.heaters_off();
         match self.state {
             State::Running | State::Holding | State::Stopping => {
                 if self.stop(Stopping::EStop, "emergency stop") {
@@ -522,6 +531,7 @@ impl Session {
     /// would have started.
     fn settle_unmoved(&mut self, how: Stopping, reason: &str) {
         self.nodes.begin(&self.machine, Vec::new(), self.rest);
+        self.heaters_run_stopped();
         self.stopping = None;
         self.events.push(
             self.now,

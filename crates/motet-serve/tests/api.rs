@@ -847,3 +847,21 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     let (code, _) = s.call("POST", "/api/jog", Some(json!({"axes": {"x": 1}})), "a");
     assert_eq!(code, 409);
 }
+
+#[test]
+fn a_printers_status_carries_its_heaters_as_the_schema_says() {
+    let m = motet_host::Machine::load(&root().join("examples/printer.toml")).unwrap();
+    let nodes = SimNodes::new(&m, m.start, serve_config());
+    let mut s = motet_serve::Session::new(std::sync::Arc::new(m), Box::new(nodes));
+    s.set_heater_target(motet_planner::AuxChannel::Bed, 60.0)
+        .unwrap();
+    s.tick(5_000_000);
+    let status = serde_json::to_value(s.status()).unwrap();
+    check_schema("Status", &status);
+    let heaters = status["heaters"].as_array().unwrap();
+    assert_eq!(heaters.len(), 2, "{status}");
+    assert_eq!(heaters[1]["channel"], "bed");
+    assert_eq!(heaters[1]["target"], 60.0);
+    let t = heaters[1]["temp"].as_f64().unwrap();
+    assert!(t > 25.0 && t < 60.0, "warming: {t}");
+}

@@ -48,7 +48,7 @@ pub struct ServeArgs {
     /// `motet dance`): it runs on a simulated node, paced to the wall
     /// clock, its `[inputs]` set live from the page's sliders or
     /// `/api/graph/inputs`. The machine then takes no jobs.
-    #[arg(long, value_name = "GRAPH.toml", conflicts_with_all = ["grbl", "klipper_api", "ebb"])]
+    #[arg(long, value_name = "GRAPH.toml", conflicts_with_all = ["grbl", "klipper_api", "ebb", "marlin"])]
     graph: Option<PathBuf>,
     /// Also be Klipper's API server for a printer host (Moonraker, and
     /// through it Mainsail or Fluidd): its Unix socket, Moonraker's
@@ -63,6 +63,10 @@ pub struct ServeArgs {
     /// or `tcp:ADDRESS:PORT` (docs/compat.md). May be given with --grbl.
     #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
     ebb: Option<motet_serve::device::port::Port>,
+    /// Also be a Marlin-style printer for print hosts (OctoPrint): `pty`
+    /// or `tcp:ADDRESS:PORT` (docs/compat.md).
+    #[arg(long, value_name = "pty|tcp:ADDR:PORT")]
+    marlin: Option<motet_serve::device::port::Port>,
 }
 
 /// Runs the server until Ctrl-C or SIGTERM; then stops the machine on its
@@ -104,6 +108,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         (sock, gcodes)
     });
     let ebb = args.ebb;
+    let marlin = args.marlin;
     let cfg = ServerConfig {
         listen: args.listen,
         dir,
@@ -143,6 +148,12 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
         if let Some(port) = &ebb {
             let at = server.ebb(port).with_context(|| format!("--ebb {port}"))?;
             println!("ebb: {at}");
+        }
+        if let Some(port) = &marlin {
+            let at = server
+                .marlin(port)
+                .with_context(|| format!("--marlin {port}"))?;
+            println!("marlin: {at}");
         }
         std::io::stdout().flush()?;
         server.serve(listener, shutdown()).await?;

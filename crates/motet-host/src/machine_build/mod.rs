@@ -1,11 +1,13 @@
 //! Building the virtual machine from its file: each section checked in
 //! the order a reader meets it (motion settings, axes, the joints the
-//! kinematics makes, actuators and their chains, tools, nodes, the start),
+//! kinematics makes, actuators and their chains, tools, heaters, nodes, the
+//! start),
 //! with errors at their place in the file, then composed into a
 //! [`Machine`]. One file per section.
 
 mod actuators;
 mod axes;
+mod heaters;
 mod joints;
 mod motion;
 mod nodes;
@@ -67,6 +69,7 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
     let mut joints = joints::joints(src, &raw, kinematics, &axes)?;
     let actuators = actuators::actuators(src, &raw, &mut joints, &axes)?;
     let tools = tools::tools(src, &raw)?;
+    let heaters = heaters::heaters(src, &raw, &axes)?;
     let nodes = nodes::nodes(src, &raw, &actuators, &tools)?;
     let start = motion::start(src, m, &axes, kinematics, joints.kinematic_axes)?;
     let draw_feed = motion::draw_feed(src, m, &axes)?;
@@ -90,5 +93,6 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
         min_radius: *m.min_radius.get_ref(),
         lookahead: settings.lookahead,
         stop_horizon,
+        heaters,
     })
 }

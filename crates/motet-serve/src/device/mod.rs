@@ -9,6 +9,7 @@
 //! [`crate::grbl::Grbl`]), open it with [`crate::Server::device`], and give
 //! `motet serve` a flag for it.
 
+pub(crate) mod gcode;
 pub mod port;
 mod pty;
 mod unix;

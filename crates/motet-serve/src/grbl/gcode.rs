@@ -59,16 +59,8 @@ impl Grbl {
             // M2/M30 ends a program, not the connection: the next line
             // starts the next program (grbl resets its modes the same way).
             self.restart_interpreter();
-            self.interp.set_machine_position(
-                commands
-                    .iter()
-                    .rev()
-                    .find_map(|c| match c.item {
-                        Command::Move(m) => Some(m.target),
-                        _ => None,
-                    })
-                    .unwrap_or(from),
-            );
+            self.interp
+                .set_machine_position(crate::device::gcode::end_of(&commands, from));
         }
         self.apply_overrides(&mut commands);
         for c in &commands {

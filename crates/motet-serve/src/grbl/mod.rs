@@ -21,13 +21,14 @@ pub mod settings;
 pub mod status;
 mod system;
 
+use crate::device::gcode::new_interpreter;
 use crate::device::{port::Port, Device};
 use crate::server::Server;
 use crate::session::{Session, State};
 use axes::Axes;
 use errors::{alarm, code};
 use lines::{Line, RxBuffer};
-use motet_gcode::{GcodeOptions, Interpreter};
+use motet_gcode::Interpreter;
 use motet_host::Machine;
 use realtime::{classify, ignored, Overrides, Realtime};
 use settings::Local;
@@ -294,10 +295,4 @@ impl Server {
         let machine = self.shared.machine.as_ref().clone();
         self.device("grbl", port, move || Grbl::new(&machine))
     }
-}
-
-fn new_interpreter(machine: &Machine) -> Interpreter {
-    // The default options are valid: this cannot fail.
-    Interpreter::new(&machine.job_target(), &GcodeOptions::default())
-        .unwrap_or_else(|e| unreachable!("default G-code options: {e}"))
 }

@@ -119,6 +119,7 @@ impl From<crate::session::ActionError> for ApiError {
             }
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
+            | E::UnknownHeater { .. }
             | E::OutOfRange { .. }
             | E::Unreachable(_) => StatusCode::UNPROCESSABLE_ENTITY,
         };

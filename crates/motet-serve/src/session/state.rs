@@ -68,6 +68,14 @@ pub enum ActionError {
         /// The machine's tools.
         tools: String,
     },
+    /// A heater the machine does not have (its temperature channel).
+    #[error("no {channel} heater (the machine's heaters: {heaters})")]
+    UnknownHeater {
+        /// The channel asked for.
+        channel: String,
+        /// The machine's heaters.
+        heaters: String,
+    },
     /// A value out of its range (a feed, a tool value, a coordinate).
     #[error("{what} = {value} is out of range ({range})")]
     OutOfRange {

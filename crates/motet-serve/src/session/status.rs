@@ -42,6 +42,8 @@ pub struct Status {
     pub event_seq: u64,
     /// Jobs waiting in the queue.
     pub queued: usize,
+    /// The machine's heaters (none on a machine without an extruder).
+    pub heaters: Vec<super::HeaterState>,
 }
 
 impl Session {
@@ -87,6 +89,7 @@ impl Session {
             controller: self.controller.clone(),
             event_seq: self.events.last_seq(),
             queued: self.queue.jobs.len(),
+            heaters: self.heaters().to_vec(),
         }
     }
 

@@ -146,6 +146,7 @@ impl Session {
             && self.state == State::Running
             && self.stream.waiting.is_empty();
         if into_run && self.nodes.run_mut().push_commands(commands.clone()) {
+            self.heaters_track_more(&commands, self.stream.run.len());
             self.stream.run.extend(commands);
         } else {
             self.stream.waiting.extend(commands);
@@ -178,6 +179,7 @@ impl Session {
             Level::Info,
             format!("stream run {n} started from rest"),
         );
+        self.heaters_track_run(&commands);
         self.nodes.begin(&self.machine, commands, self.rest);
         self.nodes.run_mut().keep_feed_open();
         self.activity = Activity::Stream;

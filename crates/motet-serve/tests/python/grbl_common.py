@@ -16,12 +16,13 @@ MOTET = os.environ.get("MOTET", os.path.join(ROOT, "target", "debug", "motet"))
 
 
 class Server:
-    """`motet serve MACHINE --grbl pty` on any free port, stopped on exit."""
+    """`motet serve MACHINE --grbl pty` (or another device: `--marlin pty`)
+    on any free port, stopped on exit."""
 
-    def __init__(self, machine):
+    def __init__(self, machine, device="grbl"):
         self.dir = tempfile.mkdtemp(prefix="motet-grbl-")
         self.proc = subprocess.Popen(
-            [MOTET, "serve", machine, "--listen", "127.0.0.1:0", "--dir", self.dir, "--grbl", "pty"],
+            [MOTET, "serve", machine, "--listen", "127.0.0.1:0", "--dir", self.dir, f"--{device}", "pty"],
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
             text=True,
@@ -35,11 +36,11 @@ class Server:
                 break
             if " at http://" in line:
                 self.url = line.split(" at ", 1)[1].strip().rstrip("/")
-            if line.startswith("grbl: "):
+            if line.startswith(f"{device}: "):
                 self.pty = line.split(": ", 1)[1].strip()
         if self.url is None or self.pty is None:
             self.proc.kill()
-            raise RuntimeError("motet serve printed no address or no grbl pty")
+            raise RuntimeError(f"motet serve printed no address or no {device} pty")
         # The nodes' clocks settle for a few seconds after the start; motion
         # asked for meanwhile waits, which would count as machine time.
         while self.get("/api/status")["connecting"] and time.monotonic() < deadline:
