@@ -91,7 +91,7 @@ impl Klipper {
         let answer: Result<Value, String> = match r.method.as_str() {
             "info" => Ok(self.info(s)),
             "list_endpoints" => Ok(json!({"endpoints": ENDPOINTS})),
-            "objects/list" => Ok(json!({"objects": objects::NAMES})),
+            "objects/list" => Ok(json!({"objects": objects::names(s)})),
             "objects/query" => objects_param(p).map(|o| {
                 json!({"eventtime": s.status().t_us as f64 * 1e-6, "status": self.status(s, &o)})
             }),

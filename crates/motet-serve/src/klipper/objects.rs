@@ -1,11 +1,13 @@
 //! Klipper's printer objects as motet's session shows them: the ones a
 //! printer host (Moonraker) and its web pages (Mainsail, Fluidd) read.
-//! Heaters: none reported yet (`heaters.available_heaters` is empty, no
-//! `extruder` or `heater_bed` object).
+//! The session's heaters are Klipper's heater objects: the first hot end
+//! `extruder` (then `extruder1`, …), the bed `heater_bed`, the chamber
+//! `heater_generic chamber`.
 
 use super::print::Print;
-use crate::session::{Session, State, Status};
+use crate::session::{HeaterState, Session, State, Status};
 use motet_gcode::Modal;
+use motet_planner::AuxChannel;
 use serde_json::{json, Map, Value};
 use std::path::Path;
 
@@ -24,6 +26,45 @@ pub const NAMES: &[&str] = &[
     "heaters",
     "system_stats",
 ];
+
+/// Klipper's name for the heater on `channel`.
+pub fn heater_name(channel: AuxChannel) -> Option<String> {
+    match channel {
+        AuxChannel::Hotend(0) => Some("extruder".into()),
+        AuxChannel::Hotend(i) => Some(format!("extruder{i}")),
+        AuxChannel::Bed => Some("heater_bed".into()),
+        AuxChannel::Chamber => Some("heater_generic chamber".into()),
+        AuxChannel::Fan(_) | AuxChannel::Coolant => None,
+    }
+}
+
+/// Every object this server has for `s`: [`NAMES`] and its heaters.
+pub fn names(s: &Session) -> Vec<String> {
+    NAMES
+        .iter()
+        .map(|n| n.to_string())
+        .chain(s.heaters().iter().filter_map(|h| heater_name(h.channel)))
+        .collect()
+}
+
+fn heater_object(h: &HeaterState) -> Value {
+    let mut v = json!({
+        "temperature": round2(h.temp),
+        "target": h.target,
+        "power": h.power,
+    });
+    if let AuxChannel::Hotend(_) = h.channel {
+        // Klipper's default minimum extrusion temperature.
+        v["can_extrude"] = json!(h.temp >= 170.0);
+        v["pressure_advance"] = json!(0.0);
+        v["smooth_time"] = json!(0.04);
+    }
+    v
+}
+
+fn round2(x: f64) -> f64 {
+    (x * 100.0).round() / 100.0
+}
 
 /// What the objects are read from, at one moment.
 pub(crate) struct View<'a> {
@@ -110,7 +151,11 @@ impl View<'_> {
                 "print_time": t,
                 "estimated_print_time": t,
                 "stalls": 0,
-                "extruder": "",
+                "extruder": if self.s.heaters().iter().any(|h| h.channel == AuxChannel::Hotend(0)) {
+                    "extruder"
+                } else {
+                    ""
+                },
                 "position": self.xyze(&self.s.rest()[..]),
                 "max_velocity": self.path_max(|a| a.max_velocity),
                 "max_accel": self.path_max(|a| a.max_acceleration),
@@ -156,13 +201,28 @@ impl View<'_> {
                     "printing_time": self.print.map_or(0.0, |p| p.total_s(st.t_us)),
                 })
             }
-            "heaters" => json!({
-                "available_heaters": [],
-                "available_sensors": [],
-                "available_monitors": [],
-            }),
+            "heaters" => {
+                let names: Vec<String> = self
+                    .s
+                    .heaters()
+                    .iter()
+                    .filter_map(|h| heater_name(h.channel))
+                    .collect();
+                json!({
+                    "available_heaters": names,
+                    "available_sensors": names,
+                    "available_monitors": [],
+                })
+            }
             "system_stats" => json!({"sysload": 0.0, "cputime": 0.0, "memavail": 0}),
-            _ => return None,
+            other => {
+                let h = self
+                    .s
+                    .heaters()
+                    .iter()
+                    .find(|h| heater_name(h.channel).as_deref() == Some(other))?;
+                heater_object(h)
+            }
         })
     }
 
