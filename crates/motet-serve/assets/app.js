@@ -18,6 +18,7 @@ let job = null;        // the uploaded job's description
 let preview = null;    // its strokes
 let trail = [];        // executed positions while running [x, y]
 let samples = [];      // [t_s, speed] for the plot
+let temps = [];        // [t_s, [[temp, target] per heater]], 5 minutes
 let lastStatus = null;
 
 function headers(json) {
@@ -116,6 +117,40 @@ function drawView() {
   }
 }
 
+const HEAT_COLOURS = ["#e76f51", "#264653", "#8338ec", "#2a9d8f"];
+
+// The heaters' temperatures and targets (°C), and a plot of the last five
+// minutes, kept at one sample a second.
+function showHeaters(s) {
+  $("temps-panel").hidden = false;
+  $("temps").textContent = s.heaters.map((h) => h.name + " " + h.temp.toFixed(1) + " / " + h.target.toFixed(0) + " °C").join("   ");
+  const t = s.t_us * 1e-6;
+  if (!temps.length || t - temps[temps.length - 1][0] >= 1) temps.push([t, s.heaters.map((h) => [h.temp, h.target, h.max])]);
+  while (temps.length > 2 && temps[0][0] < t - 300) temps.shift();
+}
+
+function drawTemps() {
+  const c = $("temp-plot");
+  if (!temps.length || $("temps-panel").hidden) return;
+  const d = fitCanvas(c);
+  const g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  const top = Math.max(...temps[temps.length - 1][1].map((h) => h[2]), 50);
+  // The window grows to five minutes, so the first minutes fill the plot.
+  const t1 = temps[temps.length - 1][0], span = Math.max(t1 - temps[0][0], 30);
+  const X = (t) => ((t - (t1 - span)) / span) * c.width;
+  const Y = (v) => c.height - (v / top) * c.height;
+  temps[0][1].forEach((_, k) => {
+    for (const [idx, dash] of [[0, []], [1, [4 * d, 4 * d]]]) {
+      g.strokeStyle = HEAT_COLOURS[k % HEAT_COLOURS.length]; g.lineWidth = 1.5 * d; g.setLineDash(dash);
+      g.beginPath();
+      temps.forEach(([t, hs], i) => { const y = Y(hs[k][idx]); i ? g.lineTo(X(t), y) : g.moveTo(X(t), y); });
+      g.stroke();
+    }
+  });
+  g.setLineDash([]);
+}
+
 function drawPlot() {
   const c = $("plot");
   if (!machine) return;
@@ -165,6 +200,7 @@ function showStatus(s, wallMs) {
     if (!last || last[0] !== p[0] || last[1] !== p[1]) trail.push(p);
     if (trail.length > 50000) trail = trail.slice(-40000);
   }
+  if (s.heaters && s.heaters.length) showHeaters(s);
   samples.push([s.t_us * 1e-6, s.speed]);
   while (samples.length > 2 && samples[0][0] < s.t_us * 1e-6 - 10) samples.shift();
   const j = s.job;
@@ -228,6 +264,7 @@ function connect() {
 
 function frame() {
   drawView();
+  drawTemps();
   drawPlot();
   requestAnimationFrame(frame);
 }
