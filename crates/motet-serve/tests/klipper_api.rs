@@ -191,14 +191,20 @@ fn info_endpoints_and_objects_answer_in_klippers_shapes() {
         json!(["extruder", "heater_bed"])
     );
     // A temperature set over the console reaches the heater's object.
-    c.ok("gcode/script", json!({"script": "M104 S200\nM140 S60\nM400"}));
+    c.ok(
+        "gcode/script",
+        json!({"script": "M104 S200\nM140 S60\nM400"}),
+    );
     c.wait_for("the targets set", |c| {
         let st = c.query(json!({"extruder": ["target", "temperature"], "heater_bed": ["target"]}));
         st["extruder"]["target"] == 200.0 && st["heater_bed"]["target"] == 60.0
     });
     let st = c.query(json!({"extruder": null, "toolhead": ["extruder"]}));
     assert_eq!(st["toolhead"]["extruder"], "extruder");
-    assert!(st["extruder"]["temperature"].as_f64().unwrap() >= 25.0, "{st}");
+    assert!(
+        st["extruder"]["temperature"].as_f64().unwrap() >= 25.0,
+        "{st}"
+    );
     let st = c.query(json!({"configfile": ["settings"], "no_such_object": null}));
     assert_eq!(
         st["configfile"]["settings"]["virtual_sdcard"]["path"],
