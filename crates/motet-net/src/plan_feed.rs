@@ -74,6 +74,13 @@ impl PlanFeed {
         self.open && self.next_command >= self.commands.len()
     }
 
+    /// The commands not yet given to the planner, to adjust before they
+    /// are planned (an override changing their feed).
+    pub fn pending_mut(&mut self) -> &mut [Located<Command>] {
+        let from = self.next_command.min(self.commands.len());
+        &mut self.commands[from..]
+    }
+
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
         (self.next_command, self.commands.len())

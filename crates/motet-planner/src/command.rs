@@ -67,7 +67,9 @@ pub enum MoveKind {
 pub struct Move {
     /// Absolute target for every machine axis, in axis units (mm or degrees).
     pub target: Point,
-    /// Requested speed along the path in units per second; ignored for rapids.
+    /// Requested speed along the path in units per second. For a rapid, a
+    /// finite positive value caps its speed (a rapid override); infinity
+    /// leaves it to the axes' limits.
     pub feed: f64,
     /// Rapid or feed move; decides whether `feed` counts.
     pub kind: MoveKind,

@@ -362,7 +362,7 @@ impl Planner {
             .sum::<f64>()
             .sqrt();
         let speed = match m.kind {
-            MoveKind::Rapid => top,
+            MoveKind::Rapid => top.min(rapid_cap(m.feed)),
             MoveKind::Feed => m.feed.min(top),
         };
         let reach = speed * self.limits.max_move_s;
@@ -381,7 +381,7 @@ impl Planner {
             ranges::RIDING_COORDINATE.check(format_args!("coordinate {axis}"), *v)?;
         }
         let feed = match m.kind {
-            MoveKind::Rapid => f64::INFINITY,
+            MoveKind::Rapid => rapid_cap(m.feed),
             MoveKind::Feed => {
                 if m.feed.is_nan() || m.feed <= 0.0 {
                     return Err(PlanError::BadFeed(m.feed));
@@ -724,5 +724,15 @@ impl Planner {
         };
         self.clock = seg.t1();
         self.out.push_back(Planned::Segment(seg));
+    }
+}
+
+/// A rapid's speed cap: its `feed` when finite and positive (a rapid
+/// override), else none (the axes' limits alone).
+fn rapid_cap(feed: f64) -> f64 {
+    if feed.is_finite() && feed > 0.0 {
+        feed
+    } else {
+        f64::INFINITY
     }
 }

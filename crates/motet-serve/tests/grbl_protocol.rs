@@ -428,3 +428,53 @@ fn queued_lines_report_run_before_their_run_starts() {
     d.start(b"G21 G90 G0 X5\n");
     assert!(d.send(b"?").contains("<Run|"), "{}", d.out);
 }
+
+#[test]
+fn overrides_apply_live_to_queued_lines() {
+    let mut d = device();
+    // Four 50 mm lines at 10 mm/s, all queued before the first ends.
+    d.start(b"G21 G90 G1 F600\nG1 X50 Y0\nG1 X50 Y50\nG1 X0 Y50\nG1 X0 Y0\n");
+    d.until_moving();
+    d.wait(1_000_000);
+    let before = d.s.status().speed;
+    assert!((before - 10.0).abs() < 0.5, "{before} mm/s");
+    // Feed override to 200 %: the lines not yet planned run at twice the
+    // feed (the one under way keeps its speed).
+    d.g.receive(&[0x91; 10], &mut d.s);
+    d.wait(6_000_000);
+    let after = d.s.status().speed;
+    assert!(
+        (after - 20.0).abs() < 1.0,
+        "{after} mm/s after the override"
+    );
+    // Back to 100 %, then rapids at 25 %: a rapid queued after is capped at a
+    // quarter of the slowest path axis.
+    d.g.receive(&[0x90, 0x97], &mut d.s);
+    d.wait(3_000_000);
+    assert!(
+        (d.s.status().speed - 10.0).abs() < 0.5,
+        "{}",
+        d.s.status().speed
+    );
+    d.send(b"G0 X200 Y0\n");
+    let m = motet_host::Machine::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/laser.toml"),
+    )
+    .unwrap();
+    let slowest = m
+        .axes
+        .iter()
+        .filter(|a| a.path)
+        .map(|a| a.max_velocity)
+        .fold(f64::INFINITY, f64::min);
+    d.start(b"G0 X0 Y0\n");
+    d.until_moving();
+    d.wait(500_000);
+    let rapid = d.s.status().speed;
+    assert!(
+        (rapid - slowest / 4.0).abs() < 0.02 * slowest,
+        "rapid {rapid} mm/s, slowest axis {slowest}"
+    );
+    d.send(b"");
+    assert_eq!(position(&d), [0.0, 0.0]);
+}

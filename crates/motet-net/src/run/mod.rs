@@ -369,6 +369,19 @@ impl NetRun {
         self.feed_open
     }
 
+    /// The commands not yet planned, with the index of the first, to
+    /// adjust before they are (a feed override applied live). What is
+    /// planned stays as planned.
+    pub fn pending_commands_mut(&mut self) -> (usize, &mut [Located<Command>]) {
+        match self.feed.as_mut() {
+            Some(f) => {
+                let from = f.progress().0;
+                (from, f.pending_mut())
+            }
+            None => (0, &mut self.commands[..]),
+        }
+    }
+
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
         self.feed

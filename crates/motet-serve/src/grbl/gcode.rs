@@ -4,6 +4,7 @@
 //! run.
 
 use super::errors::{self, alarm, code};
+use super::realtime::Overrides;
 use super::{Grbl, Step};
 use crate::session::{Session, State};
 use motet_planner::{Command, Located, MoveKind};
@@ -105,29 +106,43 @@ impl Grbl {
         }
     }
 
-    /// Feed and spindle overrides scale what is streamed after they change;
-    /// a rapid override caps rapids at that share of the slowest path
-    /// axis's speed.
+    /// The overrides on lines as they are streamed: feed and spindle scale
+    /// feeds and tool power; a rapid override caps rapids at that share of
+    /// the slowest path axis's speed.
     fn apply_overrides(&self, commands: &mut [Located<Command>]) {
-        let o = self.overrides;
-        let slowest = self
-            .file
-            .axes
-            .iter()
-            .filter(|a| a.path)
-            .map(|a| a.max_velocity)
-            .fold(f64::INFINITY, f64::min);
+        let (o, slowest) = (self.overrides, slowest_path_axis(&self.file));
         for c in commands {
-            match &mut c.item {
-                Command::Move(m) if m.kind == MoveKind::Feed => m.feed *= f64::from(o.feed) / 100.0,
-                Command::Move(m) if o.rapid < 100 && slowest.is_finite() => {
-                    m.feed = m.feed.min(slowest * f64::from(o.rapid) / 100.0)
-                }
-                Command::Tool { value, .. } | Command::ToolPerSpeed { value, .. } => {
-                    *value = (*value * f32::from(o.spindle) / 100.0).min(1.0)
-                }
-                _ => {}
+            overridden(&mut c.item, Overrides::default(), o, slowest);
+        }
+    }
+}
+
+/// The slowest path axis's top speed (what a rapid override is a share of).
+pub(super) fn slowest_path_axis(m: &motet_host::Machine) -> f64 {
+    m.axes
+        .iter()
+        .filter(|a| a.path)
+        .map(|a| a.max_velocity)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// `c`, streamed under overrides `old`, as it is under `new`. Tool power
+/// already at full under `old` stays relative to full.
+pub(super) fn overridden(c: &mut Command, old: Overrides, new: Overrides, slowest: f64) {
+    match c {
+        Command::Move(m) if m.kind == MoveKind::Feed => {
+            m.feed *= f64::from(new.feed) / f64::from(old.feed)
+        }
+        Command::Move(m) => {
+            m.feed = if new.rapid < 100 && slowest.is_finite() {
+                slowest * f64::from(new.rapid) / 100.0
+            } else {
+                f64::INFINITY
             }
         }
+        Command::Tool { value, .. } | Command::ToolPerSpeed { value, .. } => {
+            *value = (*value * f32::from(new.spindle) / f32::from(old.spindle)).min(1.0)
+        }
+        _ => {}
     }
 }

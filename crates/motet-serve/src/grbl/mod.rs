@@ -207,7 +207,15 @@ impl Grbl {
             }
             Realtime::Reset => self.reset(s),
             Realtime::Feed(_) | Realtime::Rapid(_) | Realtime::Spindle(_) => {
-                self.overrides.apply(r)
+                // Applied live: to every queued line not yet planned, as
+                // well as to lines still to come.
+                let old = self.overrides;
+                self.overrides.apply(r);
+                let new = self.overrides;
+                if new != old {
+                    let slowest = gcode::slowest_path_axis(&self.file);
+                    s.stream_adjust(&mut |c| gcode::overridden(c, old, new, slowest));
+                }
             }
             Realtime::Toggle => {}
         }

@@ -195,6 +195,31 @@ impl Session {
     }
 
     /// A held stream run is at rest on its path: where it continues.
+    /// Changes every streamed command not yet planned with `f` (grbl's
+    /// overrides, applied live): those in the running stream's run not yet
+    /// planned, those a held stream will continue with, and those waiting.
+    /// What is planned runs as planned (the next ~30 ms and the planner's
+    /// lookahead).
+    pub fn stream_adjust(&mut self, f: &mut dyn FnMut(&mut Command)) {
+        let running = matches!(self.activity, Activity::Stream) && self.state == State::Running;
+        let from = if running {
+            let (from, pending) = self.nodes.run_mut().pending_commands_mut();
+            for c in pending {
+                f(&mut c.item);
+            }
+            from
+        } else {
+            self.stream.held_at.unwrap_or(self.stream.run.len())
+        };
+        let from = from.min(self.stream.run.len());
+        for c in &mut self.stream.run[from..] {
+            f(&mut c.item);
+        }
+        for c in &mut self.stream.waiting {
+            f(&mut c.item);
+        }
+    }
+
     pub(super) fn stream_held(&mut self, next_command: usize) {
         self.stream.held_at = Some(next_command.min(self.stream.run.len()));
     }
