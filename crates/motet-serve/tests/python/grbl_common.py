@@ -1,6 +1,7 @@
-"""What the grbl stream tests and the stream bench share: a `motet serve
---grbl pty` process, its status polled over HTTP while a sender streams,
-and `motet run` of the same file as the reference."""
+"""What the protocol adapters' tests (grbl, EBB, Marlin, Moonraker) and the
+grbl stream bench share: a `motet serve` process with a device on a pty,
+its status polled over HTTP while a program drives it, and `motet run` of
+the same file as the reference."""
 
 import json
 import math
@@ -16,8 +17,8 @@ MOTET = os.environ.get("MOTET", os.path.join(ROOT, "target", "debug", "motet"))
 
 
 class Server:
-    """`motet serve MACHINE --grbl pty` (or another device: `--marlin pty`)
-    on any free port, stopped on exit."""
+    """`motet serve MACHINE --grbl pty` (or another device: `--marlin pty`,
+    `--ebb pty`) on any free port, stopped on exit."""
 
     def __init__(self, machine, device="grbl"):
         self.dir = tempfile.mkdtemp(prefix="motet-grbl-")

@@ -9,20 +9,18 @@ give, and the machine comes to rest at each stroke's two ends within one
 AxiDraw step. The board's step counters (`QS`) match the counts, and its
 rate moves match plotink's own model of the firmware (`ebb_calc`)."""
 
-import json
 import math
 import os
-import subprocess
-import tempfile
+import sys
 import threading
 import time
-import urllib.request
 
 from ink_extensions import cubicsuperpath
 from plotink import ebb3_motion, ebb3_serial, ebb_calc, ebb_serial, plot_utils
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
-MOTET = os.environ.get("MOTET", os.path.join(ROOT, "target", "debug", "motet"))
+# The `motet serve` process the adapters' tests share.
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
+from grbl_common import ROOT, Server  # noqa: E402
 MACHINE = os.path.join(ROOT, "examples", "plotter.toml")
 # The AxiDraw's grid: 2032 steps per inch of x or y at 1/16 microstepping.
 STEPS_PER_MM = 2032 / 25.4
@@ -38,48 +36,6 @@ DRAW_MM_S = 40.0
 TRAVEL_MM_S = 80.0
 # The EBB's rate register per step/s: 2^31 x 40 us.
 RATE_PER_HZ = 2**31 * 40e-6
-
-
-class Server:
-    """`motet serve MACHINE --ebb pty` on any free port, stopped on exit."""
-
-    def __init__(self, machine):
-        self.dir = tempfile.mkdtemp(prefix="motet-ebb-")
-        self.proc = subprocess.Popen(
-            [MOTET, "serve", machine, "--listen", "127.0.0.1:0", "--dir", self.dir, "--ebb", "pty"],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-        )
-        self.url = self.pty = None
-        deadline = time.monotonic() + 30
-        while (self.url is None or self.pty is None) and time.monotonic() < deadline:
-            line = self.proc.stdout.readline()
-            if not line:
-                break
-            if " at http://" in line:
-                self.url = line.split(" at ", 1)[1].strip().rstrip("/")
-            if line.startswith("ebb: "):
-                self.pty = line.split(": ", 1)[1].strip()
-        if self.url is None or self.pty is None:
-            self.proc.kill()
-            raise RuntimeError("motet serve printed no address or no ebb pty")
-        while self.get("/api/status")["connecting"] and time.monotonic() < deadline:
-            time.sleep(0.05)
-
-    def get(self, path):
-        with urllib.request.urlopen(self.url + path, timeout=5) as r:
-            return json.loads(r.read())
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.proc.terminate()
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
 
 
 class Poller:
@@ -190,7 +146,7 @@ def test_plotink_plots_an_svg_with_the_axidraw_steps():
     paths = strokes()
     assert len(paths) == 2 and len(paths[1]) > 20, "a square and a flattened circle"
     started = time.monotonic()
-    with Server(MACHINE) as srv:
+    with Server(MACHINE, device="ebb") as srv:
         # The older functions find the board by a port path too.
         legacy = ebb_serial.testPort(srv.pty)
         assert legacy is not None and ebb_serial.min_version(legacy, "3.0.2")
