@@ -158,6 +158,16 @@ fn a_server_that_cannot_start_says_why() {
             vec!["examples/plotter.toml", "--listen", "localhost"],
             "--listen",
         ),
+        (
+            vec![
+                "examples/plotter.toml",
+                "--listen",
+                "127.0.0.1:0",
+                "--grbl",
+                "tcp:0.0.0.0:0",
+            ],
+            "carries no token",
+        ),
     ] {
         let mut all = vec!["serve"];
         all.extend(&args);

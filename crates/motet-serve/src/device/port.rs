@@ -90,6 +90,7 @@ impl Server {
                 Ok(path)
             }
             Port::Tcp(addr) => {
+                only_loopback(addr)?;
                 let listener = TcpListener::bind(addr)?;
                 let local = listener.local_addr()?;
                 listener.set_nonblocking(true)?;
@@ -188,4 +189,39 @@ pub(super) fn pump<T: Read + Write, D: Device>(
         }
     }
     Ok(())
+}
+
+/// A device's TCP port is for programs on this computer: the protocols
+/// carry no token, so one reachable from the network would let anyone there
+/// move the machine.
+fn only_loopback(addr: &SocketAddr) -> io::Result<()> {
+    if addr.ip().is_loopback() {
+        return Ok(());
+    }
+    Err(io::Error::new(
+        io::ErrorKind::PermissionDenied,
+        format!(
+            "{addr} is reachable from other computers, and the protocol carries no token: \
+             listen on 127.0.0.1 and reach it over an SSH tunnel"
+        ),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn device_ports_stay_on_this_computer() {
+        for (addr, ok) in [
+            ("127.0.0.1:23", true),
+            ("[::1]:23", true),
+            ("0.0.0.0:23", false),
+            ("192.168.1.5:23", false),
+            ("[::]:23", false),
+        ] {
+            let a: SocketAddr = addr.parse().unwrap();
+            assert_eq!(only_loopback(&a).is_ok(), ok, "{addr}");
+        }
+    }
 }
