@@ -21,8 +21,6 @@ const WATCH_EVERY: u64 = 25;
 /// is further ahead (and falls behind, losing nothing, when it cannot keep
 /// up).
 const AHEAD_S: f64 = 0.002;
-/// Points of the pen's path kept for a screen that connects late.
-const KEPT_TRAIL: usize = 20_000;
 
 /// Why an input could not be set. Nothing changed.
 #[derive(Debug, thiserror::Error)]
@@ -84,7 +82,6 @@ pub struct GraphView {
 struct Live {
     values: Vec<f64>,
     moment: DanceMoment,
-    trail: Vec<[f64; 3]>,
     error: Option<String>,
 }
 
@@ -167,7 +164,6 @@ impl GraphRun {
                 xy: [0.0; 2],
                 pen_down: false,
             },
-            trail: Vec::new(),
             error: None,
         }));
         let stop = Arc::new(AtomicBool::new(false));
@@ -236,12 +232,6 @@ impl GraphRun {
             error: l.error.clone(),
         }
     }
-
-    /// The pen's path so far (x, y, 1 when down else 0), the newest
-    /// 20,000 points.
-    pub fn trail(&self) -> Vec<[f64; 3]> {
-        self.live().trail.clone()
-    }
 }
 
 impl Drop for GraphRun {
@@ -262,15 +252,7 @@ fn run(machine: &Machine, graph: &GraphFile, live: &Arc<Mutex<Live>>, stop: &Ato
     };
     let mut watch = |m: &DanceMoment| {
         let mut l = live.lock().unwrap_or_else(|e| e.into_inner());
-        let moved = l.moment.xy != m.xy || l.moment.pen_down != m.pen_down;
         l.moment = *m;
-        if moved {
-            if l.trail.len() == KEPT_TRAIL {
-                l.trail.drain(..KEPT_TRAIL / 4);
-            }
-            l.trail
-                .push([m.xy[0], m.xy[1], f64::from(u8::from(m.pen_down))]);
-        }
         !stop.load(Ordering::Relaxed)
     };
     let options = DanceOptions::default();
