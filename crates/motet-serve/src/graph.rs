@@ -36,6 +36,33 @@ pub enum InputError {
     /// Not a finite number.
     #[error("input `{0}`: the value must be a finite number")]
     NotFinite(String),
+    /// Outside what such an input reads.
+    #[error("input `{name}` ({kind}): {value} is outside {lo}..={hi}")]
+    OutOfRange {
+        /// The input.
+        name: String,
+        /// Its kind.
+        kind: &'static str,
+        /// The value given.
+        value: f64,
+        /// Lowest it takes.
+        lo: f64,
+        /// Highest it takes.
+        hi: f64,
+    },
+}
+
+/// What an input of `kind` reads: encoders ±1,000,000 counts, analog
+/// inputs a raw reading of up to 12 bits, digital inputs any level
+/// (nonzero is pressed), motion streams 16 signal bits. A value outside
+/// would be a reading no input gives (and the node refuses some of them).
+pub fn input_range(kind: GraphInputKind) -> (f64, f64) {
+    match kind {
+        GraphInputKind::Encoder => (-1.0e6, 1.0e6),
+        GraphInputKind::Analog => (0.0, 4095.0),
+        GraphInputKind::Digital => (f64::MIN, f64::MAX),
+        GraphInputKind::Stream => (0.0, 65535.0),
+    }
 }
 
 /// Why a graph could not start.
@@ -199,6 +226,16 @@ impl GraphRun {
             };
             if !value.is_finite() {
                 return Err(InputError::NotFinite(name.clone()));
+            }
+            let (lo, hi) = input_range(self.kinds[k]);
+            if !(lo..=hi).contains(value) {
+                return Err(InputError::OutOfRange {
+                    name: name.clone(),
+                    kind: kind_name(self.kinds[k]),
+                    value: *value,
+                    lo,
+                    hi,
+                });
             }
             at.push((k, *value));
         }

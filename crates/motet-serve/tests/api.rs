@@ -827,6 +827,9 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     // Wrong inputs change nothing; the machine takes no jobs meanwhile.
     for (body, want) in [
         (json!({"knob_x": 5, "nope": 1}), 422),
+        (json!({"knob_x": 1e300}), 422),
+        (json!({"joy_x": -1}), 422),
+        (json!({"joy_y": 5000}), 422),
         (json!({"knob_x": "five"}), 400),
         (json!([1, 2]), 400),
     ] {
@@ -835,6 +838,7 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     }
     let (_, g) = s.call("GET", "/api/graph", None, "a");
     assert_eq!(g["inputs"][2]["value"], 300.0);
+    assert_eq!(g["error"], Value::Null, "the graph still runs: {g}");
     let (code, job) = s.upload("one.gcode", b"G0 X1 Y1\n");
     assert_eq!(code, 201, "{job}");
     let id = job["id"].as_u64().unwrap();
