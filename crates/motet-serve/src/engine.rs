@@ -60,6 +60,18 @@ pub fn serve_config() -> NetConfig {
     }
 }
 
+/// [`serve_config`] for nodes in other processes or on boards: a longer
+/// lead (50 ms), since the committed window must outlast the host thread's
+/// worst scheduling delay on a busy computer, not only the link's round
+/// trip; a node that runs out of it brakes on its tail and the job stops in
+/// alarm. A hold or stop brakes up to this much later.
+pub fn linked_config() -> NetConfig {
+    NetConfig {
+        lead_min_us: 50_000,
+        ..serve_config()
+    }
+}
+
 /// The machine's nodes simulated in this process, stepped on the server's
 /// clock: the node firmware's own code, joined to the host by in-memory
 /// links.

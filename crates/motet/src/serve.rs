@@ -201,9 +201,9 @@ fn nodes(
         machine,
         session,
         machine.start,
-        // Real links have delay: the runs' lead covers twice the round
-        // trip whatever this says.
-        serve_config(),
+        // Other processes and boards: a lead that outlasts a busy host's
+        // scheduling delays (and twice the round trip whatever this says).
+        motet_serve::linked_config(),
         kind,
     )))
 }
