@@ -7,7 +7,7 @@
 
 use motet_graph::GraphFile;
 use motet_host::Machine;
-use motet_sim::dance::{watch_dance, DanceMoment, DanceOptions, InputSource};
+use motet_sim::dance::{watch_dance, DanceMoment, DanceOptions, HeldInputs, InputSource};
 use motet_wire::message::GraphInputKind;
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -168,16 +168,11 @@ impl GraphRun {
     /// built and run for one frame first, so a graph that does not fit the
     /// machine is an error here, not later on its thread.
     pub fn start(machine: Machine, graph: GraphFile) -> Result<GraphRun, StartError> {
-        struct Rest;
-        impl InputSource for Rest {
-            fn values(&mut self, _: f64, out: &mut [f64]) {
-                out.fill(0.0);
-            }
-        }
+        let mut rest = HeldInputs(vec![0.0; graph.inputs.len()]);
         watch_dance(
             &machine,
             &graph,
-            &mut Rest,
+            &mut rest,
             DanceOptions::default(),
             1,
             &mut |_| false,

@@ -750,15 +750,6 @@ fn the_queue_runs_jobs_in_turn_and_a_restarted_server_keeps_jobs_queue_and_histo
     assert_eq!(h[0]["outcome"], "emergency stop", "{h:?}");
 }
 
-/// Inputs that hold still.
-struct Held(Vec<f64>);
-
-impl motet_sim::dance::InputSource for Held {
-    fn values(&mut self, _: f64, out: &mut [f64]) {
-        out.copy_from_slice(&self.0);
-    }
-}
-
 #[test]
 fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     let (machine, graph) = (
@@ -801,7 +792,7 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     assert_eq!(code, 200, "{g}");
     let m = motet_host::Machine::load(&root().join(machine)).unwrap();
     let gf = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
-    let mut held = Held(vec![512.0, 512.0, 300.0, -200.0]);
+    let mut held = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 300.0, -200.0]);
     let want = motet_sim::dance::run_dance(&m, &gf, &mut held, 3.0, &mut |_| {})
         .unwrap()
         .report

@@ -45,12 +45,9 @@ fn answers(addr: &str, path: &str) -> bool {
     text.starts_with("HTTP/1.1 200")
 }
 
-/// One browser at a time: the figures one prints are its own.
-static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-#[test]
-fn the_page_drives_the_plotter_in_a_real_browser() {
-    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+/// Runs the browser script `script` (in `tests/web`) with `args` in
+/// Debian's chromium; returns what it saw (the JSON of its last line).
+fn browse(script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
     let web = root().join("crates/motet/tests/web");
     assert!(
         web.join("node_modules/playwright-core").exists(),
@@ -61,6 +58,27 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
         std::path::Path::new(&chromium).exists(),
         "{chromium} missing: ./scripts/test installs it (apt-get install chromium)"
     );
+    let out = Command::new("node")
+        .arg(web.join(script))
+        .args(args)
+        .env("CHROMIUM", &chromium)
+        .output()
+        .expect("node (Node.js) runs the browser script");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{script} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(stdout.lines().last().unwrap()).unwrap()
+}
+
+/// One browser at a time: the figures one prints are its own.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+#[test]
+fn the_page_drives_the_plotter_in_a_real_browser() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = common::scratch("web", "serve");
     let started = Instant::now();
     let mut serve = common::serve(
@@ -80,21 +98,11 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
 
     let shots = root().join("target/web");
     std::fs::create_dir_all(&shots).unwrap();
-    let out = Command::new("node")
-        .arg(web.join("page.mjs"))
-        .arg(&url)
-        .arg(root().join("examples/jobs/drawing.svg"))
-        .arg(&shots)
-        .env("CHROMIUM", &chromium)
-        .output()
-        .expect("node (Node.js) runs the browser script");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "page.mjs failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
+    let drawing = root().join("examples/jobs/drawing.svg");
+    let seen = browse(
+        "page.mjs",
+        &[url.as_ref(), drawing.as_os_str(), shots.as_os_str()],
     );
-    let seen: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
     eprintln!("serve start to page served: {to_page:?}; the browser saw: {seen}");
     assert_eq!(seen["page_errors"], serde_json::json!([]));
     assert!(seen["preview_strokes"].as_u64().unwrap() > 10, "{seen}");
@@ -120,20 +128,9 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     );
 }
 
-/// Inputs that hold still.
-struct Held(Vec<f64>);
-
-impl motet_sim::dance::InputSource for Held {
-    fn values(&mut self, _: f64, out: &mut [f64]) {
-        out.copy_from_slice(&self.0);
-    }
-}
-
 #[test]
 fn a_hand_driven_machine_moves_with_the_page_sliders() {
     let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let web = root().join("crates/motet/tests/web");
-    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
     let (machine, graph) = (
         "examples/dance/game-controller/machine.toml",
         "examples/dance/game-controller/graph.toml",
@@ -146,21 +143,14 @@ fn a_hand_driven_machine_moves_with_the_page_sliders() {
     let url = format!("http://{}/", serve.addr);
     let shot = root().join("target/web/serve-graph.png");
     std::fs::create_dir_all(shot.parent().unwrap()).unwrap();
-    let out = Command::new("node")
-        .arg(web.join("graph.mjs"))
-        .arg(&url)
-        .arg(r#"{"knob_x": 250, "knob_y": 400}"#)
-        .arg(&shot)
-        .env("CHROMIUM", &chromium)
-        .output()
-        .expect("node (Node.js) runs the browser script");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "graph.mjs failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
+    let seen = browse(
+        "graph.mjs",
+        &[
+            url.as_ref(),
+            r#"{"knob_x": 250, "knob_y": 400}"#.as_ref(),
+            shot.as_os_str(),
+        ],
     );
-    let seen: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
     eprintln!("the browser saw: {seen}");
     assert_eq!(seen["page_errors"], serde_json::json!([]));
     assert_eq!(
@@ -177,7 +167,7 @@ fn a_hand_driven_machine_moves_with_the_page_sliders() {
     // Where the same graph fed the same values offline puts the machine.
     let m = motet_host::Machine::load(&root().join(machine)).unwrap();
     let g = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
-    let mut held = Held(vec![512.0, 512.0, 250.0, 400.0]);
+    let mut held = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 250.0, 400.0]);
     let want = motet_sim::dance::run_dance(&m, &g, &mut held, 3.0, &mut |_| {})
         .unwrap()
         .report

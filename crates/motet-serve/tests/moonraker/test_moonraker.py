@@ -221,7 +221,7 @@ def test_moonraker_prints_a_file_on_the_path_of_motet_run():
         # has a negative steps_per_unit and a positive position.
         got = round(status["position"][i] * abs(a["steps_per_unit"]))
         assert got == a["position"], (a["name"], got, a["position"])
-    moving = [p for s, p in poll.samples if s == "running"]
+    moving = [p for s, p, _ in poll.samples if s == "running"]
     assert len(moving) > 20, "the poll saw the machine move"
     path = [(0.0, 0.0)] + pts  # from the machine's start, then the file
     worst = max(distance_to_polyline(p, path) for p in moving)

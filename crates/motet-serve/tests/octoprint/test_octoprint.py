@@ -204,7 +204,7 @@ def test_octoprint_prints_a_file_along_the_path_of_motet_run():
         assert got == want, (motor, got, want)
     # The bed heats toward its target; the hot end, off again, cools.
     assert 25.0 < temps["bed"]["actual"] < 55.0, temps
-    moving = [p for s, p in poll.samples if s == "running"]
+    moving = [p for s, p, _ in poll.samples if s == "running"]
     assert len(moving) > 50, "the poll saw the machine move"
     start = [(0.0, 0.0)] + pts
     worst = max(distance_to_polyline(p[:2], start) for p in moving)

@@ -72,7 +72,8 @@ class Server:
 
 
 class Poller:
-    """The machine's position from /api/status, as often as it answers."""
+    """The machine's state, position and speed from /api/status, as often
+    as it answers."""
 
     def __init__(self, server):
         self.server = server
@@ -83,7 +84,7 @@ class Poller:
     def run(self):
         while not self.stop.is_set():
             s = self.server.get("/api/status")
-            self.samples.append((s["state"], s["position"]))
+            self.samples.append((s["state"], s["position"], s["speed"]))
             time.sleep(0.002)
 
     def __enter__(self):

@@ -53,7 +53,7 @@ def test_a_streamed_file_runs_the_path_of_motet_run():
         i = ["x", "y"].index(axis)
         got = round(status["position"][i] * steps[motor]["steps_per_unit"])
         assert got == steps[motor]["position"], (axis, got, steps[motor]["position"])
-    moving = [p for s, p in poll.samples if s == "running"]
+    moving = [p for s, p, _ in poll.samples if s == "running"]
     assert len(moving) > 50, "the poll saw the machine move"
     start = [(0.0, 0.0)] + pts  # from the machine's start, then the file
     worst = max(distance_to_polyline(p, start) for p in moving)

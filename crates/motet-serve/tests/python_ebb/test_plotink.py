@@ -12,7 +12,6 @@ rate moves match plotink's own model of the firmware (`ebb_calc`)."""
 import math
 import os
 import sys
-import threading
 import time
 
 from ink_extensions import cubicsuperpath
@@ -20,7 +19,7 @@ from plotink import ebb3_motion, ebb3_serial, ebb_calc, ebb_serial, plot_utils
 
 # The `motet serve` process the adapters' tests share.
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
-from grbl_common import ROOT, Server  # noqa: E402
+from grbl_common import ROOT, Poller, Server  # noqa: E402
 MACHINE = os.path.join(ROOT, "examples", "plotter.toml")
 # The AxiDraw's grid: 2032 steps per inch of x or y at 1/16 microstepping.
 STEPS_PER_MM = 2032 / 25.4
@@ -36,30 +35,6 @@ DRAW_MM_S = 40.0
 TRAVEL_MM_S = 80.0
 # The EBB's rate register per step/s: 2^31 x 40 us.
 RATE_PER_HZ = 2**31 * 40e-6
-
-
-class Poller:
-    """The machine's state, position and speed from /api/status."""
-
-    def __init__(self, server):
-        self.server = server
-        self.samples = []
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self.run, daemon=True)
-
-    def run(self):
-        while not self.stop.is_set():
-            s = self.server.get("/api/status")
-            self.samples.append((s["state"], s["position"], s["speed"]))
-            time.sleep(0.002)
-
-    def __enter__(self):
-        self.thread.start()
-        return self
-
-    def __exit__(self, *exc):
-        self.stop.set()
-        self.thread.join()
 
 
 def strokes():

@@ -16,6 +16,17 @@ pub trait InputSource {
     fn values(&mut self, t_s: f64, out: &mut [f64]);
 }
 
+/// Inputs that hold still: one value per graph input, the same at every
+/// time (a reference run of a live graph, or a graph checked at rest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeldInputs(pub Vec<f64>);
+
+impl InputSource for HeldInputs {
+    fn values(&mut self, _t_s: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.0);
+    }
+}
+
 /// The input values of the current frame and the last ones sent to the node.
 pub(super) struct InputFeed {
     /// This frame's values, as the source gave them.

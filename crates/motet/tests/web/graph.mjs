@@ -3,18 +3,13 @@
 // moves the machine. Prints one JSON line of what it saw (the Rust test
 // checks the machine's position against the same graph run offline).
 // Usage: node graph.mjs URL INPUTS_JSON SCREENSHOT
-import { chromium } from "playwright-core";
+import { launch } from "./browser.mjs";
 
 const [url, inputsJson, shot] = process.argv.slice(2);
 const inputs = JSON.parse(inputsJson);
 const out = {};
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
-  headless: true,
-  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync"],
-});
+const browser = await launch();
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const errors = [];

@@ -3,18 +3,13 @@
 // move, pause, resume, emergency stop; then the page on a phone-sized
 // screen. Prints one JSON line of what it saw (the Rust test checks it).
 // Usage: node page.mjs URL JOB_FILE SCREENSHOT_DIR
-import { chromium } from "playwright-core";
+import { launch } from "./browser.mjs";
 
 const [url, jobFile, shots] = process.argv.slice(2);
 const out = { steps: [] };
 const step = (s) => out.steps.push(s);
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
-  headless: true,
-  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync"],
-});
+const browser = await launch();
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const errors = [];
