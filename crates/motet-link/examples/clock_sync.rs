@@ -77,7 +77,8 @@ fn run(node: &Crystal, jitter_us: u64, seed: u64, end: f64) -> (Vec<(f64, f64)>,
         let r = wait_frame(&mut host, &clock);
         let t4 = clock.get();
         let word = |i: usize| u64::from_le_bytes(r[8 * i..8 * i + 8].try_into().unwrap());
-        sync.add(Exchange {
+        // The simulated node's clock is sound: no exchange is a fault.
+        let _ = sync.add(Exchange {
             t1: word(0),
             t2: word(1),
             t3: word(2),

@@ -36,7 +36,7 @@ impl LoopbackNode {
 }
 
 /// A loopback node's crystal: its error and its clock's starting offset
-/// (the host's estimate of that clock is [`crate::peer::NodeClock`]).
+/// (the host's estimate of that clock is [`crate::node_clock::NodeClock`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Crystal {
     /// Crystal error, parts per million (positive: the node's clock runs

@@ -1,156 +1,17 @@
 //! One node as the host sees it: its transport, the reliable link over it,
 //! its clock model, and what it last said.
 
+use crate::node_clock::NodeClock;
 use motet_link::Transport;
 use motet_wire::frame::{self, Flags, Header, MAX_FRAME, MAX_RAW};
 use motet_wire::link::{Config as LinkConfig, Link, State};
 use motet_wire::service::{port, ServiceReply, ServiceRequest};
-use motet_wire::sync::{ClockSync, Exchange, SyncConfig};
+use motet_wire::sync::Exchange;
 use motet_wire::{decode, encode, HostMessage, NodeMessage, MAX_MESSAGE};
 use std::collections::VecDeque;
 
 /// The host's own address on every link.
 pub const HOST_ADDRESS: u16 = 1;
-
-/// The fine clock estimator's settings: points of 16 exchanges.
-pub fn sync_config() -> SyncConfig {
-    SyncConfig {
-        bin: 16,
-        ..SyncConfig::default()
-    }
-}
-
-/// Settings of the coarse estimator that runs first: short bins, so its
-/// points are hardly biased by the unknown drift, for a first skew.
-fn coarse_config() -> SyncConfig {
-    SyncConfig {
-        bin: 2,
-        change_threshold: 0.0,
-        ..SyncConfig::default()
-    }
-}
-
-/// A node's clock estimate: a coarse estimator until it has a skew, then a
-/// fine one started from that skew (see [`ClockSync::with_skew`]).
-///
-/// On a jittery link the coarse skew can be far off, and a fine estimator
-/// seeded with it stays biased for a long time; so while the fine estimate's
-/// skew moves away from its seed, a new fine estimator is started from the
-/// better skew, and takes over once it holds.
-#[derive(Clone, Debug)]
-pub struct NodeClock {
-    coarse: ClockSync,
-    /// The fine estimator, its seed skew and the host time it started.
-    fine: Option<(ClockSync, f64, u64)>,
-    next: Option<(ClockSync, f64, u64)>,
-    first: Option<u64>,
-    reseeds: u32,
-}
-
-/// A fine estimate whose skew differs from its seed by more than this is
-/// started again from its own skew.
-const RESEED_SKEW: f64 = 2e-6;
-/// Host time an estimator needs before its skew is worth seeding with, µs:
-/// a skew from a shorter span is mostly the link's jitter.
-const SEED_SPAN_US: u64 = 2_000_000;
-/// Points a fine estimate needs before it is trusted to move by (or to
-/// replace the one in use).
-const SETTLED_POINTS: u32 = 4;
-/// Most restarts of the fine estimator.
-const MAX_RESEEDS: u32 = 3;
-
-impl Default for NodeClock {
-    fn default() -> Self {
-        NodeClock {
-            coarse: ClockSync::new(coarse_config()),
-            fine: None,
-            next: None,
-            first: None,
-            reseeds: 0,
-        }
-    }
-}
-
-impl NodeClock {
-    /// Takes one clock exchange into every estimator running; starts the
-    /// fine one once the coarse one has a skew over long enough, and a new
-    /// fine one when the skew moved away from its seed.
-    pub fn add(&mut self, e: Exchange) {
-        let now = e.t4;
-        let first = *self.first.get_or_insert(e.t1);
-        self.coarse.add(e);
-        if let Some((f, _, _)) = self.fine.as_mut() {
-            f.add(e);
-        }
-        if let Some((n, _, _)) = self.next.as_mut() {
-            n.add(e);
-        }
-        if self.fine.is_none() && self.coarse.points() >= 8 && now >= first + SEED_SPAN_US {
-            let skew = self.coarse.model().skew;
-            self.fine = Some((ClockSync::with_skew(sync_config(), skew), skew, now));
-        }
-        if self
-            .next
-            .as_ref()
-            .is_some_and(|(n, _, _)| n.points() >= SETTLED_POINTS)
-        {
-            self.fine = self.next.take();
-        }
-        if let Some((f, seed, since)) = &self.fine {
-            let skew = f.model().skew;
-            if self.next.is_none()
-                && self.reseeds < MAX_RESEEDS
-                && f.synced()
-                && now >= since + 2 * SEED_SPAN_US
-                && (skew - seed).abs() > RESEED_SKEW
-            {
-                self.reseeds += 1;
-                self.next = Some((ClockSync::with_skew(sync_config(), skew), skew, now));
-            }
-        }
-    }
-
-    /// The fine estimate holds: the clock is known well enough to move by.
-    pub fn settled(&self) -> bool {
-        self.fine
-            .as_ref()
-            .is_some_and(|(f, _, _)| f.points() >= SETTLED_POINTS)
-    }
-
-    fn current(&self) -> &ClockSync {
-        match &self.fine {
-            Some((f, _, _)) if f.points() >= SETTLED_POINTS => f,
-            _ => &self.coarse,
-        }
-    }
-
-    /// The estimate in use rests on data (two points at least).
-    pub fn synced(&self) -> bool {
-        self.current().synced()
-    }
-
-    /// The clock model in use: `local = offset + (1 + skew) · host`, what is
-    /// sent to the node.
-    pub fn model(&self) -> motet_wire::sync::ClockModel {
-        self.current().model()
-    }
-
-    /// Estimated standard deviation of the node time the model gives at host
-    /// time `host`, µs; infinite before two points.
-    pub fn error_estimate(&self, host: f64) -> f64 {
-        self.current().error_estimate(host)
-    }
-
-    /// Host time at node time `local`, µs.
-    pub fn local_to_host(&self, local: f64) -> f64 {
-        self.current().local_to_host(local)
-    }
-
-    /// Filtered points the estimate in use was fitted to.
-    pub fn points(&self) -> u32 {
-        self.current().points()
-    }
-}
 
 /// A service request from the host to `dst` as a datagram: a frame without
 /// link flags, neither acknowledged nor repeated by the link.

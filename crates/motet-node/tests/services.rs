@@ -1357,7 +1357,8 @@ fn time_exchange_gives_the_node_host_time() {
         };
         assert_eq!((e1, t2), (t1, t2_local));
         let t4 = (leave + 80.0 + jitter()) as u64;
-        sync.add(Exchange { t1, t2, t3, t4 });
+        sync.add(Exchange { t1, t2, t3, t4 })
+            .expect("a sound clock");
         host += 10_000.0;
     }
     assert!(!s.synced());

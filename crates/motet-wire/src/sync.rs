@@ -4,37 +4,48 @@
 //! estimated from NTP-style exchanges: the host stamps a request when it leaves
 //! (`t1`, host clock), the node when it arrives (`t2`, node clock) and when its
 //! answer leaves (`t3`, node clock), the host when the answer arrives (`t4`,
-//! host clock). The estimator is plain arithmetic (no clock reads, no
-//! allocation) and runs on either side.
+//! host clock). The estimator is plain arithmetic over a fixed array (no clock
+//! reads, no allocation) and runs on either side.
 //!
 //! With θ(h) = local − host at host time h, one exchange gives two one-sided
 //! observations:
-//! - forward `f = t2 − t1 = θ(t1) + d→ + j→ ≥ θ(t1)`,
-//! - reverse `r = t3 − t4 = θ(t4) − d← − j← ≤ θ(t4)`,
+//! - forward `f = t2 − t1 = θ(t1) + d→ + j→ ≥ θ(t1) + d→`,
+//! - reverse `r = t3 − t4 = θ(t4) − d← − j← ≤ θ(t4) − d←`,
 //!
-//! with d the fixed one-way delays and j ≥ 0 the queueing jitter.
+//! with d the fixed one-way delays and j ≥ 0 the queueing jitter. Jitter only
+//! ever adds delay, so the information is in the *edges* of the two point
+//! clouds, not in their means:
 //!
-//! 1. Gate: exchanges whose round trip `(t4 − t1) − (t3 − t2)` exceeds the
-//!    least seen by more than [`SyncConfig::rtt_gate_us`] are dropped
-//!    (retransmissions, stalls).
-//! 2. Minimum-delay filter: exchanges are taken in bins of [`SyncConfig::bin`].
-//!    Within a bin each observation is moved to the bin's first host time with
-//!    the current skew estimate, and the least forward and the greatest reverse
-//!    value are kept. This is minimum-RTT filtering done for each half of the
-//!    round trip separately: the two halves need not be lucky in the same
-//!    exchange, so the composite round trip `min f − max r` approaches
-//!    `d→ + d←` far faster than the least single RTT does (with jitter uniform
-//!    over J, the expected excess falls as 2J/(bin+1) instead of J·√(2/bin)).
-//!    The bin gives a point θ ≈ (min f + max r)/2 with the hard bound
-//!    max r ≤ θ ≤ min f (exact when the fixed delays are symmetric; an
-//!    asymmetry (d→ − d←)/2 is a bias no two-way method can see).
-//! 3. Fit: a weighted least-squares line θ = a + b·(h − h_ref) through the
-//!    points, weights 1/(excess half-width + [`SyncConfig::weight_floor_us`])²,
-//!    all sums decayed by [`SyncConfig::forget`] per point so that a change of
-//!    crystal drift is followed within a few 1/(1 − forget) points.
-//! 4. Error estimate: the fit's prediction standard deviation, with the point
-//!    variance estimated from the (decayed) normalised innovations (each new
-//!    point against the fit before it).
+//! 1. **Envelopes.** For a slope b, the forward points lie on or above the
+//!    line `c_f(b) + b·h` with `c_f(b) = min (f − b·h)`, the reverse points on
+//!    or below `c_r(b) + b·h` with `c_r(b) = max (r − b·h)`. The estimate is
+//!    the slope that leaves the widest band between the two clouds (the gap
+//!    `c_f − c_r` is concave in b: a golden-section search over the lower
+//!    convex hull of the forward points and the upper hull of the reverse
+//!    ones), and θ is the band's middle line. Every exchange counts, whenever
+//!    it was lucky, in each direction separately; the error falls as 1/n in
+//!    the number of exchanges (against 1/√n for an average), and a delayed,
+//!    duplicated or retransmitted exchange costs nothing but its slot.
+//!    (A constant asymmetry (d→ − d←)/2 is a bias no two-way method can see.)
+//! 2. **Memory.** [`CAPACITY`] exchanges are kept. When full, the one
+//!    farthest from both envelopes is dropped (never one of the newest
+//!    [`RECENT`]), so the kept exchanges stretch over a long time and the
+//!    slope rests on a long base; none older than [`SyncConfig::max_age_us`].
+//! 3. **Change.** More data can only narrow the band by about the envelopes'
+//!    own uncertainty; when a new exchange narrows it by far more, the node's
+//!    rate changed (a crystal warming up) or the path got faster: the fit
+//!    starts again from the newest exchanges and the old fit's band where they begin, from the
+//!    last slope.
+//! 4. **Error bound.** Near the envelopes the density of lucky exchanges is
+//!    measured by the k-th least residual of each direction: with k
+//!    residuals within x of the edge, an edge is known to about x/k. The
+//!    bound at host time h is [`SyncConfig::confidence`] times that, plus the
+//!    slope's uncertainty (the two edges' over the span) times the distance
+//!    from the exchanges' centre.
+//!
+//! Exchanges that no clock can produce (the node's time running backwards
+//! within an exchange or between two, a turnaround longer than the round
+//! trip) are refused with a [`ClockFault`].
 
 /// Four timestamps of one exchange, µs: `t1`, `t4` on the host clock, `t2`,
 /// `t3` on the node clock.
@@ -50,39 +61,41 @@ pub struct Exchange {
     pub t4: u64,
 }
 
+/// Exchanges kept for the fit.
+pub const CAPACITY: usize = 256;
+/// The newest exchanges are never dropped to make room: a change of rate
+/// shows first in them, and the fit restarts from them.
+pub const RECENT: usize = 12;
+/// Exchanges before the slope is taken from the data rather than the prior.
+const MIN_SAMPLES: usize = 8;
+/// The slope search range: well beyond any crystal, so a node started with
+/// another time scale is measured (and refused) rather than clipped.
+const B_RANGE: f64 = 0.02;
+/// How far a crystal's rate may move at once (a board warming up, a
+/// crystal swapped): after a change, the last slope is trusted this far
+/// until the new exchanges are surer.
+const CHANGE_BOUND: f64 = 300e-6;
+
 /// Estimator settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SyncConfig {
-    /// Exchanges per filtered point.
-    pub bin: u16,
-    /// Weight kept by the fit's past at each new point (0 < forget < 1).
-    pub forget: f64,
-    /// Exchanges whose round trip exceeds the least seen by more than this are dropped.
+    /// Exchanges whose round trip exceeds the least seen by more than this
+    /// are not kept (retransmissions, stalls), µs.
     pub rtt_gate_us: f64,
-    /// Added to a point's excess half-width before weighting, µs.
-    pub weight_floor_us: f64,
-    /// Drift-change alarm: a one-sided CUSUM of the innovations in units of
-    /// their standard deviation, each clipped to ±4 and less
-    /// [`SyncConfig::change_slack`], beyond this threshold means the drift
-    /// changed; the fit is then rebuilt from the points since the sum left
-    /// zero (0 disables).
-    pub change_threshold: f64,
-    /// Innovations up to this many standard deviations do not add to the
-    /// CUSUM.
-    pub change_slack: f64,
+    /// Exchanges older than this are dropped, µs: the longest time over which
+    /// a crystal's rate is taken as constant.
+    pub max_age_us: f64,
+    /// The error bound in units of the measured edge uncertainty.
+    pub confidence: f64,
 }
 
 impl Default for SyncConfig {
-    /// 32 exchanges per point, forget 0.95 (about 20 points of memory), gate
-    /// 10 ms, weight floor 10 µs, change alarm at a CUSUM of 10σ with 0.5σ slack.
+    /// Gate 10 ms, 10 minutes of memory, bound at 2 edge uncertainties.
     fn default() -> Self {
         SyncConfig {
-            bin: 32,
-            forget: 0.95,
             rtt_gate_us: 10_000.0,
-            weight_floor_us: 10.0,
-            change_threshold: 10.0,
-            change_slack: 0.5,
+            max_age_us: 600e6,
+            confidence: 2.0,
         }
     }
 }
@@ -97,82 +110,110 @@ pub struct ClockModel {
     pub skew: f64,
 }
 
-/// Square root by Newton's method (core has none without std).
-fn sqrt(x: f64) -> f64 {
-    if x.is_nan() || x <= 0.0 {
-        return 0.0;
+impl ClockModel {
+    /// Node time at host time `host`, µs.
+    pub fn local(&self, host: f64) -> f64 {
+        self.offset + (1.0 + self.skew) * host
     }
-    if x.is_infinite() {
-        return x;
+
+    /// Host time at node time `local`, µs.
+    pub fn host(&self, local: f64) -> f64 {
+        (local - self.offset) / (1.0 + self.skew)
     }
-    // Halve the exponent for a start within a factor of two.
-    let mut y = f64::from_bits((x.to_bits() >> 1) + (1023u64 << 51));
-    for _ in 0..6 {
-        y = 0.5 * (y + x / y);
-    }
-    y
 }
 
-/// Points kept for rebuilding the fit after a drift change.
-const HISTORY: usize = 16;
+/// An exchange no working clock produces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClockFault {
+    /// The node's reply left before its request arrived (`t3 < t2`).
+    ReplyBeforeRequest,
+    /// The node's clock read less than in an exchange that had ended before
+    /// this one began.
+    Backwards,
+    /// The node spent longer between request and reply than the whole round
+    /// trip took on the host: its clock runs far too fast.
+    Turnaround,
+}
 
-/// One filtered point: host time, θ, half-width.
+impl core::fmt::Display for ClockFault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ClockFault::ReplyBeforeRequest => "its clock answered before it was asked (t3 < t2)",
+            ClockFault::Backwards => "its clock went backwards between two exchanges",
+            ClockFault::Turnaround => "its clock counted more time between request and reply than the whole round trip took",
+        })
+    }
+}
+
+/// One exchange kept, relative to the estimator's origin.
 #[derive(Clone, Copy, Debug, Default)]
-struct Point {
-    x: f64,
-    y: f64,
-    half: f64,
+struct Sample {
+    /// Host time the request left.
+    xf: f64,
+    /// Forward observation `t2 − t1`.
+    f: f64,
+    /// Host time the reply arrived.
+    xr: f64,
+    /// Reverse observation `t3 − t4`.
+    r: f64,
 }
 
-/// One side of the two-sided CUSUM: the sum and the points since it was 0.
+/// The fit: band edges at slope `b`, relative to the origin.
 #[derive(Clone, Copy, Debug, Default)]
-struct Cusum {
-    sum: f64,
-    run: u32,
+struct Fit {
+    b: f64,
+    c_f: f64,
+    c_r: f64,
+    /// The earlier and the later half of the kept exchanges.
+    halves: [Half; 2],
+    /// How far the slope may be off: the data's own bound, or the prior's.
+    skew_bound: f64,
 }
 
-impl Cusum {
-    fn add(&mut self, z: f64, slack: f64) {
-        self.sum = (self.sum + z - slack).max(0.0);
-        self.run = if self.sum > 0.0 { self.run + 1 } else { 0 };
+impl Fit {
+    fn theta(&self, x: f64) -> f64 {
+        0.5 * (self.c_f + self.c_r) + self.b * x
     }
+    fn gap(&self) -> f64 {
+        self.c_f - self.c_r
+    }
+}
+
+/// Half of the kept exchanges, by host time.
+#[derive(Clone, Copy, Debug, Default)]
+struct Half {
+    n: usize,
+    /// Mean host time, relative to the origin.
+    centre: f64,
+    /// The forward and the reverse edge's uncertainties added, µs.
+    edge: f64,
 }
 
 /// Clock offset and skew estimator (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct ClockSync {
     cfg: SyncConfig,
-    // current bin
-    n: u16,
-    bin_ref: f64,
-    min_f: f64,
-    max_r: f64,
-    // gating
+    /// Host time of the first exchange (all times are kept relative to it).
+    origin: Option<f64>,
+    samples: [Sample; CAPACITY],
+    len: usize,
     min_rtt: f64,
     rejected_run: u32,
-    // fit, x = host − x_ref, y = θ − y_ref
-    x_ref: f64,
-    y_ref: f64,
-    sw: f64,
-    swx: f64,
-    swy: f64,
-    swxx: f64,
-    swxy: f64,
-    a: f64,
-    b: f64,
-    points: u32,
-    min_half: f64,
-    // normalised innovation variance
-    nres: f64,
-    nres_n: f64,
-    ures: f64,
-    up: Cusum,
-    down: Cusum,
-    history: [Point; HISTORY],
-    history_len: usize,
-    changes: u32,
+    /// The node's time at the reply of the newest exchange, with the host
+    /// time it arrived.
+    last: Option<(u64, u64)>,
+    fit: Fit,
+    /// The slope used while the data's own is less certain, and how far
+    /// off it may be.
+    prior_b: f64,
+    prior_bound: f64,
+    /// The first kept sample is the old fit's band, not an exchange.
+    anchored: bool,
+    /// Exchanges taken into the fit since it (re)started, kept or not.
+    seen: u64,
     exchanges: u64,
     rejected: u64,
+    changes: u32,
 }
 
 impl Default for ClockSync {
@@ -186,53 +227,45 @@ impl ClockSync {
     pub fn new(cfg: SyncConfig) -> ClockSync {
         ClockSync {
             cfg,
-            n: 0,
-            bin_ref: 0.0,
-            min_f: f64::INFINITY,
-            max_r: f64::NEG_INFINITY,
+            origin: None,
+            samples: [Sample::default(); CAPACITY],
+            len: 0,
             min_rtt: f64::INFINITY,
             rejected_run: 0,
-            x_ref: 0.0,
-            y_ref: 0.0,
-            sw: 0.0,
-            swx: 0.0,
-            swy: 0.0,
-            swxx: 0.0,
-            swxy: 0.0,
-            a: 0.0,
-            b: 0.0,
-            points: 0,
-            min_half: f64::INFINITY,
-            nres: 0.0,
-            nres_n: 0.0,
-            ures: 0.0,
-            up: Cusum::default(),
-            down: Cusum::default(),
-            history: [Point::default(); HISTORY],
-            history_len: 0,
-            changes: 0,
+            last: None,
+            fit: Fit {
+                skew_bound: B_RANGE,
+                ..Fit::default()
+            },
+            prior_b: 0.0,
+            prior_bound: B_RANGE,
+            anchored: false,
+            seen: 0,
             exchanges: 0,
             rejected: 0,
+            changes: 0,
         }
     }
 
-    /// An estimator that starts from a known skew (from a coarser estimate):
-    /// the first bins then place their observations with it instead of with
-    /// no drift at all, which would bias them by up to skew × bin span.
-    pub fn with_skew(cfg: SyncConfig, skew: f64) -> ClockSync {
+    /// An estimator that starts from a known skew: until it has exchanges
+    /// enough for a slope of its own it uses this one.
+    /// `bound` says how far off it may be.
+    pub fn with_skew(cfg: SyncConfig, skew: f64, bound: f64) -> ClockSync {
         let mut s = ClockSync::new(cfg);
-        if skew.is_finite() {
-            s.b = skew;
+        if skew.is_finite() && bound.is_finite() && bound > 0.0 {
+            s.prior_b = skew.clamp(-B_RANGE, B_RANGE);
+            s.prior_bound = bound.min(B_RANGE);
+            s.fit.b = s.prior_b;
         }
         s
     }
 
-    /// Filtered points fitted so far.
+    /// Exchanges the fit rests on.
     pub fn points(&self) -> u32 {
-        self.points
+        self.len as u32
     }
 
-    /// Drift changes detected.
+    /// Changes of the node's rate detected.
     pub fn changes(&self) -> u32 {
         self.changes
     }
@@ -242,9 +275,9 @@ impl ClockSync {
         (self.exchanges, self.rejected)
     }
 
-    /// True once offset and skew both rest on data (two points).
+    /// True once offset and skew both rest on data (or on a prior skew).
     pub fn synced(&self) -> bool {
-        self.points >= 2
+        self.len >= MIN_SAMPLES && self.fit.skew_bound < B_RANGE
     }
 
     /// Least round trip seen, µs.
@@ -252,208 +285,370 @@ impl ClockSync {
         self.min_rtt
     }
 
-    /// Local minus host time at host time `host`.
-    fn theta(&self, host: f64) -> f64 {
-        self.y_ref + self.a + self.b * (host - self.x_ref)
+    fn x(&self, host: f64) -> f64 {
+        host - self.origin.unwrap_or(0.0)
     }
 
-    /// Takes one exchange; returns true when it completed a point and the
-    /// model changed.
-    pub fn add(&mut self, e: Exchange) -> bool {
-        let (t1, t2, t3, t4) = (e.t1 as f64, e.t2 as f64, e.t3 as f64, e.t4 as f64);
+    /// Takes one exchange; returns true when it was kept (the model moved).
+    pub fn add(&mut self, e: Exchange) -> Result<bool, ClockFault> {
         self.exchanges += 1;
-        let rtt = (t4 - t1) - (t3 - t2) / (1.0 + self.b);
-        if rtt.is_nan() || rtt < 0.0 {
-            self.rejected += 1;
-            return false;
+        if e.t3 < e.t2 {
+            return Err(ClockFault::ReplyBeforeRequest);
         }
+        if e.t4 < e.t1 {
+            // The host's own clock: not the node's fault, and no sample.
+            self.rejected += 1;
+            return Ok(false);
+        }
+        if let Some((t3, t4)) = self.last {
+            if e.t1 > t4 && e.t2 < t3 {
+                return Err(ClockFault::Backwards);
+            }
+        }
+        let turn = (e.t3 - e.t2) as f64;
+        let round = (e.t4 - e.t1) as f64;
+        // A node at the edge of the skew range, and a microsecond of
+        // rounding on each clock.
+        if turn > round * (1.0 + B_RANGE) + 2.0 {
+            return Err(ClockFault::Turnaround);
+        }
+        if self.last.is_none_or(|(_, t4)| e.t4 >= t4) {
+            self.last = Some((e.t3, e.t4));
+        }
+        let rtt = round - turn / (1.0 + self.fit.b);
         if rtt > self.min_rtt + self.cfg.rtt_gate_us {
             self.rejected += 1;
             self.rejected_run += 1;
             // The path got slower for good: forget the old minimum.
-            if self.rejected_run > 4 * self.cfg.bin as u32 {
+            if self.rejected_run > 64 {
                 self.min_rtt = rtt;
                 self.rejected_run = 0;
             }
-            return false;
+            return Ok(false);
         }
         self.rejected_run = 0;
         self.min_rtt = self.min_rtt.min(rtt);
-        if self.n == 0 {
-            self.bin_ref = t1;
-            self.min_f = f64::INFINITY;
-            self.max_r = f64::NEG_INFINITY;
-        }
-        let f = (t2 - t1) - self.b * (t1 - self.bin_ref);
-        let r = (t3 - t4) - self.b * (t4 - self.bin_ref);
-        self.min_f = self.min_f.min(f);
-        self.max_r = self.max_r.max(r);
-        self.n += 1;
-        if self.n < self.cfg.bin.max(1) {
-            return false;
-        }
-        self.n = 0;
-        let y = 0.5 * (self.min_f + self.max_r);
-        let half = 0.5 * (self.min_f - self.max_r);
-        self.add_point(self.bin_ref, y, half);
-        true
-    }
-
-    fn add_point(&mut self, x: f64, y: f64, half: f64) {
-        self.history.copy_within(1.., 0);
-        self.history[HISTORY - 1] = Point { x, y, half };
-        self.history_len = (self.history_len + 1).min(HISTORY);
-        if let Some(run) = self.detect_change(x, y, half) {
-            self.changes += 1;
-            self.rebuild(run);
-        } else {
-            self.fit_point(x, y, half, true);
-        }
-    }
-
-    /// Feeds the innovation of a new point to the CUSUMs; returns the
-    /// points since the change when they raise the alarm.
-    fn detect_change(&mut self, x: f64, y: f64, _half: f64) -> Option<usize> {
-        let h = self.cfg.change_threshold;
-        if h <= 0.0 || self.points < 6 || self.nres_n <= 0.0 {
-            return None;
-        }
-        let sigma = sqrt(self.ures / self.nres_n);
-        if sigma <= 0.0 {
-            return None;
-        }
-        // Clipped so that a single wild point cannot raise the alarm.
-        let z = ((y - self.theta(x)) / sigma).clamp(-4.0, 4.0);
-        let k = self.cfg.change_slack;
-        self.up.add(z, k);
-        self.down.add(-z, k);
-        let run = if self.up.sum > h {
-            self.up.run
-        } else if self.down.sum > h {
-            self.down.run
-        } else {
-            return None;
+        let origin = *self.origin.get_or_insert(e.t1 as f64);
+        let s = Sample {
+            xf: e.t1 as f64 - origin,
+            f: e.t2 as f64 - e.t1 as f64,
+            xr: e.t4 as f64 - origin,
+            r: e.t3 as f64 - e.t4 as f64,
         };
-        Some((run as usize).clamp(2, self.history_len))
+        self.make_room(s.xr);
+        if self.anchored && self.len == 0 {
+            self.anchored = false;
+        }
+        self.samples[self.len] = s;
+        self.len += 1;
+        self.seen += 1;
+        let before = self.fit;
+        self.refit();
+        if before.skew_bound < B_RANGE && self.len > RECENT {
+            // New constraints narrow the band by about the edges' own
+            // uncertainty; far more means the rate changed (or the path got
+            // faster, which the restart also serves).
+            let allowed = self.cfg.confidence * 2.0 * before.halves[1].edge + 2.0;
+            if self.fit.gap() < before.gap() - allowed {
+                self.changes += 1;
+                self.prior_b = before.b;
+                self.prior_bound = CHANGE_BOUND;
+                // The old fit was right until shortly before the change:
+                // its band where the newest exchanges begin anchors the
+                // new fit's offset, and the new exchanges give the slope.
+                let keep = RECENT / 2;
+                let x = self.samples[self.len - keep].xf;
+                let (theta, half) = (before.theta(x), 0.5 * before.gap());
+                self.samples.copy_within(self.len - keep..self.len, 1);
+                self.samples[0] = Sample {
+                    xf: x,
+                    f: theta + half,
+                    xr: x,
+                    r: theta - half,
+                };
+                self.len = keep + 1;
+                self.seen = keep as u64;
+                self.anchored = true;
+                self.refit();
+            }
+        }
+        Ok(true)
     }
 
-    /// Refits from the newest `n` points only (the drift before them is
-    /// stale).
-    fn rebuild(&mut self, n: usize) {
-        self.up = Cusum::default();
-        self.down = Cusum::default();
-        self.points = 0;
-        self.sw = 0.0;
-        self.swx = 0.0;
-        self.swy = 0.0;
-        self.swxx = 0.0;
-        self.swxy = 0.0;
-        self.a = 0.0;
-        self.b = 0.0;
-        let first = HISTORY - n;
-        for i in first..HISTORY {
-            let p = self.history[i];
-            self.fit_point(p.x, p.y, p.half, false);
+    /// Drops what is too old and, when full, the exchange farthest from
+    /// both edges among all but the newest.
+    fn make_room(&mut self, now: f64) {
+        let max_age = self.cfg.max_age_us;
+        let mut kept = 0;
+        for i in 0..self.len {
+            if now - self.samples[i].xr <= max_age || i + RECENT >= self.len {
+                self.samples[kept] = self.samples[i];
+                kept += 1;
+            }
         }
+        self.len = kept;
+        if self.len < CAPACITY {
+            return;
+        }
+        let fit = self.fit;
+        let mut worst = 0;
+        let mut worst_res = f64::NEG_INFINITY;
+        // Never the anchor: it goes once the new exchanges are surer.
+        for i in self.anchored as usize..self.len - RECENT {
+            let s = self.samples[i];
+            let res_f = s.f - (fit.c_f + fit.b * s.xf);
+            let res_r = (fit.c_r + fit.b * s.xr) - s.r;
+            let res = res_f.min(res_r);
+            if res > worst_res {
+                worst_res = res;
+                worst = i;
+            }
+        }
+        self.samples.copy_within(worst + 1..self.len, worst);
+        self.len -= 1;
     }
 
-    /// Adds a point to the decayed fit; `learn` also updates the innovation
-    /// statistics.
-    fn fit_point(&mut self, x: f64, y: f64, half: f64, learn: bool) {
-        if self.points == 0 {
-            self.x_ref = x;
-            self.y_ref = y;
+    /// Fits the band to the kept exchanges.
+    fn refit(&mut self) {
+        let n = self.len;
+        if n == 0 {
+            return;
         }
-        self.min_half = self.min_half.min(half);
-        let excess = (half - self.min_half).max(0.0) + self.cfg.weight_floor_us;
-        let w = 1.0 / (excess * excess);
-        let k = self.cfg.forget;
-        if learn && self.points >= 2 {
-            let innov = y - self.theta(x);
-            let u2 = innov * innov;
-            // Plain innovations size the change detector (the weights make a
-            // lucky point's normalised innovation large without any change);
-            // clipped at 3σ so that a drift change does not inflate them.
-            let u2 = if self.nres_n > 0.0 {
-                u2.min(9.0 * self.ures / self.nres_n)
+        let mut order = [0u8; CAPACITY];
+        let mut lower = [0u8; CAPACITY];
+        let mut upper = [0u8; CAPACITY];
+        let s = &self.samples[..n];
+        let nl = hull(s, &mut order, &mut lower, |p| (p.xf, p.f), true);
+        let nu = hull(s, &mut order, &mut upper, |p| (p.xr, p.r), false);
+        let c_f = |b: f64| {
+            lower[..nl]
+                .iter()
+                .map(|&i| s[i as usize].f - b * s[i as usize].xf)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let c_r = |b: f64| {
+            upper[..nu]
+                .iter()
+                .map(|&i| s[i as usize].r - b * s[i as usize].xr)
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        let gap = |b: f64| c_f(b) - c_r(b);
+        // The exchanges' host times, split at their median: each half's
+        // edges are measured apart, as a slope is only as sure as the
+        // thinner end it rests on.
+        let mut xs = [0.0f64; CAPACITY];
+        for (x, p) in xs.iter_mut().zip(s) {
+            *x = 0.5 * (p.xf + p.xr);
+        }
+        let cut = kth_smallest(&mut xs[..n], n.div_ceil(2));
+        let seen = self.seen.max(1) as f64;
+        let edges = |b: f64| {
+            let (cf, cr) = (c_f(b), c_r(b));
+            let mut halves = [Half::default(), Half::default()];
+            let mut res = [[[0.0f64; CAPACITY]; 2]; 2];
+            for p in s {
+                let late = (0.5 * (p.xf + p.xr) > cut) as usize;
+                let h = &mut halves[late];
+                res[late][0][h.n] = p.f - (cf + b * p.xf);
+                res[late][1][h.n] = (cr + b * p.xr) - p.r;
+                h.centre += 0.5 * (p.xf + p.xr);
+                h.n += 1;
+            }
+            for (h, r) in halves.iter_mut().zip(res.iter_mut()) {
+                if h.n == 0 {
+                    h.edge = f64::INFINITY;
+                    continue;
+                }
+                h.centre /= h.n as f64;
+                // The k-th least residual over k; with few exchanges at
+                // least twice the median over their number (what uniform
+                // jitter gives), as the k-th least is then itself a lucky
+                // draw.
+                let m = h.n;
+                let k = (m / 4).clamp(1, 8);
+                let share = (seen * m as f64 / n as f64).max(1.0);
+                let edge = |res: &mut [f64]| {
+                    let near = kth_smallest(res, k) / k as f64;
+                    let median = kth_smallest(res, m.div_ceil(2));
+                    near.max(2.0 * median / share)
+                };
+                h.edge = edge(&mut r[0][..m]) + edge(&mut r[1][..m]);
+            }
+            (cf, cr, halves)
+        };
+        let conf = self.cfg.confidence;
+        let skew_of = |h: &[Half; 2]| {
+            let apart = (h[1].centre - h[0].centre).max(1.0);
+            conf * (h[0].edge + h[1].edge) / apart
+        };
+        // The data's slope once it is surer than the prior.
+        let mut fit = None;
+        if n >= MIN_SAMPLES {
+            let b = golden_max(gap, -B_RANGE, B_RANGE);
+            let (cf, cr, halves) = edges(b);
+            let bound = skew_of(&halves);
+            // Against a prior, the data must be clearly surer: a bound
+            // from few exchanges is itself uncertain.
+            let surer = if self.prior_bound < B_RANGE {
+                n >= 4 * MIN_SAMPLES && 2.0 * bound < self.prior_bound
             } else {
-                u2
+                bound < self.prior_bound
             };
-            self.ures = k * self.ures + u2;
-            self.nres = k * self.nres + innov * innov * w;
-            self.nres_n = k * self.nres_n + 1.0;
+            if surer && b.abs() < B_RANGE * 0.999 {
+                fit = Some((b, cf, cr, halves, bound));
+            }
         }
-        // Decay and move the reference to the new point.
-        let d = x - self.x_ref;
-        let (sw, swx, swy, swxx, swxy) = (
-            k * self.sw,
-            k * self.swx,
-            k * self.swy,
-            k * self.swxx,
-            k * self.swxy,
-        );
-        let theta_at_x = self.theta(x);
-        self.x_ref = x;
-        self.sw = sw;
-        self.swx = swx - d * sw;
-        self.swxx = swxx - 2.0 * d * swx + d * d * sw;
-        self.swy = swy;
-        self.swxy = swxy - d * swy;
-        self.a = theta_at_x - self.y_ref;
-        // Add the point (x = 0 now).
-        let yy = y - self.y_ref;
-        self.sw += w;
-        self.swy += w * yy;
-        self.points += 1;
-        let det = self.sw * self.swxx - self.swx * self.swx;
-        if self.points >= 2 && det > 1e-12 * self.sw * self.swxx.max(1e-300) {
-            self.b = (self.sw * self.swxy - self.swx * self.swy) / det;
-            self.a = (self.swy - self.b * self.swx) / self.sw;
-        } else {
-            self.a = self.swy / self.sw;
+        let fit_from_data = fit.is_some();
+        let (b, cf, cr, halves, bound) = fit.unwrap_or_else(|| {
+            let b = self.prior_b;
+            let (cf, cr, halves) = edges(b);
+            (b, cf, cr, halves, self.prior_bound)
+        });
+        if fit_from_data {
+            // Once the data decide, a change later starts from them, and
+            // the anchor (a guess from before the change) goes.
+            self.prior_bound = B_RANGE;
+            if self.anchored {
+                self.anchored = false;
+                self.samples.copy_within(1..n, 0);
+                self.len -= 1;
+                return self.refit();
+            }
         }
-        // Keep y_ref near the line so the sums stay small.
-        let shift = self.a;
-        self.y_ref += shift;
-        self.a = 0.0;
-        self.swy -= shift * self.sw;
-        self.swxy -= shift * self.swx;
+        self.fit = Fit {
+            b,
+            c_f: cf,
+            c_r: cr,
+            halves,
+            skew_bound: bound,
+        };
     }
 
     /// The model: `local = offset + (1 + skew) · host`.
     pub fn model(&self) -> ClockModel {
+        let origin = self.origin.unwrap_or(0.0);
         ClockModel {
-            offset: self.theta(0.0),
-            skew: self.b,
+            offset: self.fit.theta(-origin),
+            skew: self.fit.b,
         }
     }
 
     /// Node time at host time `host`, µs.
     pub fn host_to_local(&self, host: f64) -> f64 {
-        host + self.theta(host)
+        host + self.fit.theta(self.x(host))
     }
 
     /// Host time at node time `local`, µs.
     pub fn local_to_host(&self, local: f64) -> f64 {
-        let at_ref = self.x_ref + self.theta(self.x_ref);
-        self.x_ref + (local - at_ref) / (1.0 + self.b)
+        self.model().host(local)
     }
 
-    /// Estimated standard deviation of [`ClockSync::host_to_local`] at host
-    /// time `host`, µs; infinite before two points.
-    pub fn error_estimate(&self, host: f64) -> f64 {
-        if self.points < 3 || self.nres_n <= 0.0 {
+    /// How far the slope may be off, µs per host µs; infinite before the
+    /// fit is [`synced`](ClockSync::synced).
+    pub fn skew_bound(&self) -> f64 {
+        if !self.synced() {
             return f64::INFINITY;
         }
-        let sigma2 = self.nres / self.nres_n;
-        let det = self.sw * self.swxx - self.swx * self.swx;
-        if det <= 0.0 {
-            return f64::INFINITY;
-        }
-        let x = host - self.x_ref;
-        let v = sigma2 * (self.swxx - 2.0 * x * self.swx + x * x * self.sw) / det;
-        sqrt(v)
+        self.fit.skew_bound
     }
+
+    /// A bound on the error of [`ClockSync::host_to_local`] at host time
+    /// `host`, µs (see the module documentation); infinite before the fit is
+    /// [`synced`](ClockSync::synced).
+    pub fn error_bound(&self, host: f64) -> f64 {
+        if !self.synced() {
+            return f64::INFINITY;
+        }
+        let x = self.x(host);
+        let [early, late] = self.fit.halves;
+        let near = if x >= 0.5 * (early.centre + late.centre) {
+            late
+        } else {
+            early
+        };
+        0.5 * near.edge * self.cfg.confidence + self.fit.skew_bound * (x - near.centre).abs()
+    }
+}
+
+/// Golden-section search for the maximum of a concave function on `[lo, hi]`.
+fn golden_max(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    const R: f64 = 0.618_033_988_749_894_9;
+    let mut a = hi - R * (hi - lo);
+    let mut b = lo + R * (hi - lo);
+    let (mut fa, mut fb) = (f(a), f(b));
+    // 0.04 × 0.618^80 ≈ 1e-18: below any skew that matters.
+    for _ in 0..80 {
+        if fa < fb {
+            lo = a;
+            a = b;
+            fa = fb;
+            b = lo + R * (hi - lo);
+            fb = f(b);
+        } else {
+            hi = b;
+            b = a;
+            fb = fa;
+            a = hi - R * (hi - lo);
+            fa = f(a);
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The lower (`lower`) or upper convex hull of the points `key(s[i])`,
+/// as indices into `s` in order of x; returns its length.
+fn hull(
+    s: &[Sample],
+    order: &mut [u8; CAPACITY],
+    out: &mut [u8; CAPACITY],
+    key: impl Fn(&Sample) -> (f64, f64),
+    lower: bool,
+) -> usize {
+    let n = s.len();
+    for (i, o) in order.iter_mut().enumerate().take(n) {
+        *o = i as u8;
+    }
+    // Insertion sort: the exchanges arrive almost in order.
+    for i in 1..n {
+        let mut j = i;
+        while j > 0 && key(&s[order[j - 1] as usize]).0 > key(&s[order[j] as usize]).0 {
+            order.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let mut m = 0usize;
+    for &i in &order[..n] {
+        let p = key(&s[i as usize]);
+        while m >= 2 {
+            let o = key(&s[out[m - 2] as usize]);
+            let a = key(&s[out[m - 1] as usize]);
+            let cross = (a.0 - o.0) * (p.1 - o.1) - (a.1 - o.1) * (p.0 - o.0);
+            if (lower && cross <= 0.0) || (!lower && cross >= 0.0) {
+                m -= 1;
+            } else {
+                break;
+            }
+        }
+        out[m] = i;
+        m += 1;
+    }
+    m
+}
+
+/// The k-th least of `v` (1-based), reordering `v`.
+fn kth_smallest(v: &mut [f64], k: usize) -> f64 {
+    let k = k.min(v.len()).max(1);
+    // Partial selection sort: `v` holds at most `CAPACITY`.
+    for i in 0..k {
+        let mut m = i;
+        for j in i + 1..v.len() {
+            if v[j] < v[m] {
+                m = j;
+            }
+        }
+        v.swap(i, m);
+    }
+    v[k - 1].max(0.0)
 }
 
 #[cfg(test)]
@@ -461,19 +656,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn sqrt_is_accurate() {
-        for &x in &[1e-12, 0.25, 2.0, 1e6, 3.7e15] {
-            let s = sqrt(x);
-            assert!((s * s - x).abs() <= 1e-12 * x, "{x}");
-        }
-    }
-
-    #[test]
     fn exact_exchanges_give_exact_model() {
-        let mut s = ClockSync::new(SyncConfig {
-            bin: 1,
-            ..SyncConfig::default()
-        });
+        let mut s = ClockSync::default();
         let (offset, skew) = (12_345.0, 150e-6);
         let local = |h: f64| (offset + (1.0 + skew) * h).round() as u64;
         for i in 0..50u64 {
@@ -483,12 +667,42 @@ mod tests {
                 t2: local(h as f64 + 100.0),
                 t3: local(h as f64 + 150.0),
                 t4: h + 250,
-            });
+            })
+            .unwrap();
         }
         let m = s.model();
-        assert!((m.skew - skew).abs() < 1e-6, "{m:?}");
+        assert!((m.skew - skew).abs() < 1e-5, "{m:?}");
         let h = 1_600_000.0;
         assert!((s.host_to_local(h) - (offset + (1.0 + skew) * h)).abs() < 2.0);
         assert!((s.local_to_host(s.host_to_local(h)) - h).abs() < 1e-6);
+    }
+
+    #[test]
+    fn impossible_exchanges_are_faults() {
+        let mut s = ClockSync::default();
+        let e = |t1, t2, t3, t4| Exchange { t1, t2, t3, t4 };
+        assert_eq!(
+            s.add(e(100, 500, 400, 200)),
+            Err(ClockFault::ReplyBeforeRequest)
+        );
+        assert_eq!(s.add(e(100, 500, 5_000, 200)), Err(ClockFault::Turnaround));
+        assert_eq!(s.add(e(100, 500, 510, 200)), Ok(true));
+        assert_eq!(s.add(e(300, 400, 410, 400)), Err(ClockFault::Backwards));
+    }
+
+    #[test]
+    fn hulls_hold_every_point() {
+        let pts = [(0.0, 5.0), (1.0, 1.0), (2.0, 3.0), (3.0, 0.0), (4.0, 4.0)];
+        let s: [Sample; 5] = pts.map(|(x, y)| Sample {
+            xf: x,
+            f: y,
+            xr: x,
+            r: y,
+        });
+        let (mut order, mut out) = ([0u8; CAPACITY], [0u8; CAPACITY]);
+        let n = hull(&s, &mut order, &mut out, |p| (p.xf, p.f), true);
+        assert_eq!(&out[..n], &[0, 1, 3, 4]);
+        let n = hull(&s, &mut order, &mut out, |p| (p.xr, p.r), false);
+        assert_eq!(&out[..n], &[0, 4]);
     }
 }

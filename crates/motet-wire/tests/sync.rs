@@ -84,10 +84,10 @@ fn run(
             t3: clock.local(t1 + d1 + turn).floor() as u64,
             t4: (t1 + d1 + turn + d2).floor() as u64,
         };
-        sync.add(e);
+        sync.add(e).unwrap();
         if h >= measure_from && sync.synced() {
             let err = sync.host_to_local(h) - clock.local(h);
-            errors.push((h, err, sync.error_estimate(h)));
+            errors.push((h, err, sync.error_bound(h)));
         }
         h += path.period;
     }
@@ -251,7 +251,7 @@ fn stalls_are_gated_out() {
             t3: clock.local(t1 + d1 + 20.0).floor() as u64,
             t4: (t1 + d1 + 20.0 + d2).floor() as u64,
         };
-        sync.add(e);
+        sync.add(e).unwrap();
         if t1 > 30.0 * S {
             worst = worst.max((sync.host_to_local(t1) - clock.local(t1)).abs());
         }

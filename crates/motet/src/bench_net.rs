@@ -110,7 +110,7 @@ pub fn bench_net(args: Args) -> Result<()> {
     );
     lb.run.set_identity(identity);
     if args.jitter_us > 0 || args.faults > 0.0 {
-        lb.max_step_us = 50;
+        lb.max_step_us = 10;
     }
     let limit = args.kill_host_at.or(args.seconds).map(|s| (s * 1e6) as u64);
     let streamed = stream(&mut lb, &clock, limit)?;
@@ -128,7 +128,7 @@ pub fn bench_net(args: Args) -> Result<()> {
             _ => "measured part".into(),
         }
     );
-    print_wire(&lb, n, motion, &cfg);
+    print_wire(&lb, n, motion, &cfg, streamed.bytes_at_start);
     if args.kill_host_at.is_some() {
         resume_figures(
             machine,
@@ -141,7 +141,8 @@ pub fn bench_net(args: Args) -> Result<()> {
         )?;
         let _ = std::fs::remove_dir_all(&scratch);
     }
-    print_clock_errors(&streamed.clock_errors, machine, &clocks, args.jitter_us);
+    print_clock_errors(&streamed.samples, machine, &clocks, args.jitter_us);
+    print_agreement(&streamed.samples, machine);
     Ok(())
 }
 
@@ -221,7 +222,12 @@ fn node_clocks(n: usize) -> Vec<Crystal> {
 
 /// The run's configuration with `--sync-ms` (at least 1 ms) applied.
 fn net_config(args: &Args) -> Result<NetConfig> {
-    let mut cfg = NetConfig::default();
+    // Nothing moves before every clock is within its target: under heavy
+    // jitter that takes longer than a person would wait at a prompt.
+    let mut cfg = NetConfig {
+        connect_timeout_us: 60_000_000,
+        ..NetConfig::default()
+    };
     if let Some(ms) = args.sync_ms {
         if !(ms.is_finite() && ms >= 1.0) {
             bail!("--sync-ms must be at least 1");
@@ -237,16 +243,47 @@ struct Streamed {
     phase: Phase,
     /// When streaming began, simulated µs.
     start_us: u64,
-    /// Each node's clock error (its idea of host time − host time), µs,
-    /// sampled every 100 ms while streaming.
-    clock_errors: Vec<Vec<f64>>,
+    /// Every 100 ms while streaming: each node's clock error (its idea of
+    /// host time − host time, µs) and the host's bound on it.
+    samples: Vec<Sample>,
+    /// Bytes on the wire (both ways, all nodes) when streaming began.
+    bytes_at_start: u64,
+}
+
+/// The nodes' clocks at one moment while streaming.
+struct Sample {
+    /// Per node: true error and the host's bound, µs (None: no model yet).
+    nodes: Vec<Option<(f64, f64)>>,
+    /// The planned path's speed at that moment, units/s.
+    speed: f64,
+}
+
+/// Bytes on the wire, both ways, to and from every node.
+fn wire_bytes(lb: &Loopback) -> u64 {
+    lb.run
+        .peers()
+        .iter()
+        .map(|p| p.transport().stats().bytes_out + p.transport().stats().bytes_in)
+        .sum()
+}
+
+/// The planned path's speed at host time `t`, units/s (0 where unknown).
+fn path_speed(lb: &Loopback, t: f64) -> f64 {
+    match (lb.run.position_at(t - 1_000.0), lb.run.position_at(t)) {
+        (Some(a), Some(b)) => {
+            let d2: f64 = a.iter().zip(&b).map(|(x, y)| (x - y) * (x - y)).sum();
+            d2.sqrt() / 1e-3
+        }
+        _ => 0.0,
+    }
 }
 
 /// Steps the loopback run until it is done or stopped, or until `limit_us`
 /// of streaming has passed, sampling the nodes' clock errors.
 fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<Streamed> {
     let mut streaming_at = None;
-    let mut errors: Vec<Vec<f64>> = vec![Vec::new(); lb.nodes.len()];
+    let mut bytes_at_start = 0;
+    let mut samples = Vec::new();
     let mut next_sample = 0u64;
     let phase = loop {
         clock.set(lb.now);
@@ -257,16 +294,28 @@ fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<
         }
         if phase == Phase::Streaming && streaming_at.is_none() {
             streaming_at = Some(lb.now);
+            bytes_at_start = wire_bytes(lb);
         }
         if let Some(s) = streaming_at {
             if lb.now >= next_sample {
                 next_sample = lb.now + 100_000;
-                for (k, node) in lb.nodes.iter().enumerate() {
-                    let local = node.offset_us as f64 + lb.now as f64 * (1.0 + node.ppm * 1e-6);
-                    if let Some(h) = node.node.endpoint.services().host_time(local) {
-                        errors[k].push(h - lb.now as f64);
-                    }
-                }
+                let now = lb.now as f64;
+                let nodes = lb
+                    .nodes
+                    .iter()
+                    .zip(lb.run.peers())
+                    .map(|(node, p)| {
+                        let local = node.offset_us as f64 + now * (1.0 + node.ppm * 1e-6);
+                        let services = node.node.endpoint.services();
+                        services
+                            .host_time(local)
+                            .map(|h| (h - now, p.sync.error_bound(now)))
+                    })
+                    .collect();
+                samples.push(Sample {
+                    nodes,
+                    speed: path_speed(lb, now),
+                });
             }
             if limit_us.is_some_and(|l| lb.now > s + l) {
                 break phase;
@@ -279,14 +328,15 @@ fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<
     Ok(Streamed {
         phase,
         start_us: streaming_at.context("the run never started streaming")?,
-        clock_errors: errors,
+        samples,
+        bytes_at_start,
     })
 }
 
 /// Prints the bytes and frames on the wire to and from the `n` nodes per
 /// second of `motion` (s), the
 /// clock exchanges' share, windows, segments and retransmits.
-fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig) {
+fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig, bytes_at_start: u64) {
     let ex = motet_net::peer::datagram(2, &ServiceRequest::TimeGet { t1: u64::MAX / 3 }).len()
         + frame_len(&ServiceReply::Time {
             t1: u64::MAX / 3,
@@ -311,11 +361,20 @@ fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig) {
         frames as f64 / motion
     );
     println!(
-        "  of which clock exchanges: {:.0} B/s ({} B each, every {} ms); without them {:.3} KB/s",
-        sync as f64 / motion,
-        ex,
+        "  per node {:.3} KB/s; while streaming (the start's clock exchanges left out) {:.3} KB/s, per node {:.3} KB/s",
+        total as f64 / motion / 1000.0 / n as f64,
+        total.saturating_sub(bytes_at_start) as f64 / motion / 1000.0,
+        total.saturating_sub(bytes_at_start) as f64 / motion / 1000.0 / n as f64,
+    );
+    let models: u64 = lb.run.peers().iter().map(|p| p.sync.models_sent.0).sum();
+    println!(
+        "  clock exchanges: {} ({:.2}/s per node, at most {} ms apart; about {} B each), {:.0} B/s; clock models sent: {}",
+        lb.run.peers().iter().map(|p| p.exchanges.0).sum::<u64>(),
+        lb.run.peers().iter().map(|p| p.exchanges.0).sum::<u64>() as f64 / motion / n as f64,
         cfg.sync_interval_us / 1000,
-        (total - sync.min(total)) as f64 / motion / 1000.0
+        ex,
+        sync as f64 / motion,
+        models
     );
     println!(
         "  {} windows sealed ({:.2}/s), {} segments ({:.1}/s), {} retransmits",
@@ -331,29 +390,60 @@ fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig) {
     );
 }
 
-/// Prints each node's clock error while streaming: overall, and after the
-/// estimator settled.
-fn print_clock_errors(errors: &[Vec<f64>], machine: &Machine, clocks: &[Crystal], jitter_us: u64) {
-    for (k, e) in errors.iter().enumerate() {
+/// Prints each node's clock error while streaming (overall, and after the
+/// first minute) and how often the host's bound held.
+fn print_clock_errors(samples: &[Sample], machine: &Machine, clocks: &[Crystal], jitter_us: u64) {
+    for (k, node) in machine.nodes.iter().enumerate() {
+        let e: Vec<(f64, f64)> = samples.iter().filter_map(|s| s.nodes[k]).collect();
         if e.is_empty() {
             continue;
         }
-        let max = e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
-        // After the first minute (samples every 100 ms): the estimator settled.
+        let max = e.iter().fold(0.0f64, |m, v| m.max(v.0.abs()));
+        let rms = (e.iter().map(|v| v.0 * v.0).sum::<f64>() / e.len() as f64).sqrt();
+        // After the first minute (samples every 100 ms).
         let late = &e[e.len().min(600)..];
-        let late_max = late.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let late_max = late.iter().fold(0.0f64, |m, v| m.max(v.0.abs()));
+        let outside = e.iter().filter(|v| v.0.abs() > v.1).count();
+        let bound_max = e.iter().fold(0.0f64, |m, v| m.max(v.1));
         println!(
-            "  node {} ({:+} ppm): clock error while streaming max {:.1} µs, rms {:.1} µs; after the first minute max {:.1} µs ({} samples, jitter {} µs)",
-            machine.nodes[k].name,
+            "  node {} ({:+} ppm): clock error while streaming max {:.1} µs, rms {:.1} µs; after the first minute max {:.1} µs ({} samples, jitter {} µs); host's bound at most {:.1} µs, exceeded in {} samples",
+            node.name,
             clocks[k].ppm,
             max,
             rms,
             late_max,
             e.len(),
-            jitter_us
+            jitter_us,
+            bound_max,
+            outside
         );
     }
+}
+
+/// Prints the largest difference between any two nodes' clocks while
+/// streaming, and the path error it makes at the path's speed then.
+fn print_agreement(samples: &[Sample], machine: &Machine) {
+    if machine.nodes.len() < 2 {
+        return;
+    }
+    let (mut worst, mut worst_late, mut path) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, s) in samples.iter().enumerate() {
+        let errs: Vec<f64> = s.nodes.iter().flatten().map(|v| v.0).collect();
+        let spread = errs.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+            - errs.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        if errs.len() < 2 {
+            continue;
+        }
+        worst = worst.max(spread);
+        if i >= 600 {
+            worst_late = worst_late.max(spread);
+        }
+        path = path.max(spread * 1e-6 * s.speed);
+    }
+    println!(
+        "  any two nodes' clocks apart while streaming: at most {worst:.1} µs ({worst_late:.1} µs after the first minute); path error from it at the path's speed then: at most {:.3} µm",
+        path * 1e3
+    );
 }
 
 fn fmt_s(s: f64) -> String {

@@ -96,7 +96,7 @@ impl NetRun {
                     bytes_in: t.bytes_in,
                     frames_out: t.frames_out,
                     frames_in: t.frames_in,
-                    sync_error_us: p.sync.error_estimate(now as f64),
+                    sync_error_us: p.sync.error_bound(now as f64),
                     skew_ppm: p.sync.model().skew * 1e6,
                     underruns,
                 }

@@ -20,6 +20,7 @@ pub use stop::{LostNode, StopInfo};
 
 use crate::digest::Digest;
 use crate::journal::{JournalHeader, JournalWriter};
+use crate::node_clock::MAX_CRYSTAL;
 use crate::peer::{Incoming, Peer};
 use crate::plan_feed::{run_limits, PlanFeed};
 use motet_host::{Distributor, Machine};
@@ -31,9 +32,6 @@ use motet_wire::{HostMessage, NodeMessage, Refusal};
 use std::collections::VecDeque;
 use window::Committed;
 
-/// Clock exchanges µs apart until every node's clock is settled.
-const SYNC_START_US: u64 = 20_000;
-
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NetConfig {
@@ -44,10 +42,13 @@ pub struct NetConfig {
     pub node_timeout_us: u64,
     /// Status requests to each node, µs apart.
     pub status_interval_us: u64,
-    /// Clock exchanges with each node, µs apart.
+    /// Longest time between clock exchanges with a node, µs: they are as
+    /// rare as the node's error bound allows, and no rarer than this (they
+    /// are also what a quiet node answers, so the host hears it).
     pub sync_interval_us: u64,
-    /// Clock model updates sent to each node, µs apart.
-    pub model_interval_us: u64,
+    /// The clock target, µs: nothing moves until every node's clock error
+    /// bound is within it, and the exchanges and models keep it there.
+    pub clock_bound_us: f64,
     /// Give up connecting after this long, µs.
     pub connect_timeout_us: u64,
     /// How far past the lead a new window reaches, µs: longer windows mean
@@ -68,7 +69,7 @@ impl Default for NetConfig {
             node_timeout_us: 1_500_000,
             status_interval_us: 5_000_000,
             sync_interval_us: 400_000,
-            model_interval_us: 5_000_000,
+            clock_bound_us: 10.0,
             connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
             max_move_us: 0,
@@ -215,10 +216,6 @@ pub struct NetRun {
     phase: Phase,
     started_at: Option<u64>,
     configured: bool,
-    model_sent: Vec<Option<u64>>,
-    /// A model from the settled estimate went to the node.
-    settled_sent: Vec<bool>,
-    next_sync: u64,
     next_status: u64,
     /// When to ask the stopping nodes where they are next.
     next_where: u64,
@@ -249,6 +246,12 @@ impl NetRun {
         journal: Option<JournalWriter>,
     ) -> NetRun {
         let n = peers.len();
+        let mut peers = peers;
+        for p in &mut peers {
+            // A run starts at rest, and a node may have restarted since the
+            // last: its first model goes out as it is.
+            p.sync.forget_sent();
+        }
         NetRun {
             machine: machine.clone(),
             cfg,
@@ -276,9 +279,6 @@ impl NetRun {
             phase: Phase::Starting,
             started_at: None,
             configured: false,
-            model_sent: vec![None; n],
-            settled_sent: vec![false; n],
-            next_sync: 0,
             next_status: 0,
             next_where: 0,
             tally_asked: None,
@@ -435,7 +435,7 @@ impl NetRun {
             }
         }
         self.take_replies(now)?;
-        self.keep_time(now);
+        self.keep_time(now)?;
         match self.phase.clone() {
             Phase::Starting => self.start(now)?,
             Phase::Streaming => {
@@ -483,7 +483,10 @@ impl NetRun {
                 t = t.min(d.max(now));
             }
         }
-        t.min(self.next_sync.max(now))
+        for p in &self.peers {
+            t = t.min(p.sync.next_exchange().max(now));
+        }
+        t
     }
 
     fn take_replies(&mut self, now: u64) -> Result<(), NetError> {
@@ -536,43 +539,43 @@ impl NetRun {
         Ok(())
     }
 
-    /// Clock exchanges and model updates, in every phase.
-    fn keep_time(&mut self, now: u64) {
-        if now >= self.next_sync {
-            for p in self.peers.iter_mut() {
+    /// Clock exchanges (also the heartbeat of a quiet node) and models,
+    /// in every phase; a node whose clock answered nonsense is refused.
+    fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
+        let target = self.cfg.clock_bound_us;
+        let at_rest = matches!(self.phase, Phase::Starting);
+        let quiet = self.cfg.node_timeout_us / 3;
+        let mut fault = None;
+        for p in self.peers.iter_mut() {
+            p.sync.probe_after(p.last_heard, quiet);
+            if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
                 // A lost datagram is only a missing sample.
                 let _ = p.send_time_get(now);
             }
-            // Quick exchanges until every node's clock is settled, so a job
-            // starts within seconds; then few, as they are most of the
-            // traffic of a slow job. The fine estimator starts from a
-            // measured skew, so the change of spacing does not bias it.
-            let settled = self.peers.iter().all(|p| p.sync.settled());
-            self.next_sync = now
-                + if settled {
-                    self.cfg.sync_interval_us
-                } else {
-                    self.cfg.sync_interval_us.min(SYNC_START_US)
-                };
-        }
-        for (k, p) in self.peers.iter_mut().enumerate() {
-            if !p.sync.synced() {
+            if let Some(f) = p.sync.fault() {
+                fault.get_or_insert((p.name.clone(), f));
                 continue;
             }
-            // The settled model goes out at once; later ones every interval.
-            let first_settled = p.sync.settled() && !self.settled_sent[k];
-            let due = first_settled
-                || self.model_sent[k].is_none_or(|t| now >= t + self.cfg.model_interval_us);
-            if due && matches!(p.link_state(), State::Established { .. }) {
-                let m = p.sync.model();
+            if !matches!(p.link_state(), State::Established { .. }) {
+                continue;
+            }
+            // The model reaches the node about half a round trip later.
+            let delay = 0.5 * p.link().stats().srtt_us as f64;
+            if let Some(m) = p.sync.model_due(now, target, delay, at_rest) {
                 p.send_service(&ServiceRequest::TimeSet {
                     offset: m.offset,
                     skew: m.skew,
                 });
-                self.model_sent[k] = Some(now);
-                self.settled_sent[k] |= p.sync.settled();
             }
         }
+        if let Some((node, f)) = fault {
+            let message = format!("its clock cannot be trusted: {f}; nothing moves on it");
+            if at_rest {
+                return Err(NetError::Node { node, message });
+            }
+            self.stop(&format!("node {node}: {message}"), now);
+        }
+        Ok(())
     }
 
     fn start(&mut self, now: u64) -> Result<(), NetError> {
@@ -590,38 +593,12 @@ impl NetRun {
             .iter()
             .all(|p| matches!(p.link_state(), State::Established { .. }));
         if now > started + self.cfg.connect_timeout_us {
-            let p = self
-                .peers
-                .iter()
-                .find(|p| !matches!(p.link_state(), State::Established { .. }) || !p.sync.synced());
-            return Err(NetError::Node {
-                node: p.map_or_else(|| "?".into(), |p| p.name.clone()),
-                message: format!(
-                    "no connection and clock sync after {:.1} s",
-                    self.cfg.connect_timeout_us as f64 * 1e-6
-                ),
-            });
+            return Err(self.not_ready());
         }
         if !all_up {
             return Ok(());
         }
-        // A node whose clock runs at another rate than any crystal would
-        // was started with another --time-scale (or is broken): its
-        // trajectory would run at the wrong speed.
-        for p in &self.peers {
-            let skew = p.sync.model().skew;
-            if p.sync.settled() && skew.abs() >= MAX_SKEW {
-                return Err(NetError::Node {
-                    node: p.name.clone(),
-                    message: format!(
-                        "its clock runs {:.2}× as fast as the host's ({:+.0} ppm; a crystal is off by at most {:.0}): were the host and the node started with the same --time-scale?",
-                        1.0 + skew,
-                        skew * 1e6,
-                        MAX_SKEW * 1e6
-                    ),
-                });
-            }
-        }
+        self.check_rates()?;
         if !self.configured {
             let setups = self.dist.stream_setup(&self.machine, &self.start_point);
             for (k, mut msgs) in setups.into_iter().enumerate() {
@@ -637,8 +614,7 @@ impl NetRun {
         let ready = self
             .peers
             .iter()
-            .enumerate()
-            .all(|(k, p)| self.settled_sent[k] && p.backlog() == 0);
+            .all(|p| p.sync.error_bound(now as f64) <= self.cfg.clock_bound_us && p.backlog() == 0);
         if ready {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
@@ -670,6 +646,69 @@ impl NetRun {
             self.feed_t0 = t0;
             self.phase = Phase::Streaming;
             self.fill(now)?;
+        }
+        Ok(())
+    }
+
+    /// Why the run could not start in time: the first node without a link,
+    /// or whose clock is not yet known well enough.
+    fn not_ready(&self) -> NetError {
+        let secs = self.cfg.connect_timeout_us as f64 * 1e-6;
+        let now = self.started_at.unwrap_or(0) + self.cfg.connect_timeout_us;
+        for p in &self.peers {
+            let node = p.name.clone();
+            if !matches!(p.link_state(), State::Established { .. }) {
+                let message = format!("no connection after {secs:.1} s");
+                return NetError::Node { node, message };
+            }
+            let bound = p.sync.error_bound(now as f64);
+            if bound > self.cfg.clock_bound_us {
+                let message = format!(
+                    "its clock is known to ±{bound:.1} µs after {secs:.1} s ({} exchanges kept, least round trip {:.0} µs); nothing moves before it is within ±{:.0} µs",
+                    p.sync.points(),
+                    p.sync.min_rtt(),
+                    self.cfg.clock_bound_us
+                );
+                return NetError::Node { node, message };
+            }
+        }
+        NetError::Node {
+            node: "?".into(),
+            message: format!("not configured after {secs:.1} s"),
+        }
+    }
+
+    /// Refuses a node whose clock runs at a rate no crystal has: started
+    /// with another --time-scale, or broken.
+    fn check_rates(&self) -> Result<(), NetError> {
+        for p in &self.peers {
+            if !p.sync.synced() {
+                continue;
+            }
+            let skew = p.sync.model().skew;
+            // Only a rate surely out of range: an early slope is rough.
+            let surely = skew.abs() - p.sync.skew_bound();
+            let node = p.name.clone();
+            if surely >= MAX_SKEW {
+                return Err(NetError::Node {
+                    node,
+                    message: format!(
+                        "its clock runs {:.2}× as fast as the host's ({:+.0} ppm): were the host and the node started with the same --time-scale?",
+                        1.0 + skew,
+                        skew * 1e6,
+                    ),
+                });
+            }
+            if surely > MAX_CRYSTAL {
+                return Err(NetError::Node {
+                    node,
+                    message: format!(
+                        "its clock runs {:+.0} ppm off the host's; a crystal is within ±{:.0} ppm, so nothing moves on it",
+                        skew * 1e6,
+                        MAX_CRYSTAL * 1e6
+                    ),
+                });
+            }
         }
         Ok(())
     }

@@ -1,0 +1,296 @@
+//! One node's clock as the host knows it: the estimate from the exchanges
+//! (`motet_wire::sync`), the model the node runs (the last one sent), when
+//! to exchange next, and when the node needs a new model.
+//!
+//! Two rules keep the node's time trustworthy:
+//! - **Slew, never step.** A correction larger than a clock tick goes out as
+//!   a model that agrees with the node's current one where the node will
+//!   take it and reaches the estimate over a while, at most [`SLEW_RATE`]
+//!   faster or slower; the exact model follows once it has. The node's time
+//!   stays monotone and never jumps while it moves.
+//! - **As few exchanges as the bound allows.** While the bound is above half
+//!   the target the host exchanges every [`FAST_US`]; then it exchanges when
+//!   the slope's uncertainty would carry the bound to half the target, at
+//!   most [`crate::NetConfig::sync_interval_us`] apart. With a steady
+//!   crystal the slope's uncertainty keeps falling, and so does the rate.
+
+use motet_wire::sync::{ClockFault, ClockModel, ClockSync, Exchange, SyncConfig};
+
+/// The most a crystal is off, with its temperature and age: a node whose
+/// clock runs further off the host's is refused.
+pub const MAX_CRYSTAL: f64 = 500e-6;
+/// Exchanges this far apart while the estimate is not yet good enough, µs.
+pub const FAST_US: u64 = 10_000;
+/// The fastest a node's clock is slewed: it runs at most this much faster or
+/// slower than its estimate while a correction is taken up.
+pub const SLEW_RATE: f64 = 50e-6;
+/// A correction this small is sent as it is: below a clock tick.
+const STEP_US: f64 = 0.5;
+/// The shortest slew, µs: a correction is spread over at least this long.
+const MIN_SLEW_US: f64 = 20_000.0;
+/// How far ahead the model the node runs is checked against the estimate,
+/// µs: a model that will be off by then is replaced now.
+const LOOKAHEAD_US: f64 = 100_000.0;
+
+/// A node's clock as the host knows it.
+#[derive(Clone, Debug)]
+pub struct NodeClock {
+    est: ClockSync,
+    /// The model the node runs (the last one sent), if any.
+    sent: Option<ClockModel>,
+    /// Until when (host µs) the model sent is a slew, not the estimate.
+    slewing_until: Option<f64>,
+    fault: Option<ClockFault>,
+    /// When to exchange next, host µs.
+    next_exchange: u64,
+    /// When the last exchange went out, host µs.
+    last_sent: Option<u64>,
+    /// Models sent, and how many of them slewed.
+    pub models_sent: (u64, u64),
+}
+
+impl Default for NodeClock {
+    fn default() -> Self {
+        NodeClock {
+            est: ClockSync::new(SyncConfig::default()),
+            sent: None,
+            slewing_until: None,
+            fault: None,
+            next_exchange: 0,
+            last_sent: None,
+            models_sent: (0, 0),
+        }
+    }
+}
+
+impl NodeClock {
+    /// Takes one clock exchange. An exchange no working clock produces is
+    /// kept as the node's fault (see [`NodeClock::fault`]).
+    pub fn add(&mut self, e: Exchange) {
+        if self.fault.is_some() {
+            return;
+        }
+        if let Err(f) = self.est.add(e) {
+            self.fault = Some(f);
+        }
+    }
+
+    /// The node answered an exchange no working clock produces: nothing may
+    /// move on its clock.
+    pub fn fault(&self) -> Option<ClockFault> {
+        self.fault
+    }
+
+    /// The estimate rests on data.
+    pub fn synced(&self) -> bool {
+        self.est.synced()
+    }
+
+    /// The estimated model: `local = offset + (1 + skew) · host`.
+    pub fn model(&self) -> ClockModel {
+        self.est.model()
+    }
+
+    /// Host time at node time `local` by the estimate, µs.
+    pub fn local_to_host(&self, local: f64) -> f64 {
+        self.est.local_to_host(local)
+    }
+
+    /// How far the estimate's skew may be off.
+    pub fn skew_bound(&self) -> f64 {
+        self.est.skew_bound()
+    }
+
+    /// Least round trip seen, µs.
+    pub fn min_rtt(&self) -> f64 {
+        self.est.min_rtt()
+    }
+
+    /// Exchanges the estimate rests on.
+    pub fn points(&self) -> u32 {
+        self.est.points()
+    }
+
+    /// Exchanges taken and dropped (stalls, retransmissions).
+    pub fn counts(&self) -> (u64, u64) {
+        self.est.counts()
+    }
+
+    /// A bound on the estimate's error at host time `host`, µs.
+    pub fn estimate_bound(&self, host: f64) -> f64 {
+        self.est.error_bound(host)
+    }
+
+    /// A bound on the node's own error at host time `host`: how far the
+    /// model it runs is from the estimate, plus the estimate's bound, µs;
+    /// infinite while it runs none or the host knows too little.
+    pub fn error_bound(&self, host: f64) -> f64 {
+        match self.sent {
+            Some(m) if self.fault.is_none() => {
+                let off = (m.local(host) - self.est.host_to_local(host)).abs();
+                off + self.est.error_bound(host)
+            }
+            _ => f64::INFINITY,
+        }
+    }
+
+    /// Whether an exchange is due at host time `now`; if so, plans the next
+    /// one: fast while the node's bound is above half of `target_us`, then
+    /// as late as the slope's uncertainty allows, at most `max_us` later.
+    pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64) -> bool {
+        if now < self.next_exchange {
+            return false;
+        }
+        let h = now as f64;
+        let half = 0.8 * target_us;
+        let bound = self.est.error_bound(h);
+        let interval = if !self.est.synced() || bound > half {
+            FAST_US
+        } else {
+            let grow = self.est.skew_bound().max(1e-12);
+            (((half - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
+        };
+        self.next_exchange = now + interval;
+        self.last_sent = Some(now);
+        true
+    }
+
+    /// When the next exchange is due, host µs.
+    pub fn next_exchange(&self) -> u64 {
+        self.next_exchange
+    }
+
+    /// Brings the next exchange forward to `quiet_us` after the later of
+    /// the last frame heard (`heard`) and the last exchange: an exchange is
+    /// also the heartbeat of a node that has nothing else to say.
+    pub fn probe_after(&mut self, heard: Option<u64>, quiet_us: u64) {
+        let since = heard.max(self.last_sent).unwrap_or(0);
+        self.next_exchange = self.next_exchange.min(since + quiet_us);
+    }
+
+    /// The model to send at host time `now`, if the node needs one: its
+    /// first, a slew toward the estimate when the model it runs is or will
+    /// soon be off by more than a quarter of `target_us`, or the estimate
+    /// itself once a slew has reached it. `delay_us` is how long the model
+    /// takes to reach the node. The host takes the model as the node's once
+    /// returned.
+    /// A node `at_rest` takes the estimate at once, however far off.
+    pub fn model_due(
+        &mut self,
+        now: u64,
+        target_us: f64,
+        delay_us: f64,
+        at_rest: bool,
+    ) -> Option<ClockModel> {
+        if self.fault.is_some() || !self.est.synced() {
+            return None;
+        }
+        let est = self.est.model();
+        let Some(sent) = self.sent else {
+            // The node runs nothing yet (it is not moving): the estimate as
+            // it is.
+            return Some(self.take(est, None));
+        };
+        // Where the node will be when the model arrives.
+        let at = now as f64 + delay_us;
+        let off = |h: f64| est.local(h) - sent.local(h);
+        let quarter = 0.25 * target_us;
+        match self.slewing_until {
+            // A slew runs to its end before anything else is sent.
+            Some(until) if at < until => return None,
+            Some(_) => {}
+            None if off(at).abs() <= quarter && off(at + LOOKAHEAD_US).abs() <= quarter => {
+                return None
+            }
+            None => {}
+        }
+        let delta = off(at);
+        if delta.abs() <= STEP_US || at_rest {
+            return Some(self.take(est, None));
+        }
+        // A line through the node's current time at `at` that meets the
+        // estimate `span` later.
+        let span = (delta.abs() / SLEW_RATE).max(MIN_SLEW_US);
+        let slope = (1.0 + est.skew) + delta / span;
+        let m = ClockModel {
+            offset: sent.local(at) - slope * at,
+            skew: slope - 1.0,
+        };
+        Some(self.take(m, Some(at + span)))
+    }
+
+    fn take(&mut self, m: ClockModel, slewing_until: Option<f64>) -> ClockModel {
+        self.sent = Some(m);
+        self.slewing_until = slewing_until;
+        self.models_sent.0 += 1;
+        self.models_sent.1 += slewing_until.is_some() as u64;
+        m
+    }
+
+    /// The node lost the model it ran (it restarted): the next one goes out
+    /// as it is.
+    pub fn forget_sent(&mut self) {
+        self.sent = None;
+        self.slewing_until = None;
+    }
+
+    /// The model the node runs, as last sent.
+    pub fn sent(&self) -> Option<ClockModel> {
+        self.sent
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A node whose clock runs 100 ppm fast, exchanges with a 200 µs round
+    /// trip and no jitter.
+    fn exchange(h: u64) -> Exchange {
+        let local = |h: f64| (7_000_000.0 + h * (1.0 + 100e-6)) as u64;
+        Exchange {
+            t1: h,
+            t2: local(h as f64 + 100.0),
+            t3: local(h as f64 + 110.0),
+            t4: h + 210,
+        }
+    }
+
+    #[test]
+    fn corrections_are_slewed_and_time_stays_monotone() {
+        let mut c = NodeClock::default();
+        let mut h = 1_000u64;
+        while !c.synced() {
+            c.add(exchange(h));
+            h += 10_000;
+        }
+        let first = c.model_due(h, 10.0, 100.0, false).expect("a first model");
+        // A model 30 µs off: what a node restarted on an old estimate runs.
+        c.sent = Some(ClockModel {
+            offset: first.offset + 30.0,
+            ..first
+        });
+        let mut models = vec![(h as f64, c.sent.unwrap())];
+        for _ in 0..400 {
+            h += 10_000;
+            c.add(exchange(h));
+            if let Some(m) = c.model_due(h, 10.0, 100.0, false) {
+                models.push((h as f64 + 100.0, m));
+            }
+        }
+        assert!(c.models_sent.1 >= 1, "the correction was slewed");
+        // Where one model hands over to the next, the node's time moves by
+        // less than a tick, and never backwards.
+        for w in models.windows(2) {
+            let (at, m) = w[1];
+            let jump = m.local(at) - w[0].1.local(at);
+            assert!(jump.abs() <= STEP_US + 1e-6, "jump {jump} at {at}");
+        }
+        // And in the end the node runs the estimate.
+        assert!(
+            c.error_bound(h as f64) < 10.0,
+            "{}",
+            c.error_bound(h as f64)
+        );
+    }
+}
