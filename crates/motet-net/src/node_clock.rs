@@ -8,9 +8,9 @@
 //!   take it and reaches the estimate over a while, at most [`SLEW_RATE`]
 //!   faster or slower; the exact model follows once it has. The node's time
 //!   stays monotone and never jumps while it moves.
-//! - **As few exchanges as the bound allows.** While the bound is above half
-//!   the target the host exchanges every [`FAST_US`]; then it exchanges when
-//!   the slope's uncertainty would carry the bound to half the target, at
+//! - **As few exchanges as the bound allows.** While the bound is above 80 %
+//!   of the target the host exchanges every [`FAST_US`]; then it exchanges
+//!   when the slope's uncertainty would carry the bound there, at
 //!   most [`crate::NetConfig::sync_interval_us`] apart. With a steady
 //!   crystal the slope's uncertainty keeps falling, and so does the rate.
 
@@ -19,6 +19,9 @@ use motet_wire::sync::{ClockFault, ClockModel, ClockSync, Exchange, SyncConfig};
 /// The most a crystal is off, with its temperature and age: a node whose
 /// clock runs further off the host's is refused.
 pub const MAX_CRYSTAL: f64 = 500e-6;
+/// The estimate's bound is kept within this share of the target: the rest
+/// is for the model the node runs, replaced when off by a quarter.
+const EXCHANGE_AT: f64 = 0.8;
 /// Exchanges this far apart while the estimate is not yet good enough, µs.
 pub const FAST_US: u64 = 10_000;
 /// The fastest a node's clock is slewed: it runs at most this much faster or
@@ -91,11 +94,6 @@ impl NodeClock {
         self.est.model()
     }
 
-    /// Host time at node time `local` by the estimate, µs.
-    pub fn local_to_host(&self, local: f64) -> f64 {
-        self.est.local_to_host(local)
-    }
-
     /// How far the estimate's skew may be off.
     pub fn skew_bound(&self) -> f64 {
         self.est.skew_bound()
@@ -109,16 +107,6 @@ impl NodeClock {
     /// Exchanges the estimate rests on.
     pub fn points(&self) -> u32 {
         self.est.points()
-    }
-
-    /// Exchanges taken and dropped (stalls, retransmissions).
-    pub fn counts(&self) -> (u64, u64) {
-        self.est.counts()
-    }
-
-    /// A bound on the estimate's error at host time `host`, µs.
-    pub fn estimate_bound(&self, host: f64) -> f64 {
-        self.est.error_bound(host)
     }
 
     /// A bound on the node's own error at host time `host`: how far the
@@ -135,20 +123,20 @@ impl NodeClock {
     }
 
     /// Whether an exchange is due at host time `now`; if so, plans the next
-    /// one: fast while the node's bound is above half of `target_us`, then
+    /// one: fast while the estimate's bound is above 80 % of `target_us`, then
     /// as late as the slope's uncertainty allows, at most `max_us` later.
     pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64) -> bool {
         if now < self.next_exchange {
             return false;
         }
         let h = now as f64;
-        let half = 0.8 * target_us;
+        let limit = EXCHANGE_AT * target_us;
         let bound = self.est.error_bound(h);
-        let interval = if !self.est.synced() || bound > half {
+        let interval = if !self.est.synced() || bound > limit {
             FAST_US
         } else {
             let grow = self.est.skew_bound().max(1e-12);
-            (((half - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
+            (((limit - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
         };
         self.next_exchange = now + interval;
         self.last_sent = Some(now);

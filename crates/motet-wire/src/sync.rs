@@ -39,7 +39,7 @@
 //! 4. **Error bound.** Near the envelopes the density of lucky exchanges is
 //!    measured by the k-th least residual of each direction: with k
 //!    residuals within x of the edge, an edge is known to about x/k. The
-//!    bound at host time h is [`SyncConfig::confidence`] times that, plus the
+//!    bound at host time h is a timestamp tick, [`SyncConfig::confidence`] times that, plus the
 //!    slope's uncertainty (the two edges' over the span) times the distance
 //!    from the exchanges' centre.
 //!
@@ -71,6 +71,8 @@ const MIN_SAMPLES: usize = 8;
 /// The slope search range: well beyond any crystal, so a node started with
 /// another time scale is measured (and refused) rather than clipped.
 const B_RANGE: f64 = 0.02;
+/// The timestamps' resolution, µs.
+const TICK_US: f64 = 1.0;
 /// How far a crystal's rate may move at once (a board warming up, a
 /// crystal swapped): after a change, the last slope is trusted this far
 /// until the new exchanges are surer.
@@ -245,19 +247,6 @@ impl ClockSync {
             rejected: 0,
             changes: 0,
         }
-    }
-
-    /// An estimator that starts from a known skew: until it has exchanges
-    /// enough for a slope of its own it uses this one.
-    /// `bound` says how far off it may be.
-    pub fn with_skew(cfg: SyncConfig, skew: f64, bound: f64) -> ClockSync {
-        let mut s = ClockSync::new(cfg);
-        if skew.is_finite() && bound.is_finite() && bound > 0.0 {
-            s.prior_b = skew.clamp(-B_RANGE, B_RANGE);
-            s.prior_bound = bound.min(B_RANGE);
-            s.fit.b = s.prior_b;
-        }
-        s
     }
 
     /// Exchanges the fit rests on.
@@ -566,7 +555,11 @@ impl ClockSync {
         } else {
             early
         };
-        0.5 * near.edge * self.cfg.confidence + self.fit.skew_bound * (x - near.centre).abs()
+        // Timestamps are whole µs on each clock: a tick either way is
+        // beyond what the edges can tell.
+        TICK_US
+            + 0.5 * near.edge * self.cfg.confidence
+            + self.fit.skew_bound * (x - near.centre).abs()
     }
 }
 
@@ -635,20 +628,11 @@ fn hull(
     m
 }
 
-/// The k-th least of `v` (1-based), reordering `v`.
+/// The k-th least of `v` (1-based), at least 0, reordering `v`.
 fn kth_smallest(v: &mut [f64], k: usize) -> f64 {
     let k = k.min(v.len()).max(1);
-    // Partial selection sort: `v` holds at most `CAPACITY`.
-    for i in 0..k {
-        let mut m = i;
-        for j in i + 1..v.len() {
-            if v[j] < v[m] {
-                m = j;
-            }
-        }
-        v.swap(i, m);
-    }
-    v[k - 1].max(0.0)
+    let (_, kth, _) = v.select_nth_unstable_by(k - 1, f64::total_cmp);
+    kth.max(0.0)
 }
 
 #[cfg(test)]

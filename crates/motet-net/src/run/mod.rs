@@ -543,10 +543,10 @@ impl NetRun {
     /// in every phase; a node whose clock answered nonsense is refused.
     fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
         let at_rest = matches!(self.phase, Phase::Starting);
-        let targets: Vec<f64> = self.peers.iter().map(|p| self.clock_target(p)).collect();
         let quiet = self.cfg.node_timeout_us / 3;
         let mut fault = None;
-        for (p, &target) in self.peers.iter_mut().zip(&targets) {
+        for p in self.peers.iter_mut() {
+            let target = clock_target(&self.cfg, p);
             p.sync.probe_after(p.last_heard, quiet);
             if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
                 // A lost datagram is only a missing sample.
@@ -611,10 +611,9 @@ impl NetRun {
             }
             self.configured = true;
         }
-        let ready = self
-            .peers
-            .iter()
-            .all(|p| p.sync.error_bound(now as f64) <= self.clock_target(p) && p.backlog() == 0);
+        let ready = self.peers.iter().all(|p| {
+            p.sync.error_bound(now as f64) <= clock_target(&self.cfg, p) && p.backlog() == 0
+        });
         if ready {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
@@ -662,7 +661,7 @@ impl NetRun {
                 return NetError::Node { node, message };
             }
             let bound = p.sync.error_bound(now as f64);
-            let target = self.clock_target(p);
+            let target = clock_target(&self.cfg, p);
             if bound > target {
                 let message = format!(
                     "its clock is known to ±{bound:.1} µs after {secs:.1} s ({} exchanges kept, least round trip {:.0} µs); nothing moves before it is within ±{:.0} µs",
@@ -677,15 +676,6 @@ impl NetRun {
             node: "?".into(),
             message: format!("not configured after {secs:.1} s"),
         }
-    }
-
-    /// A node's clock target, µs: the run's, or a quarter of the link's
-    /// least round trip on a slow link (a serial line's byte times bound
-    /// what its timestamps can tell).
-    fn clock_target(&self, p: &Peer) -> f64 {
-        let rtt = p.sync.min_rtt();
-        let slow = if rtt.is_finite() { 0.25 * rtt } else { 0.0 };
-        self.cfg.clock_bound_us.max(slow)
     }
 
     /// Refuses a node whose clock runs at a rate no crystal has: started
@@ -738,4 +728,13 @@ impl NetRun {
     fn finished(&self, now: u64) -> bool {
         now as f64 > self.committed_end + 20_000.0 && self.peers.iter().all(|p| p.backlog() == 0)
     }
+}
+
+/// A node's clock target, µs: the run's, or a quarter of the link's
+/// least round trip on a slow link (a serial line's byte times bound
+/// what its timestamps can tell).
+fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
+    let rtt = p.sync.min_rtt();
+    let slow = if rtt.is_finite() { 0.25 * rtt } else { 0.0 };
+    cfg.clock_bound_us.max(slow)
 }

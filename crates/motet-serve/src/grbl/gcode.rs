@@ -6,6 +6,7 @@
 use super::errors::{self, alarm, code};
 use super::realtime::Overrides;
 use super::{Grbl, Step};
+use crate::device::gcode::{follow_rest, gate, Gate};
 use crate::session::{Session, State};
 use motet_planner::{Command, Located, MoveKind};
 
@@ -24,22 +25,13 @@ impl Grbl {
             return Step::Wait;
         }
         if !self.check_mode {
-            match s.state() {
-                State::Alarm | State::Stopped => return Step::Reply(Err(code::LOCKED)),
-                _ if s.jogging() => return Step::Reply(Err(code::LOCKED)),
-                State::Stopping => return Step::Wait,
-                State::Running | State::Holding | State::Paused if !s.streaming() => {
-                    return Step::Reply(Err(code::LOCKED))
-                }
-                _ => {}
+            if s.jogging() {
+                return Step::Reply(Err(code::LOCKED));
             }
-            if s.stream_status().blocks_free == 0 {
-                return Step::Wait;
-            }
-            if s.state() == State::Idle && !s.streaming() {
-                // Moved by something else since the last line (a jog, a
-                // hold cancelled, the web page): relative moves start here.
-                self.interp.set_machine_position(s.rest());
+            match gate(s) {
+                Gate::Halted | Gate::Busy => return Step::Reply(Err(code::LOCKED)),
+                Gate::Wait => return Step::Wait,
+                Gate::Open => follow_rest(&mut self.interp, s),
             }
         }
         let from = self.interp.modal().machine;

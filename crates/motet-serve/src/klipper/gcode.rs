@@ -8,6 +8,7 @@
 
 use super::print::{load, Loaded};
 use super::{Klipper, CLIENT};
+use crate::device::gcode::{follow_rest, gate, Gate};
 use crate::session::{Session, State};
 use motet_planner::{Command, Located};
 
@@ -198,26 +199,18 @@ impl Klipper {
 
     /// Traditional G-code through motet's interpreter into the stream.
     fn gcode(&mut self, line: &str, s: &mut Session) -> Step {
-        match s.state() {
-            State::Alarm | State::Stopped => {
+        match gate(s) {
+            Gate::Halted => {
                 return Step::Done(Err("Printer is shutdown: FIRMWARE_RESTART to go on".into()))
             }
-            State::Stopping => return Step::Wait,
-            State::Running | State::Holding | State::Paused if !s.streaming() => {
+            Gate::Busy => {
                 return Step::Done(Err(format!(
                     "the machine is busy ({}): a print or a jog runs",
                     s.state()
                 )))
             }
-            _ => {}
-        }
-        if s.stream_status().blocks_free == 0 {
-            return Step::Wait;
-        }
-        if s.state() == State::Idle && !s.streaming() {
-            // Moved by something else since the last line (a print, the
-            // web page): relative moves start from here.
-            self.interp.set_machine_position(s.rest());
+            Gate::Wait => return Step::Wait,
+            Gate::Open => follow_rest(&mut self.interp, s),
         }
         let from = self.interp.modal().machine;
         self.line_no = self.line_no.wrapping_add(1);

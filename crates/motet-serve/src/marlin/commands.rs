@@ -5,7 +5,7 @@
 
 use super::frame::code;
 use super::{report, Marlin};
-use crate::device::gcode::{end_of, new_interpreter};
+use crate::device::gcode::{end_of, follow_rest, new_interpreter};
 use crate::session::{ActionError, Session, State};
 use motet_host::heater::READY_WITHIN_C;
 use motet_planner::{AuxChannel, Command, Located};
@@ -206,11 +206,7 @@ impl Marlin {
         if matches!(s.state(), State::Stopped | State::Alarm) {
             return Outcome::Reply(halted());
         }
-        if s.state() == State::Idle && !s.streaming() {
-            // Moved by something else since the last line (the web page):
-            // relative moves start here.
-            self.interp.set_machine_position(s.rest());
-        }
+        follow_rest(&mut self.interp, s);
         let from = self.interp.modal().machine;
         self.line_no = self.line_no.wrapping_add(1);
         if let Err(e) = self.interp.line(cmd, self.line_no) {
