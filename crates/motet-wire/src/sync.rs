@@ -68,9 +68,14 @@ pub const CAPACITY: usize = 256;
 pub const RECENT: usize = 12;
 /// Exchanges before the slope is taken from the data rather than the prior.
 const MIN_SAMPLES: usize = 8;
-/// The slope search range: well beyond any crystal, so a node started with
-/// another time scale is measured (and refused) rather than clipped.
+/// A slope known no better than this (2 %, far beyond any crystal) is no
+/// slope yet: the bound with no prior, and the most a prior may be off.
 const B_RANGE: f64 = 0.02;
+/// The slopes searched: any clock that runs forward, up to 11 times the
+/// host's, so a node started with another time scale is measured and
+/// refused by name rather than never fitted.
+const B_MIN: f64 = -0.9;
+const B_MAX: f64 = 10.0;
 /// The timestamps' resolution, µs.
 const TICK_US: f64 = 1.0;
 /// How far a crystal's rate may move at once (a board warming up, a
@@ -298,7 +303,7 @@ impl ClockSync {
         let round = (e.t4 - e.t1) as f64;
         // A node at the edge of the skew range, and a microsecond of
         // rounding on each clock.
-        if turn > round * (1.0 + B_RANGE) + 2.0 {
+        if turn > round * (1.0 + B_MAX) + 2.0 {
             return Err(ClockFault::Turnaround);
         }
         if self.last.is_none_or(|(_, t4)| e.t4 >= t4) {
@@ -473,7 +478,7 @@ impl ClockSync {
         // The data's slope once it is surer than the prior.
         let mut fit = None;
         if n >= MIN_SAMPLES {
-            let b = golden_max(gap, -B_RANGE, B_RANGE);
+            let b = golden_max(gap, B_MIN, B_MAX);
             let (cf, cr, halves) = edges(b);
             let bound = skew_of(&halves);
             // Against a prior, the data must be clearly surer: a bound
@@ -483,7 +488,8 @@ impl ClockSync {
             } else {
                 bound < self.prior_bound
             };
-            if surer && b.abs() < B_RANGE * 0.999 {
+            let inside = b > B_MIN + 1e-6 && b < B_MAX - 1e-6;
+            if surer && inside {
                 fit = Some((b, cf, cr, halves, bound));
             }
         }
