@@ -51,8 +51,13 @@ pub trait Nodes: Send {
 /// planned in pieces of at most about 20 ms, because a hold or a stop
 /// brakes on the tail of the committed window and a person waits for it
 /// (in-process nodes have no link delay to cover).
+///
+/// Its clock target is a millisecond: the clock thread reads the time once
+/// per tick (up to 1 ms) and stamps the clock exchanges it sends and takes
+/// with it, so its timestamps cannot tell a node's clock any finer.
 pub fn serve_config() -> NetConfig {
     NetConfig {
+        clock_bound_us: 1_000.0,
         lead_min_us: 10_000,
         window_us: 20_000,
         max_move_us: 20_000,

@@ -309,7 +309,14 @@ impl ClockSync {
         if self.last.is_none_or(|(_, t4)| e.t4 >= t4) {
             self.last = Some((e.t3, e.t4));
         }
-        let rtt = round - turn / (1.0 + self.fit.b);
+        // An early slope can be anything in the search range: the node's
+        // turnaround is only scaled by one the data decided.
+        let b = if self.synced() {
+            self.fit.b
+        } else {
+            self.prior_b
+        };
+        let rtt = round - turn / (1.0 + b);
         if rtt > self.min_rtt + self.cfg.rtt_gate_us {
             self.rejected += 1;
             self.rejected_run += 1;
