@@ -270,8 +270,8 @@ fn a_program_end_leaves_the_next_program_free_to_run() {
 #[test]
 fn a_hold_before_the_first_move_starts_holds_it_there() {
     // Before the queued line's run starts, and while its run waits for the
-    // nodes' clocks to settle.
-    for after_us in [0, 200_000] {
+    // nodes' clocks (eight exchanges 10 ms apart before a slope is known).
+    for after_us in [0, 40_000] {
         let mut d = device();
         d.start(b"G21 G90 G0 X5\n");
         d.wait(after_us);
