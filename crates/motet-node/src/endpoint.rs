@@ -268,6 +268,14 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         if run == 0 || msg.run() != run || self.services.in_bootloader() {
             return;
         }
+        if let GroupMessage::Heartbeat { .. } = msg {
+            // The host's heartbeat: a shared medium, so this node sends its
+            // own, even before (or without) a group seal reaching it.
+            if h.src == HOST_ADDRESS {
+                self.group.join(run, me, &[], now);
+            }
+            return;
+        }
         let Some(next_seq) = msg.next_seq_of(me) else {
             return;
         };

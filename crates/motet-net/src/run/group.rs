@@ -206,12 +206,23 @@ impl NetRun {
                 u.repaired = true;
             }
         } else if now >= sent_at + lead / 2 && !matches!(self.phase, Phase::Stopping(_)) {
-            let names: Vec<&str> = open
-                .iter()
-                .map(|&(k, _)| self.peers[k].name.as_str())
-                .collect();
             let window = self.group.as_ref().map_or(0, |g| g.window);
-            let reason = format!("node {} did not confirm window {window}", names.join(", "));
+            let reason = if sent {
+                let names: Vec<&str> = open
+                    .iter()
+                    .map(|&(k, _)| self.peers[k].name.as_str())
+                    .collect();
+                format!("node {} did not confirm window {window}", names.join(", "))
+            } else {
+                let names: Vec<&str> = (0..self.peers.len())
+                    .filter(|&k| self.peers[k].backlog() > 0)
+                    .map(|k| self.peers[k].name.as_str())
+                    .collect();
+                format!(
+                    "window {window} was not sealed: node {} did not take its segments",
+                    names.join(", ")
+                )
+            };
             self.stop(&reason, now);
         }
     }
