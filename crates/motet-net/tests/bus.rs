@@ -41,6 +41,10 @@ struct BusRun {
 
 impl BusRun {
     fn start() -> BusRun {
+        BusRun::start_with(NetConfig::default())
+    }
+
+    fn start_with(cfg: NetConfig) -> BusRun {
         let (m, cmds) = load(MACHINE, JOB);
         let machine_text = std::fs::read_to_string(root().join(MACHINE)).unwrap();
         let job_bytes = motet_api::job::read_bytes(&root().join(JOB)).unwrap();
@@ -56,7 +60,7 @@ impl BusRun {
             cmds.clone(),
             m.start,
             &clocks(m.nodes.len()),
-            NetConfig::default(),
+            cfg,
             Some(JournalWriter::create(&journal).unwrap()),
         );
         lb.run.set_identity(identity);
@@ -273,6 +277,36 @@ fn one_node_killed_the_others_rest_on_one_committed_point() {
     let at = b.lb.nodes[1].node.board.position[0] as f64 / b.m.actuators[a].steps_per_unit;
     let r = b.prove(Some(&[(y, at)]));
     b.finish(&r);
+}
+
+/// Windows seconds apart: a node killed between two seals is noticed by the
+/// others from its silence, long before the host's next seal, and each
+/// brakes on the committed tail by itself, all on the same one.
+#[test]
+fn the_others_hear_a_node_fall_silent_and_brake_on_the_same_tail() {
+    let cfg = NetConfig {
+        window_us: 3_000_000,
+        ..NetConfig::default()
+    };
+    let mut b = BusRun::start_with(cfg);
+    b.until(9_000_000);
+    b.lb.nodes[1].alive = false;
+    let Phase::Stopped(info) = b.lb.run_until_settled(60_000_000).unwrap() else {
+        panic!("the run must stop")
+    };
+    assert_eq!(
+        info.lost.iter().map(|l| l.node).collect::<Vec<_>>(),
+        vec![1]
+    );
+    b.settle_nodes();
+    b.same_rest(&[0, 2]);
+    for k in [0, 2] {
+        assert_eq!(
+            b.lb.nodes[k].node.endpoint.stats().silent,
+            Some(3),
+            "node {k}"
+        );
+    }
 }
 
 /// A group seal from a node's address (or any but the host's) is refused by

@@ -202,8 +202,9 @@ mod tests {
             committed: 12,
         };
         let g = port::GROUP;
+        type Case = (u16, u16, u8, GroupMessage, Result<GroupMessage, GroupError>);
         // (dst, src, port, message, expected)
-        let cases: [(u16, u16, u8, GroupMessage, Result<GroupMessage, GroupError>); 8] = [
+        let cases: [Case; 8] = [
             (BROADCAST, 1, g, seal.clone(), Ok(seal.clone())),
             (
                 BROADCAST,
