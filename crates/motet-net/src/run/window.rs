@@ -272,16 +272,13 @@ impl NetRun {
             if let Some(o) = self.dist.flush(k) {
                 self.peers[k].send_motion(&o.message);
             }
-            if let Some(next_seq) = self.dist.next_seq(k) {
-                if self.group.is_none() {
-                    self.peers[k].send_motion(&HostMessage::Seal { next_seq });
-                }
+            if let (Some(next_seq), None) = (self.dist.next_seq(k), &self.group) {
+                self.peers[k].send_motion(&HostMessage::Seal { next_seq });
             }
         }
         if self.group.is_some() {
-            // After the segments: the frame overtakes nothing it seals only
-            // once every link delivered them, which the node checks
-            // (a seal with segments missing is refused, out of order).
+            // On a shared medium one frame seals every node, sent once every
+            // link has delivered the window's segments.
             self.seal_group(now, before);
         }
         self.windows += 1;
