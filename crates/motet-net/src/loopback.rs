@@ -156,7 +156,7 @@ impl Loopback {
             .bus_peers(machine, 0x1000)
             .expect("a host identifier on a new bus");
         lb.run = NetRun::new(machine, commands, peers, start, cfg, journal);
-        lb.run.on_shared_medium();
+        let _ = lb.run.on_shared_medium();
         lb
     }
 
@@ -190,7 +190,7 @@ impl Loopback {
         if self.bus.is_some() {
             if let Some(peers) = self.bus_peers(machine, 0x2000) {
                 self.run = NetRun::new(machine, commands, peers, start, cfg, journal);
-                self.run.on_shared_medium();
+                let _ = self.run.on_shared_medium();
                 self.host_alive = true;
                 return;
             }
@@ -225,7 +225,7 @@ impl Loopback {
         let shared = self.run.shared_medium();
         self.run = NetRun::new(machine, commands, peers, start, cfg, None);
         if shared {
-            self.run.on_shared_medium();
+            let _ = self.run.on_shared_medium();
         }
     }
 

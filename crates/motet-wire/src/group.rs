@@ -17,7 +17,8 @@ use crate::service::{is_node_address, port, HOST_ADDRESS};
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-/// Most nodes a group frame lists (16 × at most 8 bytes fits a message).
+/// Most nodes a group frame lists: 16 members of at most 8 bytes each,
+/// 140 bytes in all, fit a message.
 pub const MAX_GROUP: usize = 16;
 
 /// A member sends a heartbeat at least this often, µs of its own clock.

@@ -67,9 +67,15 @@ pub(super) struct Before {
 impl NetRun {
     /// The nodes share one medium (a bus): seals and stops go to every node
     /// in one frame, and the members watch one another's heartbeats.
-    /// Before the first poll.
-    pub fn on_shared_medium(&mut self) {
+    /// Before the first poll. More nodes than one frame lists
+    /// ([`MAX_GROUP`]) keep their seals through their own links: returns
+    /// whether the group is on.
+    pub fn on_shared_medium(&mut self) -> bool {
+        if self.peers.len() > MAX_GROUP {
+            return false;
+        }
         self.group = Some(Group::default());
+        true
     }
 
     /// Whether seals go to every node in one frame.
@@ -103,7 +109,7 @@ impl NetRun {
         let msg = GroupMessage::Seal {
             run: self.identity.run,
             window: g.window,
-            members: members.iter().map(|m| m.1).take(MAX_GROUP).collect(),
+            members: members.iter().map(|m| m.1).collect(),
         };
         g.unconfirmed = Some(Unconfirmed {
             members,
@@ -297,7 +303,7 @@ impl NetRun {
         }
         let msg = GroupMessage::Stop {
             run: self.identity.run,
-            members: g.stop_ends.iter().copied().take(MAX_GROUP).collect(),
+            members: g.stop_ends.iter().copied().collect(),
         };
         self.broadcast(&msg, now);
     }
