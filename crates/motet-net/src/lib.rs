@@ -12,6 +12,7 @@ pub mod clock;
 pub mod digest;
 pub mod journal;
 pub mod loopback;
+pub mod medium;
 pub mod node_clock;
 pub mod pairing_file;
 pub mod peer;

@@ -5,11 +5,12 @@
 //! the tests of the network and `motet bench net` use it.
 
 use crate::journal::JournalWriter;
+use crate::medium::Medium;
 use crate::peer::Peer;
 use crate::run::{NetConfig, NetError, NetRun, Phase};
 use crate::sim_node::{sim_config, SimNode};
 use motet_host::Machine;
-use motet_link::Transport;
+use motet_link::{CanBus, CanTransport, Transport};
 use motet_node::storage::{Persisted, RamStore};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
@@ -61,7 +62,18 @@ pub struct Loopback {
     /// released at the first step after their time, so jittered links need
     /// short steps to keep their delays what the wrapper drew.
     pub max_step_us: u64,
+    /// The bus every node and the host share, for a run on one medium
+    /// ([`Loopback::on_bus`]).
+    pub bus: Option<CanBus>,
+    /// Hosts started on the bus so far (each takes its own identifier).
+    hosts: u32,
 }
+
+/// The CAN identifier of the first host on a loopback bus (a low one: the
+/// host wins arbitration); later hosts take the next ones.
+pub const BUS_HOST_ID: u32 = 0x010;
+/// The CAN identifier of machine node `k` on a loopback bus is this plus `k`.
+pub const BUS_NODE_ID: u32 = 0x100;
 
 impl Loopback {
     /// A run of `commands` on `machine` from `start`; `links[k]` joins the
@@ -92,31 +104,13 @@ impl Loopback {
         let mut nodes = Vec::new();
         for (k, (host_end, node_end)) in links.into_iter().enumerate() {
             let address = 2 + k as u16;
-            let name = machine
-                .nodes
-                .get(k)
-                .map_or_else(|| format!("node{k}"), |n| n.name.clone());
-            peers.push(Peer::new(&name, address, host_end, 0x1000 + k as u16));
-            let uid = 0x5157_0000 + k as u64;
-            let cfg = sim_config("stepper", uid).expect("a short kind");
-            let store = RamStore {
-                record: Some(Persisted {
-                    uid,
-                    address,
-                    firmware: cfg.firmware,
-                }),
-                saves: 0,
-            };
-            let clock = clocks.get(k).copied().unwrap_or_default();
-            let mut node = SimNode::new(cfg, store, node_end, clock.offset_us);
-            node.board.trace = Some(Vec::new());
-            node.board.tool_trace = Some(Vec::new());
-            nodes.push(LoopbackNode {
-                node,
-                ppm: clock.ppm,
-                offset_us: clock.offset_us,
-                alive: true,
-            });
+            peers.push(Peer::new(
+                &node_name(machine, k),
+                address,
+                host_end,
+                0x1000 + k as u16,
+            ));
+            nodes.push(loopback_node(k, node_end, clocks));
         }
         Loopback {
             run: NetRun::new(machine, commands, peers, start, cfg, journal),
@@ -124,7 +118,63 @@ impl Loopback {
             now: 0,
             host_alive: true,
             max_step_us: 1_000,
+            bus: None,
+            hosts: 0,
         }
+    }
+
+    /// [`Loopback::with_journal`] with the host and every node on one
+    /// simulated CAN-FD bus: the host reaches all nodes through one
+    /// transport, seals and stops go to every node in one frame, and every
+    /// node hears the others' heartbeats.
+    pub fn on_bus(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        clocks: &[Crystal],
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+    ) -> Loopback {
+        let bus = CanBus::new();
+        let nodes = (0..machine.nodes.len())
+            .map(|k| {
+                let id = BUS_NODE_ID + k as u32;
+                let node = bus.attach(id, false).expect("one identifier per node");
+                loopback_node(k, Box::new(CanTransport::new(node, None)), clocks)
+            })
+            .collect();
+        let mut lb = Loopback {
+            run: NetRun::new(machine, Vec::new(), Vec::new(), start, cfg, None),
+            nodes,
+            now: 0,
+            host_alive: true,
+            max_step_us: 1_000,
+            bus: Some(bus),
+            hosts: 0,
+        };
+        let peers = lb
+            .bus_peers(machine, 0x1000)
+            .expect("a host identifier on a new bus");
+        lb.run = NetRun::new(machine, commands, peers, start, cfg, journal);
+        let _ = lb.run.on_shared_medium();
+        lb
+    }
+
+    /// A new host on the bus, under the next host identifier: one peer per
+    /// node, all through one transport.
+    fn bus_peers(&mut self, machine: &Machine, isn: u16) -> Option<Vec<Peer>> {
+        let bus = self.bus.as_ref()?;
+        let host = bus.attach(BUS_HOST_ID + self.hosts, false).ok()?;
+        self.hosts += 1;
+        let medium = Medium::new(Box::new(CanTransport::new(host, None)));
+        let peers = (0..self.nodes.len())
+            .map(|k| {
+                let address = 2 + k as u16;
+                let port = Box::new(medium.port(address));
+                Peer::new(&node_name(machine, k), address, port, isn + k as u16)
+            })
+            .collect();
+        Some(peers)
     }
 
     /// Replaces the host (after it died or stopped) with a new run over new
@@ -137,6 +187,14 @@ impl Loopback {
         cfg: NetConfig,
         journal: Option<JournalWriter>,
     ) {
+        if self.bus.is_some() {
+            if let Some(peers) = self.bus_peers(machine, 0x2000) {
+                self.run = NetRun::new(machine, commands, peers, start, cfg, journal);
+                let _ = self.run.on_shared_medium();
+                self.host_alive = true;
+                return;
+            }
+        }
         let mut peers = Vec::new();
         for (k, n) in self.nodes.iter_mut().enumerate() {
             let (a, b) = motet_link::pair(&format!("host{k}'"), &format!("node{k}'"));
@@ -164,7 +222,11 @@ impl Loopback {
         cfg: NetConfig,
     ) {
         let peers = self.run.take_peers();
+        let shared = self.run.shared_medium();
         self.run = NetRun::new(machine, commands, peers, start, cfg, None);
+        if shared {
+            let _ = self.run.on_shared_medium();
+        }
     }
 
     /// Node `k` restarts (power cycled, or its process killed and started
@@ -257,11 +319,11 @@ impl Loopback {
                     break;
                 }
             } else {
-                let busy = self.nodes.iter().any(|n| {
-                    n.alive
-                        && n.node.endpoint.node().queued() > 0
-                        && !n.node.endpoint.node().stopped()
-                });
+                // A node braking on its tail is still moving.
+                let busy = self
+                    .nodes
+                    .iter()
+                    .any(|n| n.alive && n.node.endpoint.node().moving());
                 if busy {
                     dead_since = None;
                 } else if dead_since.get_or_insert(self.now).saturating_add(1_000_000) < self.now {
@@ -270,5 +332,43 @@ impl Loopback {
             }
         }
         Ok(self.run.phase().clone())
+    }
+}
+
+/// Machine node `k`'s name.
+fn node_name(machine: &Machine, k: usize) -> String {
+    machine
+        .nodes
+        .get(k)
+        .map_or_else(|| format!("node{k}"), |n| n.name.clone())
+}
+
+/// The simulated node of machine node `k` on `transport` (address 2 + k,
+/// paired already, tracing every step and tool change).
+fn loopback_node(
+    k: usize,
+    transport: Box<dyn Transport + Send>,
+    clocks: &[Crystal],
+) -> LoopbackNode {
+    let address = 2 + k as u16;
+    let uid = 0x5157_0000 + k as u64;
+    let cfg = sim_config("stepper", uid).expect("a short kind");
+    let store = RamStore {
+        record: Some(Persisted {
+            uid,
+            address,
+            firmware: cfg.firmware,
+        }),
+        saves: 0,
+    };
+    let clock = clocks.get(k).copied().unwrap_or_default();
+    let mut node = SimNode::new(cfg, store, transport, clock.offset_us);
+    node.board.trace = Some(Vec::new());
+    node.board.tool_trace = Some(Vec::new());
+    LoopbackNode {
+        node,
+        ppm: clock.ppm,
+        offset_us: clock.offset_us,
+        alive: true,
     }
 }

@@ -172,6 +172,24 @@ impl Peer {
         self.transport.send(&datagram(dst, req))
     }
 
+    /// Sends a message to every node as one datagram (on a shared medium
+    /// every node hears it, whichever peer sends it).
+    pub fn broadcast(&mut self, msg: &motet_wire::group::GroupMessage) -> std::io::Result<()> {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let payload = encode(msg, &mut buf).expect("group messages fit MAX_MESSAGE");
+        let header = Header {
+            dst: frame::BROADCAST,
+            src: HOST_ADDRESS,
+            port: port::GROUP,
+            flags: Flags::NONE,
+            seq: 0,
+            ack: 0,
+        };
+        let mut out = [0u8; MAX_FRAME];
+        let n = frame::encode(&header, payload, &mut out).expect("one message fits a frame");
+        self.transport.send(&out[..n])
+    }
+
     fn datagram(&mut self, req: &ServiceRequest) -> std::io::Result<()> {
         self.datagram_to(self.address, req)
     }
@@ -195,6 +213,10 @@ impl Peer {
             }
         };
         if f.header.dst != HOST_ADDRESS {
+            // A node's heartbeat to every node says it is alive.
+            if f.header.dst == frame::BROADCAST && f.header.src == self.address {
+                self.last_heard = Some(now);
+            }
             return;
         }
         if f.header.src != self.address {

@@ -15,11 +15,13 @@
 //! before the host has set one.
 
 use crate::board::Board;
+use crate::group_watch::GroupWatch;
 use crate::node::{Node, DEFAULT_QUEUE};
 use crate::service::{Action, Handled, NodeConfig, Services};
 use crate::storage::{Flash, Store};
 use heapless::{Deque, Vec};
-use motet_wire::frame::{self, is_multicast, Flags, Header, MAX_RAW};
+use motet_wire::frame::{self, is_multicast, Flags, Header, BROADCAST, MAX_RAW};
+use motet_wire::group::{self, GroupError, GroupMessage};
 use motet_wire::link::{Config as LinkConfig, Link, State, WINDOW};
 use motet_wire::service::{port, NodeState, ServiceReply, HOST_ADDRESS};
 use motet_wire::{encode, MAX_MESSAGE};
@@ -54,6 +56,13 @@ pub struct EndpointStats {
     pub replies_dropped: u64,
     /// Link sessions started (the host connected or reconnected).
     pub sessions: u64,
+    /// Group frames refused (a seal or stop not from the host, a bad
+    /// member list): nothing changed.
+    pub group_refused: u64,
+    /// The last group frame refused: the address it came from and why.
+    pub last_group_refusal: Option<(u16, GroupError)>,
+    /// The member whose silence stopped this node (the host or a node).
+    pub silent: Option<u16>,
 }
 
 /// A node on the network: the link to the host, the base service routines and the motion node, with
@@ -73,6 +82,8 @@ pub struct Endpoint<S: Store, F: Flash, const Q: usize = DEFAULT_QUEUE> {
     /// A verified image was started: firmware restarts into its bootloader.
     start_requested: bool,
     stats: EndpointStats,
+    /// The other members of the group, on a shared medium.
+    group: GroupWatch,
 }
 
 impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
@@ -93,6 +104,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             last_host_frame: None,
             start_requested: false,
             stats: EndpointStats::default(),
+            group: GroupWatch::default(),
         }
     }
 
@@ -158,6 +170,12 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         };
         let me = self.services.address();
         let h = f.header;
+        // On a bus every frame a member sends is a sign of life.
+        self.group.heard(h.src, now);
+        if h.dst == BROADCAST && h.port == port::GROUP && h.flags == Flags::NONE {
+            self.on_group(&h, f.payload, now);
+            return;
+        }
         let broadcast = is_multicast(h.dst);
         if !broadcast && h.dst != me {
             self.stats.foreign += 1;
@@ -232,6 +250,90 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         }
     }
 
+    /// A frame to every node: a group seal or stop from the host is acted
+    /// on when it is for this node's run and lists this node (the answer,
+    /// its status, goes through the link); anything refused is counted and
+    /// changes nothing.
+    fn on_group(&mut self, h: &Header, payload: &[u8], now: u64) {
+        let msg = match group::parse(h.dst, h.src, h.port, payload) {
+            Ok(m) => m,
+            Err(e) => {
+                self.stats.group_refused += 1;
+                self.stats.last_group_refusal = Some((h.src, e));
+                return;
+            }
+        };
+        let me = self.services.address();
+        let run = self.node.run();
+        if run == 0 || msg.run() != run || self.services.in_bootloader() {
+            return;
+        }
+        if let GroupMessage::Heartbeat { .. } = msg {
+            // The host's heartbeat: a shared medium, so this node sends its
+            // own, even before (or without) a group seal reaching it.
+            if h.src == HOST_ADDRESS {
+                self.group.join(run, me, &[], now);
+            }
+            return;
+        }
+        let Some(next_seq) = msg.next_seq_of(me) else {
+            return;
+        };
+        match &msg {
+            GroupMessage::Seal { members, .. } => {
+                self.group.join(run, me, members, now);
+                let reply = self.node.group_seal(next_seq);
+                self.push(None, port::MOTION, &reply);
+            }
+            GroupMessage::Stop { .. } => {
+                self.node.close(Some(next_seq));
+                let reply = self.node.position();
+                self.push(None, port::MOTION, &reply);
+            }
+            GroupMessage::Heartbeat { .. } => {}
+        }
+        self.report_state();
+    }
+
+    /// A node with committed motion that no longer hears a member of its
+    /// group takes no more seals: it brakes on its committed tail, as every
+    /// other member that stops hearing the same one does.
+    fn watch_group(&mut self, now: u64) {
+        if self.group.run() == 0 || self.group.run() != self.node.run() {
+            return;
+        }
+        if self.node.closed() || self.node.stopped() || !self.node.moving() {
+            return;
+        }
+        if let Some(a) = self.group.silent(now) {
+            self.node.close(None);
+            self.stats.silent = Some(a);
+        }
+    }
+
+    /// This node's heartbeat to every node, when one is due, encoded into
+    /// `out`: its length.
+    fn heartbeat(&mut self, now: u64, out: &mut [u8]) -> Option<usize> {
+        if self.group.run() != self.node.run() || !self.node.moving() || !self.group.beat_due(now) {
+            return None;
+        }
+        let msg = GroupMessage::Heartbeat {
+            run: self.node.run(),
+            committed: self.node.status().committed,
+        };
+        let mut buf = [0u8; MAX_MESSAGE];
+        let bytes = encode(&msg, &mut buf).ok()?;
+        let header = Header {
+            dst: BROADCAST,
+            src: self.services.address(),
+            port: port::GROUP,
+            flags: Flags::NONE,
+            seq: 0,
+            ack: 0,
+        };
+        frame::encode(&header, bytes, out).ok()
+    }
+
     fn push<T: serde::Serialize>(&mut self, datagram: Option<(u16, u16)>, port: u8, msg: &T) {
         let mut buf = [0u8; MAX_MESSAGE];
         let Ok(bytes) = encode(msg, &mut buf) else {
@@ -300,6 +402,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             // out: the next poll goes on.
             self.ran_until = self.node.time();
         }
+        self.watch_group(now);
         self.report_state();
     }
 
@@ -330,6 +433,9 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             }
             self.outbox.pop_front();
         }
+        if let Some(n) = self.heartbeat(now, out) {
+            return Some(&out[..n]);
+        }
         if let Some(mut r) = self.datagrams.pop_front() {
             let (dst, src) = r
                 .datagram
@@ -355,6 +461,14 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             return Some(now);
         }
         let mut best = self.link.as_ref().and_then(|l| l.next_timeout());
+        if self.group.run() != 0 && self.node.moving() {
+            for t in [self.group.next_beat(), self.group.silence_deadline()]
+                .into_iter()
+                .flatten()
+            {
+                best = Some(best.map_or(t, |b| b.min(t)));
+            }
+        }
         if let Some(d) = self.node.next_deadline() {
             if let Some(local) = self.services.local_time(d) {
                 let l = if local <= now as f64 {

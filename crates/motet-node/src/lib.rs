@@ -13,6 +13,7 @@ pub mod board;
 pub mod channel;
 pub mod endpoint;
 pub mod graph;
+pub mod group_watch;
 pub mod node;
 pub mod service;
 pub mod storage;

@@ -9,6 +9,7 @@
 #![forbid(unsafe_code)]
 
 pub mod frame;
+pub mod group;
 pub mod image;
 pub mod link;
 pub mod message;

@@ -360,6 +360,9 @@ pub enum Refusal {
     /// A seal came after the committed window's tail started, or would
     /// commit a window whose tail start has already passed.
     TailStarted,
+    /// The run was stopped for every node (a group stop, or a member of
+    /// the group fell silent): the node takes no more seals.
+    Closed,
 }
 
 #[cfg(test)]

@@ -26,6 +26,9 @@ impl fmt::Display for Refusal {
             Refusal::TailStarted => f.write_str(
                 "the seal came after the committed window's tail had started",
             ),
+            Refusal::Closed => f.write_str(
+                "the run was stopped for every node (a group stop, or a member fell silent): it takes no more seals",
+            ),
         }
     }
 }

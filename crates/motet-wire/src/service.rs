@@ -42,6 +42,9 @@ pub mod port {
     pub const TIME: u8 = 7;
     /// Motion messages (`HostMessage` / `NodeMessage`).
     pub const MOTION: u8 = 10;
+    /// Seals, stops and heartbeats to every node at once
+    /// ([`crate::group::GroupMessage`]), as broadcast datagrams.
+    pub const GROUP: u8 = 11;
 }
 
 /// The host's address.

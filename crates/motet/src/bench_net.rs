@@ -49,6 +49,18 @@ pub struct Args {
     /// journal read, the job planned again and compared, the nodes' answers.
     #[arg(long, value_name = "SECONDS")]
     kill_host_at: Option<f64>,
+    /// Put the host and every node on one shared medium: seals and stops go
+    /// to every node in one frame, and the nodes watch one another's
+    /// heartbeats [default: one link per node].
+    #[arg(long, value_enum)]
+    bus: Option<Bus>,
+}
+
+/// A shared medium for `--bus`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Bus {
+    /// A simulated CAN-FD bus with arbitration.
+    Can,
 }
 
 /// Wire size of a datagram carrying `m`.
@@ -99,15 +111,32 @@ pub fn bench_net(args: Args) -> Result<()> {
         None => None,
     };
     let identity = RunIdentity::new(Digest::of(loaded.text.as_bytes()), Digest::of(&loaded.data));
-    let mut lb = Loopback::with_journal(
-        machine,
-        loaded.commands.clone(),
-        machine.start,
-        links,
-        &clocks,
-        cfg,
-        journal,
-    );
+    let mut lb = match args.bus {
+        Some(Bus::Can) => {
+            if args.jitter_us > 0 || args.faults > 0.0 {
+                bail!(
+                    "--bus can takes no --jitter-us or --faults: the simulated bus loses nothing"
+                );
+            }
+            Loopback::on_bus(
+                machine,
+                loaded.commands.clone(),
+                machine.start,
+                &clocks,
+                cfg,
+                journal,
+            )
+        }
+        None => Loopback::with_journal(
+            machine,
+            loaded.commands.clone(),
+            machine.start,
+            links,
+            &clocks,
+            cfg,
+            journal,
+        ),
+    };
     lb.run.set_identity(identity);
     if args.jitter_us > 0 || args.faults > 0.0 {
         lb.max_step_us = 10;
@@ -466,6 +495,7 @@ fn resume_figures(
 ) -> Result<()> {
     lb.host_alive = false;
     lb.run_until_settled(600_000_000)?;
+    print_rest(lb, machine);
     let record = RunRecord {
         format: RECORD_FORMAT,
         run: format!("{:08x}", identity.run),
@@ -524,4 +554,63 @@ fn resume_figures(
         commands.len()
     );
     Ok(())
+}
+
+/// Where every node came to rest after the host was killed: its committed
+/// end, whether it stopped on its tail, and its axes, as the node itself
+/// reports them.
+fn print_rest(lb: &Loopback, machine: &Machine) {
+    let mut ends = Vec::new();
+    for (k, n) in lb.nodes.iter().enumerate() {
+        let node = n.node.endpoint.node();
+        let s = node.status();
+        let motet_wire::NodeMessage::Position { at, .. } = node.position() else {
+            continue;
+        };
+        // Each of its joints where the node's trajectory ends, and where
+        // its board's steps put it.
+        let joints: Vec<String> = machine.nodes[k]
+            .actuators
+            .iter()
+            .enumerate()
+            .map(|(ch, &a)| {
+                let act = &machine.actuators[a];
+                let joint = &machine.joints[act.joint];
+                let stepped = n.node.board.position[ch] as f64 / act.steps_per_unit;
+                format!(
+                    "{}={:.3} (steps: {:.3})",
+                    joint.name,
+                    joint.map.value(&at, 0.0),
+                    stepped
+                )
+            })
+            .collect();
+        println!(
+            "  {}: at rest after segment {} ({}), {}, {} queued",
+            machine.nodes[k].name,
+            s.committed,
+            if s.stopped {
+                "braked on its tail"
+            } else {
+                "at its end"
+            },
+            joints.join(" "),
+            node.queued()
+        );
+        ends.push(s.committed);
+    }
+    let same = ends.windows(2).all(|w| w[0] == w[1]);
+    println!(
+        "nodes after the host was killed: {} ({})",
+        if same {
+            "every node on the same committed point"
+        } else {
+            "NOT on one committed point"
+        },
+        if lb.bus.is_some() {
+            "one bus, seals in one frame"
+        } else {
+            "one link per node"
+        }
+    );
 }

@@ -12,6 +12,7 @@
 //! path, where the journal says.
 
 mod figures;
+mod group;
 mod stop;
 mod window;
 
@@ -232,6 +233,8 @@ pub struct NetRun {
     /// Pauses for the person (M0, M1) routed so far.
     pub pauses: u64,
     status: Vec<Option<NodeMessage>>,
+    /// Seals and stops to every node in one frame (a shared medium).
+    group: Option<group::Group>,
 }
 
 impl NetRun {
@@ -288,6 +291,7 @@ impl NetRun {
             segments_sent: 0,
             pauses: 0,
             status: vec![None; n],
+            group: None,
         }
     }
 
@@ -436,6 +440,7 @@ impl NetRun {
         }
         self.take_replies(now)?;
         self.keep_time(now)?;
+        self.keep_group(now);
         match self.phase.clone() {
             Phase::Starting => self.start(now)?,
             Phase::Streaming => {

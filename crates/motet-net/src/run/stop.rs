@@ -74,6 +74,8 @@ impl NetRun {
         for p in self.peers.iter_mut() {
             p.drop_unsealed();
         }
+        // A group seal not every node confirmed is taken back first.
+        let ends = self.take_back_unconfirmed(now);
         // An open feed's planner holds commands for lookahead: closing it
         // plans them, so the first command not sealed is found among them.
         self.close_feed();
@@ -112,6 +114,7 @@ impl NetRun {
             confirmed: Vec::new(),
         });
         self.next_where = now;
+        self.broadcast_stop(ends, now);
     }
 
     /// The command of the first segment not sealed: the first pending one,
@@ -207,6 +210,7 @@ impl NetRun {
         }
         // Asked from the start: the answers also show the node is alive.
         if now >= self.next_where {
+            self.stop_again(now);
             for k in open {
                 if matches!(self.peers[k].link_state(), State::Established { .. }) {
                     self.peers[k].send_motion(&HostMessage::Where);
@@ -218,11 +222,17 @@ impl NetRun {
     }
 
     pub(super) fn stopped(&mut self, info: StopInfo, now: u64) -> Result<(), NetError> {
+        // A window taken back was journaled: the stop record names the
+        // last seal journaled, the nodes their own ends.
+        let (end, tail) = match &self.group {
+            Some(g) if g.journaled.0 > info.window_end => g.journaled,
+            _ => (info.window_end, info.tail_start),
+        };
         if let Some(j) = self.journal.as_mut() {
             j.stop(&JournalStop {
                 seal: JournalSeal {
-                    end: info.window_end,
-                    tail: info.tail_start,
+                    end,
+                    tail,
                     done: info.done,
                     time: now,
                 },

@@ -113,7 +113,7 @@ impl NetRun {
         while self.deadline < t + lead {
             // One seal in flight at a time: a node that missed a seal can then
             // differ from the others by at most that one window.
-            if self.peers.iter().any(|p| p.seal_in_flight()) {
+            if self.peers.iter().any(|p| p.seal_in_flight()) || self.group_busy() {
                 break;
             }
             let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
@@ -228,6 +228,12 @@ impl NetRun {
     pub(super) fn seal(&mut self, now: u64) -> Result<(), NetError> {
         let pending = std::mem::take(&mut self.pending);
         self.pending_events = 0;
+        let before = super::group::Before {
+            added: pending.len(),
+            committed_end: self.committed_end,
+            deadline: self.deadline,
+            tail_start: self.tail_start,
+        };
         if let Some(j) = self.journal.as_mut() {
             for c in &pending {
                 j.segment(&JournalSegment {
@@ -259,13 +265,21 @@ impl NetRun {
                 time: now,
             })?;
         }
+        if let Some(g) = self.group.as_mut() {
+            g.journaled = (end, self.tail_start);
+        }
         for k in 0..self.peers.len() {
             if let Some(o) = self.dist.flush(k) {
                 self.peers[k].send_motion(&o.message);
             }
-            if let Some(next_seq) = self.dist.next_seq(k) {
+            if let (Some(next_seq), None) = (self.dist.next_seq(k), &self.group) {
                 self.peers[k].send_motion(&HostMessage::Seal { next_seq });
             }
+        }
+        if self.group.is_some() {
+            // On a shared medium one frame seals every node, sent once every
+            // link has delivered the window's segments.
+            self.seal_group(now, before);
         }
         self.windows += 1;
         Ok(())

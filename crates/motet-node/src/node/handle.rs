@@ -17,6 +17,16 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         reply.unwrap_or_else(|reason| Some(NodeMessage::Refused { reason }))
     }
 
+    /// A seal for every node at once (a group seal, with this node's end):
+    /// what [`HostMessage::Seal`] does, answered with the node's status
+    /// (the host's confirmation) or the refusal.
+    pub fn group_seal(&mut self, next_seq: u32) -> NodeMessage {
+        match self.seal(next_seq) {
+            Ok(()) => self.status_message(),
+            Err(reason) => NodeMessage::Refused { reason },
+        }
+    }
+
     /// Acts on a decoded message, family by family; `Ok` holds the reply, if
     /// the message has one besides a refusal.
     fn act(&mut self, msg: HostMessage) -> Result<Option<NodeMessage>, Refusal> {

@@ -106,6 +106,11 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// When the committed window's contingency tail takes over, µs.
     tail_start: Option<f64>,
     stopped: bool,
+    /// The run was stopped for every node ([`Node::close`]): no more seals.
+    closed: bool,
+    /// Segments and events the last seal committed, the window a group
+    /// stop may take back while the tail before it has not started.
+    last_window: (usize, usize),
     /// The run this node's trajectory belongs to (`Windowed`); 0: none, so
     /// the node's position is not one a host can resume from.
     run: u32,
@@ -156,6 +161,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             pending_events: 0,
             tail_start: None,
             stopped: false,
+            closed: false,
+            last_window: (0, 0),
             run: 0,
             tally: None,
             stream: StreamConfig {
@@ -208,6 +215,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// Whether the node stopped on its contingency tail.
     pub fn stopped(&self) -> bool {
         self.stopped
+    }
+
+    /// Whether the run was stopped for every node ([`Node::close`]): the
+    /// node takes no more seals and brakes on its committed tail.
+    pub fn closed(&self) -> bool {
+        self.closed
+    }
+
+    /// The run of the windowed mode (0: none).
+    pub fn run(&self) -> u32 {
+        self.run
     }
 
     /// When the committed window's tail takes over, µs, if a window is
