@@ -11,9 +11,19 @@
 //! payloads under its node's id (the last one padded with 0x00 to a DLC
 //! length); the 0x00 delimiter ends the motet frame, so no fragment header
 //! is needed, and the receiver collects fragments per sender id.
+//!
+//! A bus made with [`CanBus::timed`] also takes time: a frame occupies the
+//! bus for its bits at the nominal and data rates ([`BusTiming`]), the next
+//! arbitration starts when it ends, and every receiver gets it at its end
+//! of frame, stamped with that instant as its own clock reads it (the
+//! receive timestamp a CAN controller takes). The sender can hear its own
+//! frames back, stamped the same way ([`CanBus::attach_hearing_own`], as
+//! SocketCAN's `CAN_RAW_RECV_OWN_MSGS`): a frame every node hears at one
+//! instant is a shared reference for their clocks.
 
+use crate::clock::{Clock, Crystal};
 use crate::slcan::{fd_round_up, CanFrame, MAX_EXT_ID, MAX_STD_ID};
-use crate::{Inbox, LinkStats, StreamSplitter, Transport};
+use crate::{LinkStats, Stamp, StreamSplitter, Transport};
 use std::collections::{BTreeMap, VecDeque};
 use std::fmt;
 use std::io;
@@ -49,18 +59,190 @@ impl fmt::Display for BusError {
 
 impl std::error::Error for BusError {}
 
+/// How long frames take on the bus: the arbitration and acknowledgement
+/// bits at the nominal rate, a CAN-FD frame's data phase (with the bit-rate
+/// switch) at the data rate. Stuff bits are not counted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BusTiming {
+    /// Nominal (arbitration) bit rate, bits per second.
+    pub nominal_bps: f64,
+    /// Data-phase bit rate, bits per second.
+    pub data_bps: f64,
+}
+
+impl BusTiming {
+    /// CAN-FD at 1 Mbit/s nominal and 5 Mbit/s data, as common FD
+    /// controllers and transceivers run.
+    pub const FD_1M_5M: BusTiming = BusTiming {
+        nominal_bps: 1e6,
+        data_bps: 5e6,
+    };
+
+    /// Time `f` occupies the bus, µs, with the interframe space.
+    pub fn frame_us(&self, f: &CanFrame) -> f64 {
+        let n = f.data.len() as f64;
+        let id_bits = if f.extended { 31.0 } else { 12.0 };
+        // ACK slot and delimiter, end of frame, interframe space.
+        let tail = 12.0;
+        if f.fd {
+            // SOF, id, RRS/IDE/FDF/res/BRS; then ESI, DLC, data, stuff
+            // count, CRC (17 bits up to 16 bytes, 21 beyond), delimiter.
+            let head = 1.0 + id_bits + 5.0;
+            let crc = if n <= 16.0 { 17.0 } else { 21.0 };
+            let data = 1.0 + 4.0 + 8.0 * n + 4.0 + crc + 1.0;
+            let data_rate = if f.brs {
+                self.data_bps
+            } else {
+                self.nominal_bps
+            };
+            1e6 * ((head + tail) / self.nominal_bps + data / data_rate)
+        } else {
+            // SOF, id, RTR/IDE/r0, DLC, data, CRC 15 and delimiter.
+            let bits = 1.0 + id_bits + 3.0 + 4.0 + 8.0 * n + 16.0 + tail;
+            1e6 * bits / self.nominal_bps
+        }
+    }
+}
+
+/// A frame as a node receives it: when its end of frame passed (bus µs, on
+/// a timed bus) and whether the node sent it itself.
+#[derive(Clone, Debug)]
+pub struct Received {
+    /// The frame.
+    pub frame: CanFrame,
+    /// Its end of frame, µs of the bus's clock (timed bus only).
+    pub at_us: Option<f64>,
+    /// The node's own frame, heard back.
+    pub own: bool,
+}
+
 #[derive(Debug, Default)]
 struct NodeState {
     id: u32,
     extended: bool,
-    tx: VecDeque<CanFrame>,
-    rx: VecDeque<CanFrame>,
+    hears_own: bool,
+    /// Frames waiting, with when they were queued (bus µs; 0 untimed).
+    tx: VecDeque<(CanFrame, f64)>,
+    rx: VecDeque<Received>,
+}
+
+/// The time of a timed bus.
+struct Timed {
+    timing: BusTiming,
+    clock: Arc<dyn Clock + Send + Sync>,
+    /// The frame on the wire: its sender, the frame, its end, bus µs.
+    on_wire: Option<(usize, CanFrame, f64)>,
+    /// When the bus was last free, bus µs.
+    free_at: f64,
+}
+
+impl fmt::Debug for Timed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Timed")
+            .field("timing", &self.timing)
+            .field("free_at", &self.free_at)
+            .finish_non_exhaustive()
+    }
 }
 
 #[derive(Debug, Default)]
 struct BusInner {
     nodes: Vec<NodeState>,
     slots: u64,
+    timed: Option<Timed>,
+}
+
+impl BusInner {
+    /// Among the frames at the heads of the queues that were waiting at
+    /// `at`, the node whose frame wins arbitration.
+    fn winner(&self, at: f64) -> Option<usize> {
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| {
+                n.tx.front()
+                    .filter(|f| f.1 <= at)
+                    .map(|f| (f.0.arbitration_key(), i))
+            })
+            .min()
+            .map(|w| w.1)
+    }
+
+    /// Hands `f` (sent by `from`) to every node that hears it.
+    fn deliver(&mut self, from: usize, f: &CanFrame, at_us: Option<f64>) {
+        self.slots += 1;
+        for (i, n) in self.nodes.iter_mut().enumerate() {
+            let own = i == from;
+            if !own || n.hears_own {
+                n.rx.push_back(Received {
+                    frame: f.clone(),
+                    at_us,
+                    own,
+                });
+            }
+        }
+    }
+
+    /// Runs a timed bus up to its clock's now: frames whose end of frame
+    /// passed are delivered, at most `max` of them. Returns how many.
+    fn advance(&mut self, max: usize) -> usize {
+        let mut n = 0;
+        while n < max {
+            let Some(t) = self.timed.as_mut() else {
+                return n;
+            };
+            let now = t.clock.now_us() as f64;
+            if let Some((from, f, end)) = t.on_wire.take() {
+                if end > now {
+                    t.on_wire = Some((from, f, end));
+                    return n;
+                }
+                t.free_at = end;
+                self.deliver(from, &f, Some(end));
+                n += 1;
+                continue;
+            }
+            let free_at = t.free_at;
+            let Some(first) = self
+                .nodes
+                .iter()
+                .filter_map(|n| n.tx.front().map(|f| f.1))
+                .reduce(f64::min)
+            else {
+                return n;
+            };
+            let start = free_at.max(first);
+            if start > now {
+                return n;
+            }
+            let Some(w) = self.winner(start) else {
+                return n;
+            };
+            let Some((f, _)) = self.nodes[w].tx.pop_front() else {
+                return n;
+            };
+            if let Some(t) = self.timed.as_mut() {
+                let end = start + t.timing.frame_us(&f);
+                t.on_wire = Some((w, f, end));
+            }
+        }
+        n
+    }
+
+    /// When something next happens on a timed bus: the frame on the wire
+    /// ends, or one waiting can start, bus µs.
+    fn next_event(&self) -> Option<f64> {
+        let t = self.timed.as_ref()?;
+        if let Some((_, _, end)) = &t.on_wire {
+            return Some(*end);
+        }
+        let first = self
+            .nodes
+            .iter()
+            .filter_map(|n| n.tx.front().map(|f| f.1))
+            .reduce(f64::min)?;
+        Some(first.max(t.free_at))
+    }
 }
 
 /// The shared bus. Cloning gives another handle to the same bus.
@@ -74,13 +256,42 @@ fn lock(m: &Mutex<BusInner>) -> MutexGuard<'_, BusInner> {
 }
 
 impl CanBus {
-    /// A bus with no node attached.
+    /// A bus with no node attached, on which frames take no time.
     pub fn new() -> CanBus {
         CanBus::default()
     }
 
+    /// A bus on which frames take the time `timing` gives, read on `clock`
+    /// (bus µs).
+    pub fn timed(timing: BusTiming, clock: Arc<dyn Clock + Send + Sync>) -> CanBus {
+        let bus = CanBus::default();
+        lock(&bus.inner).timed = Some(Timed {
+            timing,
+            clock,
+            on_wire: None,
+            free_at: 0.0,
+        });
+        bus
+    }
+
+    /// When something next happens on a timed bus (a frame ends, or one
+    /// waiting can start), bus µs rounded up; `None` when idle or untimed.
+    pub fn next_event_us(&self) -> Option<u64> {
+        lock(&self.inner).next_event().map(|t| t.ceil() as u64)
+    }
+
     /// Attaches a node owning `id`.
     pub fn attach(&self, id: u32, extended: bool) -> Result<CanNode, BusError> {
+        self.attach_with(id, extended, false)
+    }
+
+    /// Attaches a node owning `id` that also receives its own frames, at
+    /// their end of frame.
+    pub fn attach_hearing_own(&self, id: u32, extended: bool) -> Result<CanNode, BusError> {
+        self.attach_with(id, extended, true)
+    }
+
+    fn attach_with(&self, id: u32, extended: bool, hears_own: bool) -> Result<CanNode, BusError> {
         let max = if extended { MAX_EXT_ID } else { MAX_STD_ID };
         if id > max {
             return Err(BusError::IdOutOfRange(id));
@@ -92,6 +303,7 @@ impl CanBus {
         b.nodes.push(NodeState {
             id,
             extended,
+            hears_own,
             ..NodeState::default()
         });
         Ok(CanNode {
@@ -102,31 +314,28 @@ impl CanBus {
         })
     }
 
-    /// One arbitration slot: the winning frame (if any node has one
-    /// waiting) is taken off its queue, delivered to all other nodes and
-    /// returned.
+    /// One arbitration slot on a bus without time: the winning frame (if
+    /// any node has one waiting) is taken off its queue, delivered to every
+    /// node that hears it and returned. A timed bus answers `None`: its
+    /// clock moves it ([`CanBus::run`]).
     pub fn step(&self) -> Option<CanFrame> {
         let mut b = lock(&self.inner);
-        let winner = b
-            .nodes
-            .iter()
-            .enumerate()
-            .filter_map(|(i, n)| n.tx.front().map(|f| (f.arbitration_key(), i)))
-            .min()?
-            .1;
-        let f = b.nodes[winner].tx.pop_front()?;
-        b.slots += 1;
-        for (i, n) in b.nodes.iter_mut().enumerate() {
-            if i != winner {
-                n.rx.push_back(f.clone());
-            }
+        if b.timed.is_some() {
+            return None;
         }
+        let winner = b.winner(0.0)?;
+        let (f, _) = b.nodes[winner].tx.pop_front()?;
+        b.deliver(winner, &f, None);
         Some(f)
     }
 
-    /// Steps until no node has a frame waiting, at most `max_slots` slots.
-    /// Returns the slots used.
+    /// Carries at most `max_slots` frames: on a bus without time, until no
+    /// node has one waiting; on a timed bus, those whose end of frame has
+    /// passed on its clock. Returns the frames carried.
     pub fn run(&self, max_slots: usize) -> usize {
+        if lock(&self.inner).timed.is_some() {
+            return lock(&self.inner).advance(max_slots);
+        }
         (0..max_slots).take_while(|_| self.step().is_some()).count()
     }
 
@@ -177,12 +386,19 @@ impl CanNode {
         if frame.data.len() > max {
             return Err(BusError::BadLength(frame.data.len()));
         }
-        lock(&self.bus.inner).nodes[self.index].tx.push_back(frame);
+        let mut b = lock(&self.bus.inner);
+        let at = b.timed.as_ref().map_or(0.0, |t| t.clock.now_us() as f64);
+        b.nodes[self.index].tx.push_back((frame, at));
         Ok(())
     }
 
     /// The next frame received from the bus.
     pub fn receive(&self) -> Option<CanFrame> {
+        self.receive_stamped().map(|r| r.frame)
+    }
+
+    /// The next frame received from the bus, with its end of frame.
+    pub fn receive_stamped(&self) -> Option<Received> {
         lock(&self.bus.inner).nodes[self.index].rx.pop_front()
     }
 
@@ -222,20 +438,33 @@ pub struct CanTransport {
     /// Only frames from this id are taken (all senders if `None`).
     peer: Option<u32>,
     splitters: BTreeMap<u32, StreamSplitter>,
-    inbox: Inbox,
+    /// Frames reassembled, each with the stamp of its last fragment.
+    ready: VecDeque<(Vec<u8>, Option<Stamp>)>,
+    last_stamp: Option<Stamp>,
+    /// The receiver's clock against the bus's, for stamps.
+    crystal: Crystal,
     stats: LinkStats,
 }
 
 impl CanTransport {
     /// A transport sending under `node`'s identifier and taking only frames
     /// from `peer` (every sender's if `None`, each reassembled separately).
+    /// Stamps read the bus's clock as it is.
     pub fn new(node: CanNode, peer: Option<u32>) -> CanTransport {
+        CanTransport::with_clock(node, peer, Crystal::default())
+    }
+
+    /// [`CanTransport::new`] on a receiver whose clock reads `crystal`'s
+    /// local time for the bus's: its stamps are in its own clock.
+    pub fn with_clock(node: CanNode, peer: Option<u32>, crystal: Crystal) -> CanTransport {
         CanTransport {
             name: format!("can:{:#x}", node.id()),
             node,
             peer,
             splitters: BTreeMap::new(),
-            inbox: Inbox::new(),
+            ready: VecDeque::new(),
+            last_stamp: None,
+            crystal,
             stats: LinkStats::default(),
         }
     }
@@ -266,16 +495,34 @@ impl Transport for CanTransport {
     /// The simulated bus is synchronous: this runs it until idle and never
     /// waits, whatever `timeout` says.
     fn recv(&mut self, _timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        if self.inbox.is_empty() {
+        if self.ready.is_empty() {
             self.node.bus().run(MAX_SLOTS_PER_RECV);
-            while let Some(f) = self.node.receive() {
+            while let Some(r) = self.node.receive_stamped() {
+                let f = &r.frame;
                 if self.peer.is_some_and(|p| p != f.id) || !f.fd {
                     continue;
                 }
-                self.inbox.take_from(&mut self.splitters, f.id, &f.data);
+                let stamp = r.at_us.map(|t| Stamp {
+                    at_us: self.crystal.local(t),
+                    own: r.own,
+                });
+                let ready = &mut self.ready;
+                self.splitters
+                    .entry(f.id)
+                    .or_default()
+                    .push(&f.data, &mut |bytes| ready.push_back((bytes, stamp)));
             }
         }
-        Ok(self.inbox.pop(&mut self.stats))
+        let Some((f, stamp)) = self.ready.pop_front() else {
+            return Ok(None);
+        };
+        self.last_stamp = stamp;
+        self.stats.received(f.len());
+        Ok(Some(f))
+    }
+
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.last_stamp
     }
 
     fn stats(&self) -> &LinkStats {
@@ -286,6 +533,7 @@ impl Transport for CanTransport {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clock::SimClock;
     use crate::testutil::link_exchange;
     use motet_wire::frame::{decode, encode, Flags, Header, MAX_FRAME};
 
@@ -361,6 +609,109 @@ mod tests {
             }
         }
         assert_eq!(got, want);
+    }
+
+    #[test]
+    fn frame_times() {
+        let t = BusTiming::FD_1M_5M;
+        // (frame, µs): bits at 1 and 5 Mbit/s, interframe space included.
+        let cases = [
+            (CanFrame::standard(0x10, &[0; 8]), 112.0),
+            (CanFrame::standard(0x10, &[]), 48.0),
+            (CanFrame::fd(0x10, false, &[0; 64]), 30.0 + 543.0 / 5.0),
+            (CanFrame::fd(0x10, false, &[0; 8]), 30.0 + 91.0 / 5.0),
+            (
+                CanFrame {
+                    brs: false,
+                    ..CanFrame::fd(0x10, false, &[0; 8])
+                },
+                30.0 + 91.0,
+            ),
+            (CanFrame::fd(0x10, true, &[0; 8]), 49.0 + 91.0 / 5.0),
+        ];
+        for (f, want) in cases {
+            assert!(
+                (t.frame_us(&f) - want).abs() < 1e-9,
+                "{f:?}: {}",
+                t.frame_us(&f)
+            );
+        }
+    }
+
+    /// On a timed bus a frame reaches every receiver at its end of frame,
+    /// the next arbitration waits for the wire, and every receiver (the
+    /// sender hearing its own included) stamps one instant.
+    #[test]
+    fn timed_bus_one_instant_for_every_receiver() {
+        let clock = SimClock::new();
+        let timing = BusTiming::FD_1M_5M;
+        let bus = CanBus::timed(timing, Arc::new(clock.clone()));
+        let a = bus.attach_hearing_own(0x10, false).unwrap();
+        let b = bus.attach(0x20, false).unwrap();
+        let c = bus.attach(0x30, false).unwrap();
+        let short = timing.frame_us(&CanFrame::fd(0x20, false, &[1; 8]));
+        let long = timing.frame_us(&CanFrame::fd(0x10, false, &[2; 64]));
+        clock.set(100);
+        b.transmit(&[1; 8]).unwrap();
+        // a's frame wins the next arbitration, but b's is on the wire.
+        clock.set(110);
+        a.transmit(&[2; 64]).unwrap();
+        assert_eq!(bus.run(10), 0);
+        assert_eq!(bus.next_event_us(), Some((100.0 + short).ceil() as u64));
+        clock.set((100.0 + short).floor() as u64);
+        assert_eq!(bus.run(10), 0, "nothing before its end of frame");
+        clock.set(10_000);
+        assert_eq!(bus.run(10), 2);
+        assert_eq!(bus.next_event_us(), None);
+        let heard = |n: &CanNode| {
+            std::iter::from_fn(|| n.receive_stamped())
+                .map(|r| (r.frame.id, r.at_us.unwrap(), r.own))
+                .collect::<Vec<_>>()
+        };
+        let (first, second) = (100.0 + short, 100.0 + short + long);
+        assert_eq!(heard(&c), vec![(0x20, first, false), (0x10, second, false)]);
+        assert_eq!(heard(&a), vec![(0x20, first, false), (0x10, second, true)]);
+        assert_eq!(heard(&b), vec![(0x10, second, false)]);
+        assert_eq!(bus.step(), None, "a timed bus runs on its clock");
+    }
+
+    /// A transport stamps what it receives in its own clock: the bus's end
+    /// of frame read through its crystal.
+    #[test]
+    fn transport_stamps_in_its_own_clock() {
+        let clock = SimClock::new();
+        let bus = CanBus::timed(BusTiming::FD_1M_5M, Arc::new(clock.clone()));
+        let crystal = Crystal {
+            ppm: 100.0,
+            offset_us: 5_000_000,
+        };
+        let mut a = CanTransport::new(bus.attach_hearing_own(0x10, false).unwrap(), None);
+        let mut b = CanTransport::with_clock(bus.attach(0x20, false).unwrap(), None, crystal);
+        clock.set(1_000_000);
+        a.send(&frame(1, 100)).unwrap();
+        clock.set(2_000_000);
+        let f = b.recv(None).unwrap().unwrap();
+        assert_eq!(decode(&f, &mut [0u8; MAX_FRAME]).unwrap().header.seq, 1);
+        let end = 1_000_000.0
+            + fragment(&frame(1, 100))
+                .iter()
+                .map(|p| BusTiming::FD_1M_5M.frame_us(&CanFrame::fd(0x10, false, p)))
+                .sum::<f64>();
+        assert_eq!(
+            b.last_stamp(),
+            Some(Stamp {
+                at_us: crystal.local(end),
+                own: false
+            })
+        );
+        assert!(a.recv(None).unwrap().is_some());
+        assert_eq!(
+            a.last_stamp(),
+            Some(Stamp {
+                at_us: end as u64,
+                own: true
+            })
+        );
     }
 
     #[test]

@@ -73,6 +73,28 @@ impl Clock for WallClock {
     }
 }
 
+/// A crystal's clock against a reference (the host's, a bus's): off by
+/// `ppm` parts per million and reading `offset_us` at the reference's 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Crystal {
+    /// Crystal error, parts per million (positive: the clock runs fast).
+    pub ppm: f64,
+    /// The clock at reference time 0, µs.
+    pub offset_us: u64,
+}
+
+impl Crystal {
+    /// The clock's reading (whole µs) at reference time `reference_us`.
+    pub fn local(&self, reference_us: f64) -> u64 {
+        self.offset_us + (reference_us * (1.0 + self.ppm * 1e-6)) as u64
+    }
+
+    /// The reference time at which the clock reads `local_us` (whole µs).
+    pub fn reference(&self, local_us: u64) -> u64 {
+        (local_us.saturating_sub(self.offset_us) as f64 / (1.0 + self.ppm * 1e-6)) as u64
+    }
+}
+
 /// A simulated clock in µs, shared by clones, advanced by whoever drives the
 /// simulation ([`SimClock::set`], [`SimClock::advance`]).
 #[derive(Clone, Debug, Default)]

@@ -25,8 +25,8 @@ pub mod slcan_port;
 pub mod spec;
 pub mod udp;
 
-pub use can::{CanBus, CanNode, CanTransport};
-pub use clock::{Clock, SimClock, WallClock};
+pub use can::{BusTiming, CanBus, CanNode, CanTransport, Received};
+pub use clock::{Clock, Crystal, SimClock, WallClock};
 pub use fault::{FaultClock, FaultConfig, FaultCounts, Faulty};
 pub use inbox::Inbox;
 pub use mem::{pair, MemTransport};
@@ -208,6 +208,24 @@ pub trait Transport {
 
     /// Counters so far.
     fn stats(&self) -> &LinkStats;
+
+    /// When the frame the last [`Transport::recv`] returned arrived, as
+    /// close to the wire as the transport can tell (a CAN controller's
+    /// receive timestamp), in the receiver's clock; `None` when it cannot
+    /// tell better than the caller's own clock.
+    fn last_stamp(&self) -> Option<Stamp> {
+        None
+    }
+}
+
+/// When a received frame arrived, read at the wire.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stamp {
+    /// Its arrival (end of frame), µs of the receiver's clock.
+    pub at_us: u64,
+    /// The receiver sent it itself and heard it back: the instant every
+    /// other receiver on the medium heard it too.
+    pub own: bool,
 }
 
 /// Collects a byte stream into frames ending at 0x00. Empty frames (repeated

@@ -10,10 +10,11 @@ use crate::peer::Peer;
 use crate::run::{NetConfig, NetError, NetRun, Phase};
 use crate::sim_node::{sim_config, SimNode};
 use motet_host::Machine;
-use motet_link::{CanBus, CanTransport, Transport};
+use motet_link::{BusTiming, CanBus, CanTransport, SimClock, Transport};
 use motet_node::storage::{Persisted, RamStore};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
+use std::sync::Arc;
 
 /// One simulated node and its clock.
 pub struct LoopbackNode {
@@ -28,24 +29,25 @@ pub struct LoopbackNode {
 }
 
 impl LoopbackNode {
+    /// The node's clock against host time.
+    pub fn crystal(&self) -> Crystal {
+        Crystal {
+            ppm: self.ppm,
+            offset_us: self.offset_us,
+        }
+    }
     fn local(&self, host: u64) -> u64 {
-        self.offset_us + (host as f64 * (1.0 + self.ppm * 1e-6)) as u64
+        self.crystal().local(host as f64)
     }
     fn host(&self, local: u64) -> u64 {
-        (local.saturating_sub(self.offset_us) as f64 / (1.0 + self.ppm * 1e-6)) as u64
+        self.crystal().reference(local)
     }
 }
 
 /// A loopback node's crystal: its error and its clock's starting offset
-/// (the host's estimate of that clock is [`crate::node_clock::NodeClock`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Crystal {
-    /// Crystal error, parts per million (positive: the node's clock runs
-    /// fast).
-    pub ppm: f64,
-    /// The node's clock at host time 0, µs.
-    pub offset_us: u64,
-}
+/// against host time (the host's estimate of that clock is
+/// [`crate::node_clock::NodeClock`]).
+pub use motet_link::Crystal;
 
 /// A whole networked run, host and nodes, stepped together on one simulated
 /// clock.
@@ -67,6 +69,8 @@ pub struct Loopback {
     pub bus: Option<CanBus>,
     /// Hosts started on the bus so far (each takes its own identifier).
     hosts: u32,
+    /// The bus's clock: host time.
+    bus_clock: SimClock,
 }
 
 /// The CAN identifier of the first host on a loopback bus (a low one: the
@@ -120,6 +124,7 @@ impl Loopback {
             max_step_us: 1_000,
             bus: None,
             hosts: 0,
+            bus_clock: SimClock::new(),
         }
     }
 
@@ -135,12 +140,15 @@ impl Loopback {
         cfg: NetConfig,
         journal: Option<JournalWriter>,
     ) -> Loopback {
-        let bus = CanBus::new();
+        let bus_clock = SimClock::new();
+        let bus = CanBus::timed(BusTiming::FD_1M_5M, Arc::new(bus_clock.clone()));
         let nodes = (0..machine.nodes.len())
             .map(|k| {
                 let id = BUS_NODE_ID + k as u32;
                 let node = bus.attach(id, false).expect("one identifier per node");
-                loopback_node(k, Box::new(CanTransport::new(node, None)), clocks)
+                let crystal = clocks.get(k).copied().unwrap_or_default();
+                let transport = CanTransport::with_clock(node, None, crystal);
+                loopback_node(k, Box::new(transport), clocks)
             })
             .collect();
         let mut lb = Loopback {
@@ -151,6 +159,7 @@ impl Loopback {
             max_step_us: 1_000,
             bus: Some(bus),
             hosts: 0,
+            bus_clock,
         };
         let peers = lb
             .bus_peers(machine, 0x1000)
@@ -164,7 +173,11 @@ impl Loopback {
     /// node, all through one transport.
     fn bus_peers(&mut self, machine: &Machine, isn: u16) -> Option<Vec<Peer>> {
         let bus = self.bus.as_ref()?;
-        let host = bus.attach(BUS_HOST_ID + self.hosts, false).ok()?;
+        // The host hears its own frames at their end of frame: the
+        // instant every node heard them (reference broadcast).
+        let host = bus
+            .attach_hearing_own(BUS_HOST_ID + self.hosts, false)
+            .ok()?;
         self.hosts += 1;
         let medium = Medium::new(Box::new(CanTransport::new(host, None)));
         let peers = (0..self.nodes.len())
@@ -285,6 +298,7 @@ impl Loopback {
     /// The host, every live node, and the host again (replies are taken at
     /// once, as on a link without delay); returns the earliest wakeup.
     fn round(&mut self) -> Result<u64, NetError> {
+        self.bus_clock.set(self.now);
         if self.host_alive {
             self.run.poll(self.now)?;
         }
@@ -303,6 +317,9 @@ impl Loopback {
         if self.host_alive {
             self.run.poll(self.now)?;
             next = next.min(self.run.next_wakeup(self.now));
+        }
+        if let Some(t) = self.bus.as_ref().and_then(CanBus::next_event_us) {
+            next = next.min(t.max(self.now));
         }
         Ok(next)
     }

@@ -3,9 +3,15 @@
 //! peer of the address they come from. Each peer keeps its own reliable
 //! link over its [`MediumPort`]; a frame sent through any port reaches
 //! every node, which is what a group seal needs.
+//!
+//! A transport that hears the host's own frames back, stamped at the
+//! instant every node heard them, hands its own clock exchanges to every
+//! port: each peer then knows when the nodes received the sync frame
+//! (reference broadcast).
 
-use motet_link::{LinkStats, Transport};
+use motet_link::{LinkStats, Stamp, Transport};
 use motet_wire::frame::{self, MAX_RAW};
+use motet_wire::service::{port, HOST_ADDRESS};
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -22,10 +28,14 @@ pub struct MediumStats {
     pub bad_frames: u64,
 }
 
+/// A frame as it arrived, with its stamp.
+type Arrived = (Vec<u8>, Option<Stamp>);
+
 struct Demux {
     transport: Box<dyn Transport + Send>,
-    /// Frames waiting for each node's peer, by source address.
-    queues: BTreeMap<u16, VecDeque<Vec<u8>>>,
+    /// Frames waiting for each node's peer, by source address, with their
+    /// stamps.
+    queues: BTreeMap<u16, VecDeque<Arrived>>,
     stats: MediumStats,
 }
 
@@ -34,12 +44,24 @@ impl Demux {
     fn pump(&mut self) -> io::Result<()> {
         let mut raw = [0u8; MAX_RAW];
         while let Some(bytes) = self.transport.recv(None)? {
+            let stamp = self.transport.last_stamp();
             let Ok(f) = frame::decode(&bytes, &mut raw) else {
                 self.stats.bad_frames += 1;
                 continue;
             };
+            let own = stamp.is_some_and(|s| s.own) && f.header.src == HOST_ADDRESS;
+            if own {
+                // Only the host's own sync frames to every node matter to
+                // its peers.
+                if f.header.port == port::TIME && f.header.dst == frame::BROADCAST {
+                    for q in self.queues.values_mut() {
+                        q.push_back((bytes.clone(), stamp));
+                    }
+                }
+                continue;
+            }
             match self.queues.get_mut(&f.header.src) {
-                Some(q) => q.push_back(bytes),
+                Some(q) => q.push_back((bytes, stamp)),
                 None => {
                     self.stats.strangers += 1;
                     self.stats.last_stranger = Some(f.header.src);
@@ -81,6 +103,7 @@ impl Medium {
             address,
             name: format!("bus node {address}"),
             stats: LinkStats::default(),
+            last_stamp: None,
         }
     }
 
@@ -96,6 +119,7 @@ pub struct MediumPort {
     address: u16,
     name: String,
     stats: LinkStats,
+    last_stamp: Option<Stamp>,
 }
 
 impl Transport for MediumPort {
@@ -114,15 +138,23 @@ impl Transport for MediumPort {
     fn recv(&mut self, _timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
         let mut d = lock(&self.inner);
         d.pump()?;
-        let f = d.queues.get_mut(&self.address).and_then(|q| q.pop_front());
-        if let Some(f) = &f {
+        let Some((f, stamp)) = d.queues.get_mut(&self.address).and_then(|q| q.pop_front()) else {
+            return Ok(None);
+        };
+        // The host's own frame heard back is no traffic.
+        if !stamp.is_some_and(|s| s.own) {
             self.stats.received(f.len());
         }
-        Ok(f)
+        self.last_stamp = stamp;
+        Ok(Some(f))
     }
 
     fn stats(&self) -> &LinkStats {
         &self.stats
+    }
+
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.last_stamp
     }
 }
 

@@ -129,6 +129,14 @@ impl NodeClock {
         if now < self.next_exchange {
             return false;
         }
+        self.exchanged(now, target_us, max_us);
+        true
+    }
+
+    /// An exchange went out at `now` (one this clock asked for, or a sync
+    /// frame to every node): plans the next as [`NodeClock::exchange_due`]
+    /// does.
+    pub fn exchanged(&mut self, now: u64, target_us: f64, max_us: u64) {
         let h = now as f64;
         let limit = EXCHANGE_AT * target_us;
         let bound = self.est.error_bound(h);
@@ -140,7 +148,6 @@ impl NodeClock {
         };
         self.next_exchange = now + interval;
         self.last_sent = Some(now);
-        true
     }
 
     /// When the next exchange is due, host µs.

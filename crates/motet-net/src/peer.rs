@@ -73,8 +73,25 @@ pub struct Peer {
     inbox: VecDeque<Incoming>,
     /// Clock exchanges sent and answered.
     pub exchanges: (u64, u64),
+    /// Reference samples taken: answers to a sync frame every node heard
+    /// at the instant the host heard its own.
+    pub references: u64,
     seal_sent: bool,
+    /// The host's sync frames to every node heard back: (`t1`, when every
+    /// node heard it, host µs). The last few.
+    heard_own: VecDeque<(u64, u64)>,
+    /// `t1` of the last exchanges asked of this node: an answer to any
+    /// other (a request someone else sent in the host's name) is no sample.
+    asked: VecDeque<u64>,
+    /// Clock answers to no exchange the host asked: ignored.
+    pub unasked: u64,
 }
+
+/// Sync frames remembered for their answers.
+const HEARD_OWN: usize = 8;
+/// Exchanges remembered for their answers: more than are in flight at the
+/// fastest rate over the slowest link.
+const ASKED: usize = 256;
 
 impl Peer {
     /// A peer reached over `transport` at `address`; `isn` should differ across
@@ -96,7 +113,11 @@ impl Peer {
             bad_frames: 0,
             inbox: VecDeque::new(),
             exchanges: (0, 0),
+            references: 0,
             seal_sent: false,
+            heard_own: VecDeque::new(),
+            asked: VecDeque::new(),
+            unasked: 0,
         }
     }
 
@@ -163,8 +184,24 @@ impl Peer {
     /// Sends a clock exchange request as a datagram (no retransmission: a
     /// late answer is worthless).
     pub fn send_time_get(&mut self, now: u64) -> std::io::Result<()> {
-        self.exchanges.0 += 1;
+        self.asked(now);
         self.datagram(&ServiceRequest::TimeGet { t1: now })
+    }
+
+    /// A clock exchange with `t1` went out to this node (on its own or to
+    /// every node): its answer is a sample.
+    pub fn asked(&mut self, t1: u64) {
+        self.exchanges.0 += 1;
+        if self.asked.len() == ASKED {
+            self.asked.pop_front();
+        }
+        self.asked.push_back(t1);
+    }
+
+    /// Sends a clock exchange request to every node at once, on a shared
+    /// medium: one frame, answered by each node.
+    pub fn send_time_to_all(&mut self, now: u64) -> std::io::Result<()> {
+        self.datagram_to(frame::BROADCAST, &ServiceRequest::TimeGet { t1: now })
     }
 
     /// Sends a service request as a datagram to `dst` (broadcast for scans).
@@ -197,12 +234,50 @@ impl Peer {
     /// Takes every frame the transport has, without blocking.
     pub fn receive(&mut self, now: u64) -> std::io::Result<()> {
         while let Some(bytes) = self.transport.recv(None)? {
-            self.on_frame(&bytes, now);
+            let stamp = self.transport.last_stamp();
+            self.on_frame(&bytes, now, stamp);
         }
         Ok(())
     }
 
-    fn on_frame(&mut self, bytes: &[u8], now: u64) {
+    /// The host's own sync frame to every node, heard back at `at`.
+    fn heard_own(&mut self, payload: &[u8], at: u64) {
+        if let Ok(ServiceRequest::TimeGet { t1 }) = decode::<ServiceRequest>(payload) {
+            if self.heard_own.len() == HEARD_OWN {
+                self.heard_own.pop_front();
+            }
+            self.heard_own.push_back((t1, at));
+        }
+    }
+
+    /// A clock exchange answered: an exact reference sample when it
+    /// answers a sync frame the host heard back (the node's `t2` and the
+    /// host's stamp are one instant), else an exchange.
+    fn exchange_answered(&mut self, t1: u64, t2: u64, t3: u64, t4: u64) {
+        if !self.asked.contains(&t1) {
+            self.unasked += 1;
+            return;
+        }
+        self.exchanges.1 += 1;
+        let heard = self.heard_own.iter().find(|h| h.0 == t1).map(|h| h.1);
+        let e = match heard {
+            Some(at) => {
+                self.references += 1;
+                Exchange {
+                    t1: at,
+                    t2,
+                    t3: t2,
+                    t4: at,
+                }
+            }
+            None => Exchange { t1, t2, t3, t4 },
+        };
+        self.sync.add(e);
+    }
+
+    fn on_frame(&mut self, bytes: &[u8], now: u64, stamp: Option<motet_link::Stamp>) {
+        // The frame's arrival as the transport read it, if it can tell.
+        let at = stamp.map_or(now, |s| s.at_us.min(now));
         let mut raw = [0u8; MAX_RAW];
         let f = match frame::decode(bytes, &mut raw) {
             Ok(f) => f,
@@ -217,6 +292,12 @@ impl Peer {
             if f.header.dst == frame::BROADCAST && f.header.src == self.address {
                 self.last_heard = Some(now);
             }
+            // The host's own sync frame to every node, heard back at the
+            // instant every node heard it.
+            let own = stamp.is_some_and(|s| s.own) && f.header.src == HOST_ADDRESS;
+            if own && f.header.dst == frame::BROADCAST && f.header.port == port::TIME {
+                self.heard_own(f.payload, at);
+            }
             return;
         }
         if f.header.src != self.address {
@@ -228,13 +309,7 @@ impl Peer {
             // A datagram: a service reply outside the link.
             if let Ok(reply) = decode::<ServiceReply>(f.payload) {
                 if let ServiceReply::Time { t1, t2, t3 } = reply {
-                    self.exchanges.1 += 1;
-                    self.sync.add(Exchange {
-                        t1,
-                        t2,
-                        t3,
-                        t4: now,
-                    });
+                    self.exchange_answered(t1, t2, t3, at);
                 } else {
                     self.inbox.push_back(Incoming::Service(reply));
                 }

@@ -166,7 +166,10 @@ impl<S: Store> SimNode<S> {
     pub fn step(&mut self, now: u64) {
         loop {
             match self.transport.recv(None) {
-                Ok(Some(f)) => self.endpoint.on_frame(&f, now),
+                Ok(Some(f)) => {
+                    let stamp = self.transport.last_stamp().map(|s| s.at_us);
+                    self.endpoint.on_frame_stamped(&f, now, stamp);
+                }
                 Ok(None) => break,
                 Err(_) => {
                     self.link_errors += 1;

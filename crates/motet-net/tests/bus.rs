@@ -365,6 +365,102 @@ fn a_seal_from_the_wrong_address_is_refused_and_changes_nothing() {
     assert_eq!(executed(&b.m, &b.lb), simulated(&b.m, &b.cmds));
 }
 
+/// Host time on node `k`'s clock right now, by its crystal, and the time
+/// its clock model gives for it: the node's error, µs.
+fn clock_error(lb: &Loopback, k: usize) -> Option<f64> {
+    let n = &lb.nodes[k];
+    let now = lb.now as f64;
+    let local = n.offset_us as f64 + now * (1.0 + n.ppm * 1e-6);
+    Some(n.node.endpoint.services().host_time(local)? - now)
+}
+
+/// One sync frame to every node: the host hears its own frame back at the
+/// instant every node heard it, so each answer is an exact sample of that
+/// node's clock (reference broadcast), and every node stays within 2 µs
+/// of the host's time while the job streams, whatever its crystal and
+/// however busy the bus.
+#[test]
+fn one_sync_frame_holds_every_node_within_2_us() {
+    let mut b = BusRun::start();
+    let mut worst = (0.0f64, 0);
+    let mut next = 0;
+    while !matches!(b.lb.run.phase(), Phase::Done | Phase::Stopped(_)) {
+        b.lb.step().unwrap();
+        if b.lb.run.phase() == &Phase::Streaming && b.lb.now >= next {
+            next = b.lb.now + 10_000;
+            for k in 0..b.lb.nodes.len() {
+                let e = clock_error(&b.lb, k).expect("a clock model while streaming");
+                if e.abs() > worst.0 {
+                    worst = (e.abs(), b.lb.now);
+                }
+            }
+        }
+    }
+    assert_eq!(b.lb.run.phase(), &Phase::Done);
+    assert!(worst.0 <= 2.0, "{worst:?}");
+    for p in b.lb.run.peers() {
+        let (asked, answered) = p.exchanges;
+        assert!(
+            answered > 10 && answered <= asked,
+            "{}: {:?}",
+            p.name,
+            p.exchanges
+        );
+        assert_eq!(
+            p.references, answered,
+            "{}: every answer a reference sample",
+            p.name
+        );
+    }
+    assert_eq!(executed(&b.m, &b.lb), simulated(&b.m, &b.cmds));
+}
+
+/// A clock exchange to every node as the frame `src` sends.
+fn sync_frame(src: u16, t1: u64) -> Vec<u8> {
+    let mut buf = [0u8; 64];
+    let req = motet_wire::service::ServiceRequest::TimeGet { t1 };
+    let payload = motet_wire::encode(&req, &mut buf).unwrap();
+    let h = Header {
+        dst: BROADCAST,
+        src,
+        port: port::TIME,
+        flags: Flags::NONE,
+        seq: 0,
+        ack: 0,
+    };
+    let mut out = [0u8; MAX_FRAME];
+    let n = frame::encode(&h, payload, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// Sync frames someone else sends: from a node's address every node
+/// refuses it and counts it; in the host's name (a node cannot tell) the
+/// host takes no sample from the answers, since it never asked. Nobody's
+/// clock moves and the job runs to its end.
+#[test]
+fn a_sync_frame_not_from_the_host_changes_no_clock() {
+    let mut b = BusRun::start();
+    b.until(6_000_000);
+    let bus = b.lb.bus.clone().unwrap();
+    let mut forger = motet_link::CanTransport::new(bus.attach(0x7F1, false).unwrap(), None);
+    forger.send(&sync_frame(3, 0)).unwrap();
+    forger.send(&sync_frame(1, b.lb.now - 3_000_000)).unwrap();
+    let until = b.lb.now + 20_000;
+    while b.lb.now < until {
+        b.lb.step().unwrap();
+    }
+    for (k, n) in b.lb.nodes.iter().enumerate() {
+        assert_eq!(n.node.endpoint.stats().sync_refused, 1, "node {k}");
+    }
+    for p in b.lb.run.peers() {
+        assert_eq!(p.unasked, 1, "{}", p.name);
+        assert_eq!(p.sync.fault(), None, "{}", p.name);
+    }
+    let phase = b.lb.run_until_settled(3_600_000_000).unwrap();
+    assert_eq!(phase, Phase::Done);
+    assert_eq!(executed(&b.m, &b.lb), simulated(&b.m, &b.cmds));
+}
+
 /// A node's cable that loses group seals: with `mode` 1 every one, with 2
 /// the first, and from then on everything (the cable pulled just as that
 /// seal went by, after the segments it seals had arrived).
@@ -417,6 +513,9 @@ impl Transport for Gate {
     }
     fn stats(&self) -> &motet_link::LinkStats {
         self.inner.stats()
+    }
+    fn last_stamp(&self) -> Option<motet_link::Stamp> {
+        self.inner.last_stamp()
     }
 }
 
@@ -472,6 +571,9 @@ fn a_window_one_node_missed_is_taken_back_from_the_others() {
     // The cable back for the resumed run.
     let bus = b.lb.bus.clone().unwrap();
     let node = bus.attach(0x1F0, false).unwrap();
-    b.lb.nodes[1].node.transport = Box::new(motet_link::CanTransport::new(node, None));
+    // Its controller stamps frames in the node's own clock.
+    let crystal = b.lb.nodes[1].crystal();
+    b.lb.nodes[1].node.transport =
+        Box::new(motet_link::CanTransport::with_clock(node, None, crystal));
     b.finish(&r);
 }

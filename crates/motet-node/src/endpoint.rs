@@ -63,6 +63,8 @@ pub struct EndpointStats {
     pub last_group_refusal: Option<(u16, GroupError)>,
     /// The member whose silence stopped this node (the host or a node).
     pub silent: Option<u16>,
+    /// Clock exchanges to every node not from the host: not answered.
+    pub sync_refused: u64,
 }
 
 /// A node on the network: the link to the host, the base service routines and the motion node, with
@@ -156,6 +158,14 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
 
     /// Takes one received frame (with or without its 0x00 delimiter).
     pub fn on_frame(&mut self, bytes: &[u8], now: u64) {
+        self.on_frame_stamped(bytes, now, None);
+    }
+
+    /// [`Endpoint::on_frame`] for a frame the board's controller stamped on
+    /// arrival (`stamp`, local µs, at most `now`): a clock exchange takes
+    /// that instant as its `t2`, not the moment the frame was handled, so
+    /// the time it waited for the main loop counts as the node's.
+    pub fn on_frame_stamped(&mut self, bytes: &[u8], now: u64, stamp: Option<u64>) {
         self.stats.frames_in += 1;
         let mut raw = [0u8; MAX_RAW];
         let f = match frame::decode(bytes, &mut raw) {
@@ -189,7 +199,18 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
                 // Motion needs the link's order and exactly-once delivery.
                 return;
             }
-            let handled = self.services.handle(h.port, f.payload, broadcast, now);
+            let at = if h.port == port::TIME {
+                if broadcast && h.src != HOST_ADDRESS {
+                    // Every node would answer a sync frame to every node:
+                    // only the host's is one.
+                    self.stats.sync_refused += 1;
+                    return;
+                }
+                stamp.map_or(now, |s| s.min(now))
+            } else {
+                now
+            };
+            let handled = self.services.handle(h.port, f.payload, broadcast, at);
             self.after(handled, Some((h.src, me)), h.port);
             return;
         }

@@ -54,6 +54,10 @@ pub struct Args {
     /// heartbeats [default: one link per node].
     #[arg(long, value_enum)]
     bus: Option<Bus>,
+    /// On `--bus`, a clock exchange with each node instead of one sync
+    /// frame to every node (to compare the two).
+    #[arg(long, requires = "bus")]
+    sync_each: bool,
 }
 
 /// A shared medium for `--bus`.
@@ -263,6 +267,7 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         }
         cfg.sync_interval_us = (ms * 1000.0) as u64;
     }
+    cfg.sync_to_all = !args.sync_each;
     Ok(cfg)
 }
 
@@ -366,20 +371,28 @@ fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<
 /// second of `motion` (s), the
 /// clock exchanges' share, windows, segments and retransmits.
 fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig, bytes_at_start: u64) {
-    let ex = motet_net::peer::datagram(2, &ServiceRequest::TimeGet { t1: u64::MAX / 3 }).len()
-        + frame_len(&ServiceReply::Time {
-            t1: u64::MAX / 3,
-            t2: u64::MAX / 3,
-            t3: u64::MAX / 3,
-        });
-    let (mut out, mut inb, mut frames, mut sync) = (0u64, 0u64, 0u64, 0u64);
+    let request = motet_net::peer::datagram(2, &ServiceRequest::TimeGet { t1: u64::MAX / 3 }).len();
+    let reply = frame_len(&ServiceReply::Time {
+        t1: u64::MAX / 3,
+        t2: u64::MAX / 3,
+        t3: u64::MAX / 3,
+    });
+    let (mut out, mut inb, mut frames) = (0u64, 0u64, 0u64);
     for p in lb.run.peers() {
         let t = p.transport().stats();
         out += t.bytes_out;
         inb += t.bytes_in;
         frames += t.frames_out + t.frames_in;
-        sync += p.exchanges.0 * ex as u64;
     }
+    // One sync frame serves every node on a shared medium.
+    let asked = lb.run.peers().iter().map(|p| p.exchanges.0);
+    let requests = if lb.run.shared_medium() && cfg.sync_to_all {
+        asked.max().unwrap_or(0)
+    } else {
+        asked.sum()
+    };
+    let answered: u64 = lb.run.peers().iter().map(|p| p.exchanges.1).sum();
+    let sync = requests * request as u64 + answered * reply as u64;
     let total = out + inb;
     println!(
         "wire, all {} node(s) together: {:.3} KB/s ({:.0} B/s host→nodes, {:.0} B/s nodes→host, {:.1} frames/s)",
@@ -396,12 +409,16 @@ fn print_wire(lb: &Loopback, n: usize, motion: f64, cfg: &NetConfig, bytes_at_st
         total.saturating_sub(bytes_at_start) as f64 / motion / 1000.0 / n as f64,
     );
     let models: u64 = lb.run.peers().iter().map(|p| p.sync.models_sent.0).sum();
+    let references: u64 = lb.run.peers().iter().map(|p| p.references).sum();
     println!(
-        "  clock exchanges: {} ({:.2}/s per node, at most {} ms apart; about {} B each), {:.0} B/s; clock models sent: {}",
-        lb.run.peers().iter().map(|p| p.exchanges.0).sum::<u64>(),
-        lb.run.peers().iter().map(|p| p.exchanges.0).sum::<u64>() as f64 / motion / n as f64,
+        "  clock exchanges: {} requests, {} answers ({:.2}/s per node, at most {} ms apart; {} B a request, {} B an answer; {} of the answers reference samples), {:.0} B/s; clock models sent: {}",
+        requests,
+        answered,
+        answered as f64 / motion / n as f64,
         cfg.sync_interval_us / 1000,
-        ex,
+        request,
+        reply,
+        references,
         sync as f64 / motion,
         models
     );

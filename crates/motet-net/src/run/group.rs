@@ -157,6 +157,25 @@ impl NetRun {
         }
     }
 
+    /// One clock exchange for every node in one frame. On a medium where
+    /// the host hears its own frame at the instant every node did, each
+    /// answer is an exact sample of that node's clock (reference
+    /// broadcast); elsewhere still one frame instead of one per node. Each
+    /// node's next exchange is planned from it.
+    pub(super) fn sync_all(&mut self, now: u64) {
+        let Some(k) = (0..self.peers.len()).find(|k| !self.lost.iter().any(|l| l.node == *k))
+        else {
+            return;
+        };
+        // A lost datagram is only a missing sample.
+        let _ = self.peers[k].send_time_to_all(now);
+        for p in self.peers.iter_mut() {
+            let target = super::clock_target(&self.cfg, p);
+            p.sync.exchanged(now, target, self.cfg.sync_interval_us);
+            p.asked(now);
+        }
+    }
+
     /// Every round on a shared medium: the host's heartbeat, and the
     /// confirmations of the last group seal (repaired through the links,
     /// or the run stopped when a node does not confirm in time).

@@ -61,6 +61,11 @@ pub struct NetConfig {
     /// ([`motet_planner::Limits::max_move_s`]). Not journaled: a run that
     /// may be resumed from its journal leaves it at 0.
     pub max_move_us: u64,
+    /// On a shared medium, one clock exchange to every node in one frame:
+    /// where the host hears its own frame when every node does (a CAN
+    /// bus), each answer is an exact sample (reference broadcast). Off:
+    /// one exchange per node, as on separate links.
+    pub sync_to_all: bool,
 }
 
 impl Default for NetConfig {
@@ -74,6 +79,7 @@ impl Default for NetConfig {
             connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
             max_move_us: 0,
+            sync_to_all: true,
         }
     }
 }
@@ -550,12 +556,19 @@ impl NetRun {
         let at_rest = matches!(self.phase, Phase::Starting);
         let quiet = self.cfg.node_timeout_us / 3;
         let mut fault = None;
+        // On a shared medium one sync frame serves every node.
+        let shared = self.group.is_some() && self.cfg.sync_to_all;
+        let mut to_all = false;
         for p in self.peers.iter_mut() {
             let target = clock_target(&self.cfg, p);
             p.sync.probe_after(p.last_heard, quiet);
             if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
                 // A lost datagram is only a missing sample.
-                let _ = p.send_time_get(now);
+                if shared {
+                    to_all = true;
+                } else {
+                    let _ = p.send_time_get(now);
+                }
             }
             if let Some(f) = p.sync.fault() {
                 fault.get_or_insert((p.name.clone(), f));
@@ -572,6 +585,9 @@ impl NetRun {
                     skew: m.skew,
                 });
             }
+        }
+        if to_all {
+            self.sync_all(now);
         }
         if let Some((node, f)) = fault {
             let message = format!("its clock cannot be trusted: {f}; nothing moves on it");
