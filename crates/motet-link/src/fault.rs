@@ -8,7 +8,7 @@
 //! either real time or a simulated clock the caller advances.
 
 pub use crate::clock::SimClock;
-use crate::{LinkStats, Transport};
+use crate::{Crystal, LinkStats, Stamp, Transport};
 use std::io;
 use std::time::{Duration, Instant};
 
@@ -208,11 +208,22 @@ struct Held {
     not_before: u64,
     /// Released at this time even if `after` is not 0.
     limit: u64,
+    /// When the frames it waited for had arrived.
+    freed_at: u64,
 }
 
 impl Held {
     fn due(&self, now: u64) -> bool {
         (self.after == 0 && now >= self.not_before) || now >= self.limit
+    }
+
+    /// When it came due: its arrival on the faulty link.
+    fn arrival(&self) -> u64 {
+        if self.after == 0 {
+            self.not_before.max(self.freed_at).min(self.limit)
+        } else {
+            self.limit
+        }
     }
 }
 
@@ -228,6 +239,10 @@ pub struct Faulty<T: Transport> {
     held: Vec<Held>,
     counts: FaultCounts,
     stats: LinkStats,
+    /// On a simulated clock, the receiver's clock against it: frames are
+    /// stamped with their arrival (see [`Faulty::stamping`]).
+    stamps: Option<Crystal>,
+    last_stamp: Option<Stamp>,
 }
 
 impl<T: Transport> Faulty<T> {
@@ -248,7 +263,21 @@ impl<T: Transport> Faulty<T> {
             held: Vec::new(),
             counts: FaultCounts::default(),
             stats: LinkStats::default(),
+            stamps: None,
+            last_stamp: None,
         }
+    }
+
+    /// Stamps every frame with the moment it arrives on the faulty link,
+    /// its delays and jitter included, as a receiver whose clock reads
+    /// `crystal` for the simulated clock's time would ([`Transport::last_stamp`]):
+    /// a simulated network interface that timestamps on receipt. Only on a
+    /// [`FaultClock::Simulated`] clock.
+    pub fn stamping(mut self, crystal: Crystal) -> Faulty<T> {
+        if let FaultClock::Simulated(_) = self.clock {
+            self.stamps = Some(crystal);
+        }
+        self
     }
 
     /// What has been injected so far.
@@ -302,6 +331,7 @@ impl<T: Transport> Faulty<T> {
             let h = &mut self.held[i];
             if h.after == 1 {
                 h.after = 0;
+                h.freed_at = now;
                 released.push(self.held.remove(i));
             } else {
                 h.after = h.after.saturating_sub(1);
@@ -330,6 +360,7 @@ impl<T: Transport> Faulty<T> {
             after: 0,
             not_before: now + jitter,
             limit: u64::MAX,
+            freed_at: now,
         };
         if self.rng.chance(c.delay) {
             let by_frames = match (c.delay_frames, c.delay_us) {
@@ -370,7 +401,12 @@ impl<T: Transport> Faulty<T> {
     fn take_due(&mut self) -> Option<Vec<u8>> {
         let now = self.clock.now_us();
         let i = self.held.iter().position(|h| h.due(now))?;
-        Some(self.held.remove(i).frame)
+        let h = self.held.remove(i);
+        self.last_stamp = self.stamps.map(|c| Stamp {
+            at_us: c.local(h.arrival() as f64),
+            own: false,
+        });
+        Some(h.frame)
     }
 
     /// How long until the next held frame comes due by time alone (real
@@ -426,6 +462,10 @@ impl<T: Transport> Transport for Faulty<T> {
     fn stats(&self) -> &LinkStats {
         &self.stats
     }
+
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.last_stamp
+    }
 }
 
 #[cfg(test)]
@@ -446,7 +486,58 @@ mod tests {
         )
     }
 
-    /// Sends frames `0..n` (one byte each, plus a delimiter) and collects what
+    /// A stamping receiver reads each frame's arrival (its jitter
+    /// included; for a reordered one, the arrival of the frame that freed
+    /// it) through its crystal, however late it takes the frame.
+    #[test]
+    fn stamps_are_arrivals_in_the_receivers_clock() {
+        let crystal = Crystal {
+            ppm: -100.0,
+            offset_us: 1_000_000,
+        };
+        let reorder = FaultConfig {
+            reorder: 1.0,
+            hold_limit_us: 1_000_000,
+            ..FaultConfig::default()
+        };
+        // (faults, for frames 1, 2, 3 sent at 100, 200, 300 µs: the
+        // earliest and latest arrival, host µs)
+        type Case = (FaultConfig, [(u64, u64); 3]);
+        let cases: [Case; 3] = [
+            (FaultConfig::default(), [(100, 100), (200, 200), (300, 300)]),
+            (
+                FaultConfig::jitter(5, 400),
+                [(100, 500), (200, 600), (300, 700)],
+            ),
+            (reorder, [(200, 200), (300, 300), (1_000_300, 1_000_300)]),
+        ];
+        for (cfg, want) in cases {
+            let clock = SimClock::new();
+            let (f, mut tx) = sim_pair(cfg, &clock);
+            let mut f = f.stamping(crystal);
+            let mut got = Vec::new();
+            let mut take = |f: &mut Faulty<crate::MemTransport>| {
+                while let Some(frame) = f.recv(None).unwrap() {
+                    got.push((frame[0], crystal.reference(f.last_stamp().unwrap().at_us)));
+                }
+            };
+            for (i, t) in [100, 200, 300].into_iter().enumerate() {
+                clock.set(t);
+                tx.send(&[i as u8 + 1, 0]).unwrap();
+                take(&mut f);
+            }
+            clock.set(10_000_000);
+            take(&mut f);
+            got.sort();
+            assert_eq!(got.len(), 3, "{cfg:?}");
+            for ((id, at), (lo, hi)) in got.iter().zip(want) {
+                // A whole µs of the receiver's clock either way.
+                assert!(lo <= at + 1 && *at <= hi + 1, "{cfg:?}: frame {id} at {at}");
+            }
+        }
+    }
+
+    /// Sends frames `0..n` (one byte each, plus a delimiter) and collects what    /// Sends frames `0..n` (one byte each, plus a delimiter) and collects what
     /// comes out, advancing the simulated clock by `step` per frame.
     fn through(cfg: FaultConfig, n: u8, step: u64) -> (Vec<Vec<u8>>, FaultCounts) {
         let clock = SimClock::new();

@@ -229,15 +229,19 @@ fn faulty_links(
         jitter_us: args.jitter_us,
         ..FaultConfig::all(seed, args.faults)
     };
+    let crystals = node_clocks(n);
     (0..n)
         .map(|k| {
             let (a, b) = motet_link::pair(&format!("host{k}"), &format!("node{k}"));
             let c = || FaultClock::Simulated(clock.clone());
+            // Each end stamps frames on arrival, in its own clock, as a
+            // network interface's receive timestamps would.
+            let host =
+                Faulty::with_clock(a, fault(2 * k as u64 + 1), c()).stamping(Crystal::default());
+            let node = Faulty::with_clock(b, fault(2 * k as u64 + 2), c()).stamping(crystals[k]);
             (
-                Box::new(Faulty::with_clock(a, fault(2 * k as u64 + 1), c()))
-                    as Box<dyn Transport + Send>,
-                Box::new(Faulty::with_clock(b, fault(2 * k as u64 + 2), c()))
-                    as Box<dyn Transport + Send>,
+                Box::new(host) as Box<dyn Transport + Send>,
+                Box::new(node) as Box<dyn Transport + Send>,
             )
         })
         .collect()

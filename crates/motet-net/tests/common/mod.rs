@@ -55,17 +55,22 @@ pub fn clean_links(n: usize) -> Links {
         .collect()
 }
 
+/// `n` links with `p` of every fault, on the simulated `clock`, for nodes
+/// whose crystals [`clocks`] gives.
 pub fn faulty_links(n: usize, clock: &SimClock, p: f64, seed: u64) -> Links {
     (0..n)
         .map(|k| {
             let (a, b) = pair(&format!("host{k}"), &format!("node{k}"));
             let cfg = |s| FaultConfig::all(seed * 100 + s, p);
-            let a = Faulty::with_clock(a, cfg(2 * k as u64), FaultClock::Simulated(clock.clone()));
+            // Each end stamps frames on arrival, in its own clock.
+            let a = Faulty::with_clock(a, cfg(2 * k as u64), FaultClock::Simulated(clock.clone()))
+                .stamping(Crystal::default());
             let b = Faulty::with_clock(
                 b,
                 cfg(2 * k as u64 + 1),
                 FaultClock::Simulated(clock.clone()),
-            );
+            )
+            .stamping(clocks(n)[k]);
             (
                 Box::new(a) as Box<dyn Transport + Send>,
                 Box::new(b) as Box<dyn Transport + Send>,
