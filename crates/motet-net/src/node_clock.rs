@@ -157,10 +157,21 @@ impl NodeClock {
 
     /// Brings the next exchange forward to `quiet_us` after the later of
     /// the last frame heard (`heard`) and the last exchange: an exchange is
-    /// also the heartbeat of a node that has nothing else to say.
+    /// also the heartbeat of a node that has nothing else to say. One not
+    /// answered (nothing heard since) is repeated after a tenth of that, or
+    /// four least round trips if longer: a quiet node is asked several
+    /// times within its timeout, so a few frames lost in a row do not make
+    /// it look gone.
     pub fn probe_after(&mut self, heard: Option<u64>, quiet_us: u64) {
-        let since = heard.max(self.last_sent).unwrap_or(0);
-        self.next_exchange = self.next_exchange.min(since + quiet_us);
+        let next = match (heard, self.last_sent) {
+            (h, Some(sent)) if h.is_none_or(|h| h < sent) => {
+                let rtt = self.est.min_rtt();
+                let rtt = if rtt.is_finite() { 4.0 * rtt } else { 0.0 };
+                sent + (quiet_us / 10).max(rtt as u64)
+            }
+            (h, sent) => h.max(sent).unwrap_or(0) + quiet_us,
+        };
+        self.next_exchange = self.next_exchange.min(next);
     }
 
     /// The model to send at host time `now`, if the node needs one: its

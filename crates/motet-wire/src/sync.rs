@@ -478,9 +478,12 @@ impl ClockSync {
             (cf, cr, halves)
         };
         let conf = self.cfg.confidence;
+        // Each half's line is known to its edges and a timestamp tick (whole
+        // µs on each clock): exact exchanges still leave a tick of slope
+        // over the time between the halves.
         let skew_of = |h: &[Half; 2]| {
             let apart = (h[1].centre - h[0].centre).max(1.0);
-            conf * (h[0].edge + h[1].edge) / apart
+            (conf * (h[0].edge + h[1].edge) + TICK_US) / apart
         };
         // The data's slope once it is surer than the prior.
         let mut fit = None;

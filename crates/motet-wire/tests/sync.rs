@@ -153,7 +153,9 @@ fn converges_to_ten_microseconds() {
             "seed {seed}: the bound failed {outside} times of {}",
             errs.len()
         );
-        assert!(est < 10.0 * r.max(0.2), "bound {est:.1} vs rms {r:.1}");
+        // Timestamps are whole µs: the bound carries a tick in its offset
+        // and a tick over the exchanges' span in its slope.
+        assert!(est < 2.0 + 3.0 * max, "bound {est:.1} vs max {max:.1}");
         // Local-to-host inverts host-to-local.
         let h = 100.0 * S;
         assert!((sync.local_to_host(sync.host_to_local(h)) - h).abs() < 1e-3);

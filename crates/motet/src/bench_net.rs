@@ -527,7 +527,7 @@ fn resume_figures(
         allow_unknown: true,
         time_scale: 1.0,
         lead_ms: 100.0,
-        sync_ms: 400.0,
+        sync_ms: 10_000.0,
         continues: None,
         nodes: lb
             .nodes

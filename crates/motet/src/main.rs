@@ -121,10 +121,11 @@ struct RunArgs {
     /// reaches ahead, ms (at least 2×RTT is used anyway).
     #[arg(long, default_value_t = 100.0, value_parser = flags::number(ranges::LEAD_MS))]
     lead_ms: f64,
-    /// With --nodes spawn|paired: clock exchanges with each node, ms
-    /// apart. Faster tracks clocks more closely on jittery links at the
-    /// cost of wire traffic (about 70 bytes per exchange).
-    #[arg(long, default_value_t = 400.0, value_parser = flags::number(ranges::SYNC_MS))]
+    /// With --nodes spawn|paired: longest time between clock exchanges
+    /// with each node, ms. They are as rare as each clock's error bound
+    /// allows and no rarer than this (about 70 bytes per exchange); a node
+    /// with nothing else to say is asked after 1 s anyway.
+    #[arg(long, default_value_t = 10_000.0, value_parser = flags::number(ranges::SYNC_MS))]
     sync_ms: f64,
     #[command(flatten)]
     place: flags::PlacementFlags,

@@ -74,7 +74,7 @@ impl Default for NetConfig {
             lead_min_us: 100_000,
             node_timeout_us: 1_500_000,
             status_interval_us: 5_000_000,
-            sync_interval_us: 400_000,
+            sync_interval_us: 10_000_000,
             clock_bound_us: 10.0,
             connect_timeout_us: 15_000_000,
             window_us: 1_000_000,
@@ -554,7 +554,9 @@ impl NetRun {
     /// in every phase; a node whose clock answered nonsense is refused.
     fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
         let at_rest = matches!(self.phase, Phase::Starting);
-        let quiet = self.cfg.node_timeout_us / 3;
+        // A node not heard for two thirds of its timeout is asked, and
+        // asked again every fifteenth (see `NodeClock::probe_after`).
+        let quiet = self.cfg.node_timeout_us * 2 / 3;
         let mut fault = None;
         // On a shared medium one sync frame serves every node.
         let shared = self.group.is_some() && self.cfg.sync_to_all;
