@@ -770,3 +770,34 @@ thread_local! {
     /// One stopped run for the property test (a stopped plotter job).
     static BASE: Evidence0 = Evidence0::of(&plotter_stopped());
 }
+
+/// A host that had no turn for longer than its lead: the nodes braked on
+/// their tails, the host stopped saying why, and the run resumes from its
+/// journal to the job's end.
+#[test]
+fn a_run_stopped_by_a_stalled_host_resumes_exactly() {
+    let machine = "examples/gestalt-3axis.toml";
+    let job = "examples/jobs/gestalt-3d.gcode";
+    let (mut s, jpath) = started(machine, job);
+    let want: Vec<i64> = simulated(&s.m, &s.cmds).iter().map(|&(_, p)| p).collect();
+    while s.lb.now < 9_000_000 {
+        s.lb.step().unwrap();
+    }
+    assert_eq!(s.lb.run.phase(), &Phase::Streaming);
+    s.lb.host_alive = false;
+    while s.lb.now < 14_000_000 {
+        s.lb.step().unwrap();
+    }
+    s.lb.host_alive = true;
+    let Phase::Stopped(info) = s.lb.run_until_settled(60_000_000).unwrap() else {
+        panic!("expected a stop");
+    };
+    assert!(info.reason.contains("the host had no turn"), "{info:?}");
+    assert!(info.all_at_rest(), "{info:?}");
+    s.journal = std::fs::read_to_string(&jpath).unwrap();
+    assert!(s.journal().stop.is_some());
+    let r = s.prove(None).unwrap();
+    assert_eq!(r.window_end, info.window_end);
+    finish(&mut s, &r);
+    assert_eq!(positions(&s.m, &s.lb), want);
+}

@@ -53,6 +53,9 @@ fn cfg(r: &RunRecord) -> NetConfig {
     // Timeouts are in the run's own (possibly scaled) time.
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c.connect_timeout_us = (c.connect_timeout_us as f64 * time_scale.max(1.0)) as u64;
+    // A busy computer's stalls are in wall time: the lead may grow to
+    // cover a quarter second of them, however fast the run's time goes.
+    c.lead_max_us = c.lead_max_us.max((250_000.0 * time_scale) as u64);
     c
 }
 
@@ -209,6 +212,11 @@ fn drive(
         let now = clock.now_us();
         let phase = run.poll(now)?.clone();
         bar.set_position(run.progress().0 as u64);
+        for note in run.take_notes() {
+            if !quiet {
+                bar.suspend(|| eprintln!("warning: {note}"));
+            }
+        }
         bar.set_message(match phase {
             Phase::Starting => "connecting",
             Phase::Streaming => "streaming",
@@ -228,6 +236,7 @@ fn drive(
     let now = clock.now_us();
     let figures = run.figures(now);
     let tallies = run.tallies();
+    let pace = run.pace();
     let report = serde_json::json!({
         "machine": machine.name,
         "commands": total,
@@ -235,6 +244,12 @@ fn drive(
         "windows": run.windows,
         "wall_s": started.elapsed().as_secs_f64(),
         "outcome": match &phase { Phase::Done => "done".to_string(), Phase::Stopped(s) => format!("stopped: {}", s.reason), _ => "?".into() },
+        "pace": {
+            "worst_gap_ms": pace.worst_gap_us as f64 / 1000.0,
+            "worst_seal_late_ms": pace.worst_seal_late_us as f64 / 1000.0,
+            "least_margin_ms": if pace.least_margin_us.is_finite() { serde_json::json!(pace.least_margin_us / 1000.0) } else { serde_json::Value::Null },
+            "lead_ms": pace.lead_us as f64 / 1000.0,
+        },
         "lost": match &phase { Phase::Stopped(s) => s.lost.iter().map(|l| serde_json::json!({ "node": l.name, "why": l.why })).collect::<Vec<_>>(), _ => Vec::new() },
         "nodes": figures.iter().enumerate().map(|(k, f)| serde_json::json!({
             "name": f.name,

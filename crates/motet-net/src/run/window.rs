@@ -130,7 +130,11 @@ impl NetRun {
                 }
                 break;
             }
+            let base = self.base_lead_us();
+            self.pace.sealing(now, self.deadline - t, base);
             self.seal(now)?;
+            let lead = self.lead_us();
+            self.pace.sealed(now, self.deadline, lead);
         }
         Ok(())
     }
