@@ -12,10 +12,11 @@ use motet_net::{NetConfig, Phase};
 
 /// Steps the loopback with the host polled only `on_us` of every
 /// `on_us + off_us` µs (the nodes always), until the run is done or
-/// stopped. Returns the phase and the host's notes.
-fn run_stalled(lb: &mut Loopback, on_us: u64, off_us: u64) -> (Phase, Vec<String>) {
+/// stopped, or `for_us` passed. Returns the phase and the host's notes.
+fn stalled_for(lb: &mut Loopback, on_us: u64, off_us: u64, for_us: u64) -> (Phase, Vec<String>) {
     let mut notes = Vec::new();
-    while lb.now < 600_000_000 {
+    let end = lb.now + for_us;
+    while lb.now < end {
         lb.host_alive = lb.now % (on_us + off_us) < on_us;
         lb.step().unwrap();
         notes.extend(lb.run.take_notes());
@@ -27,7 +28,15 @@ fn run_stalled(lb: &mut Loopback, on_us: u64, off_us: u64) -> (Phase, Vec<String
     (lb.run.phase().clone(), notes)
 }
 
-fn gestalt() -> (motet_host::Machine, Vec<motet_planner::Located<motet_planner::Command>>) {
+/// [`stalled_for`] until the run is done or stopped.
+fn run_stalled(lb: &mut Loopback, on_us: u64, off_us: u64) -> (Phase, Vec<String>) {
+    stalled_for(lb, on_us, off_us, 600_000_000)
+}
+
+fn gestalt() -> (
+    motet_host::Machine,
+    Vec<motet_planner::Located<motet_planner::Command>>,
+) {
     load(
         "examples/gestalt-3axis.toml",
         "examples/jobs/gestalt-3d.gcode",
@@ -124,4 +133,52 @@ fn settled_on_the_path(m: &motet_host::Machine, lb: &mut Loopback, info: &motet_
     );
     let rest: Vec<i64> = executed(m, lb).iter().map(|&(_, p)| p).collect();
     assert_eq!(rest, steps_at(m, &info.point));
+}
+
+/// 0.02 mm moves on an arc: the nodes' queues hold a fraction of a second.
+fn tiny_moves(n: u32) -> Vec<motet_planner::Located<motet_planner::Command>> {
+    let r = 0.02 / 1e-4;
+    (1..=n)
+        .map(|k| {
+            let a = k as f64 * 1e-4;
+            motet_planner::Located {
+                loc: motet_planner::SourceLoc { line: k, column: 0 },
+                item: motet_planner::Command::Move(motet_planner::Move {
+                    target: [r * a.sin(), r * (1.0 - a.cos()), 0.0, 0.0, 0.0, 0.0],
+                    feed: 250.0,
+                    kind: motet_planner::MoveKind::Feed,
+                }),
+            }
+        })
+        .collect()
+}
+
+/// Tiny moves, and the host stalled longer and longer once the job runs
+/// (60 ms, then 120 ms, then 200 ms of every 240 ms): the queues cannot
+/// reach the longer lead, so the moves not yet planned are slowed; the job
+/// finishes with the simulator's steps.
+#[test]
+fn full_queues_short_of_the_lead_slow_the_moves_not_yet_planned() {
+    let m = motet_host::Machine::load(&root().join("examples/printer.toml")).unwrap();
+    let cmds = tiny_moves(3_000);
+    let want = simulated(&m, &cmds);
+    let mut lb = clean_loopback(&m, cmds);
+    while lb.run.progress().0 < 100 {
+        lb.step().unwrap();
+    }
+    let mut notes = Vec::new();
+    for off in [60_000, 120_000] {
+        let (phase, n) = stalled_for(&mut lb, 240_000 - off, off, 3_000_000);
+        assert_eq!(phase, Phase::Streaming, "{n:?}");
+        notes.extend(n);
+    }
+    let (phase, n) = run_stalled(&mut lb, 40_000, 200_000);
+    notes.extend(n);
+    assert_eq!(phase, Phase::Done, "{notes:?}");
+    assert_eq!(executed(&m, &lb), want);
+    assert!(
+        notes.iter().any(|n| n.contains("short moves from job line")
+            && n.contains("are slowed to take at least")),
+        "{notes:?}"
+    );
 }

@@ -13,7 +13,11 @@
 //! the committed window's tail start, the nodes are braking: the run stops
 //! at once, saying how late the host was and what lead it had.
 
-use super::NetRun;
+use super::{NetError, NetRun};
+use crate::journal::JournalPace;
+
+/// The feed is slowed again only for moves this much longer than before.
+const SLOW_STEP: f64 = 1.05;
 
 /// How much lead the worst lateness asks for: as much again in hand when a
 /// stall as long as the worst one starts just as a seal falls due.
@@ -144,6 +148,11 @@ impl Pace {
         }
     }
 
+    /// Something to say about the run's pace.
+    pub(super) fn note(&mut self, note: String) {
+        self.notes.push(note);
+    }
+
     /// What was measured, with the lead now kept.
     pub(super) fn figures(&self, base: u64) -> PaceFigures {
         PaceFigures {
@@ -170,6 +179,39 @@ impl NetRun {
         self.pace.figures(self.base_lead_us())
     }
 
+    /// The nodes' queues are full and still reach less than `lead` ahead:
+    /// the moves not yet planned are planned longer (at least the lead over
+    /// the queue's usable length), journaled so that a resume plans them
+    /// the same. What is planned stays as planned.
+    pub(super) fn slow_feed(&mut self, lead: u64) -> Result<(), NetError> {
+        let horizon = self.machine.limits().stop_horizon;
+        let usable = self.capacity().saturating_sub(horizon).max(1);
+        let want = lead as f64 * 1e-6 / usable as f64;
+        let line = self.pending_commands_mut().1.first().map(|c| c.loc.line);
+        let Some(feed) = self.feed.as_mut() else {
+            return Ok(());
+        };
+        let had = feed.min_move_s();
+        if want <= had * SLOW_STEP || feed.exhausted() {
+            return Ok(());
+        }
+        let command = feed.slow(want);
+        if let Some(j) = self.journal.as_mut() {
+            j.pace(&JournalPace {
+                command,
+                min_move_s: want,
+            })?;
+        }
+        let from = line.map_or_else(String::new, |l| format!(" from job line {l} on"));
+        self.pace.note(format!(
+            "the nodes' queues hold less than the lead of {}: short moves{from} are slowed to take at least {:.1} ms (were {:.1} ms)",
+            ms(lead),
+            want * 1e3,
+            had * 1e3
+        ));
+        Ok(())
+    }
+
     /// The host is past the committed window's tail start with more to
     /// seal: every node is braking on its tail. Stops the run, saying why.
     pub(super) fn check_behind(&mut self, now: u64) {
@@ -186,7 +228,9 @@ impl NetRun {
         } else if self.peers.iter().any(|p| p.seal_in_flight()) || self.group_busy() {
             format!("the last seal was not acknowledged within the lead of {lead} (a node or its link is slow)")
         } else if self.queued_on_nodes(now) >= self.capacity() {
-            format!("the nodes' queues were full with less than the lead of {lead} of motion in them")
+            format!(
+                "the nodes' queues were full with less than the lead of {lead} of motion in them"
+            )
         } else {
             format!("the host could not seal the next window within the lead of {lead}")
         };

@@ -136,6 +136,10 @@ impl NetRun {
             let lead = self.lead_us();
             self.pace.sealed(now, self.deadline, lead);
         }
+        let short = self.deadline < t + lead && self.queued_on_nodes(now) >= self.capacity();
+        if short && matches!(self.phase, Phase::Streaming) {
+            self.slow_feed(lead as u64)?;
+        }
         Ok(())
     }
 
