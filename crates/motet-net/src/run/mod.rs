@@ -436,7 +436,8 @@ impl NetRun {
         }
         if !matches!(self.phase, Phase::Done | Phase::Stopped(_)) {
             let base = self.base_lead_us();
-            self.pace.turn(now, base);
+            // Short stalls, however frequent, never hide a dead node.
+            self.pace.turn(now, base, self.cfg.node_timeout_us / 4);
         }
         let mut failed = None;
         for (k, p) in self.peers.iter_mut().enumerate() {

@@ -8,10 +8,12 @@
 //! (late turns, or the seal before still unacknowledged). It lengthens its
 //! lead to twice the worst lateness seen on top of the least lead, at most
 //! [`super::NetConfig::lead_max_us`], and reports each raise. The lead only
-//! changes when windows are sealed, never what is sealed: the plan, the
-//! journal and `motet resume` are as before. If the host still falls behind
-//! the committed window's tail start, the nodes are braking: the run stops
-//! at once, saying how late the host was and what lead it had.
+//! changes when windows are sealed, never what is sealed. When the nodes'
+//! queues are full and still reach less than the lead (tiny moves), the
+//! moves not yet planned are planned longer; that is journaled (a `pace`
+//! record) so that `motet resume` plans them the same. If the host still
+//! falls behind the committed window's tail start, the nodes are braking:
+//! the run stops at once, saying how late the host was and what lead it had.
 
 use super::{NetError, NetRun};
 use crate::journal::JournalPace;
@@ -60,6 +62,8 @@ pub(super) struct Pace {
     due_at: Option<u64>,
     /// The lead the last window was sealed with, µs.
     sealed_lead: u64,
+    /// How long before the tail it replaced the last seal went out, µs.
+    last_margin: f64,
     /// Extra lead lateness asks for, µs.
     extra_us: u64,
     /// The most the lead is raised to, µs.
@@ -80,6 +84,7 @@ impl Pace {
             },
             due_at: None,
             sealed_lead: 0,
+            last_margin: f64::INFINITY,
             extra_us: 0,
             lead_max_us,
             reported_us: 0,
@@ -94,11 +99,13 @@ impl Pace {
     }
 
     /// A turn of the host at `now`: the time since the last is lateness.
-    pub(super) fn turn(&mut self, now: u64, base: u64) {
+    /// A gap longer than `deaf_us` was long enough to hide a node's
+    /// answers: silence before it is not counted.
+    pub(super) fn turn(&mut self, now: u64, base: u64, deaf_us: u64) {
         let gap = self.last_poll.map_or(0, |t| now.saturating_sub(t));
         self.last_poll = Some(now);
         self.last_gap_us = gap;
-        if gap > base / NOISE_FRACTION {
+        if gap > deaf_us {
             self.listening_since = now;
         }
         self.figures.worst_gap_us = self.figures.worst_gap_us.max(gap);
@@ -108,6 +115,7 @@ impl Pace {
     /// A seal goes out at `now`, `margin` µs before the committed tail would
     /// start.
     pub(super) fn sealing(&mut self, now: u64, margin: f64, base: u64) {
+        self.last_margin = margin;
         if margin.is_finite() {
             self.figures.least_margin_us = self.figures.least_margin_us.min(margin);
         }
@@ -245,11 +253,24 @@ impl NetRun {
     /// Why a node's refusal to take more segments stopped it, with the
     /// host's pace: a node refuses once it braked on its tail.
     pub(super) fn pace_context(&self) -> String {
-        let f = self.pace();
+        let p = &self.pace;
+        let gap = if p.last_gap_us > self.base_lead_us() / NOISE_FRACTION {
+            format!("the host had just had no turn for {}; ", ms(p.last_gap_us))
+        } else {
+            String::new()
+        };
+        let margin = if p.last_margin.is_finite() {
+            format!(
+                "the last window went out {} before the tail it replaced would start, ",
+                ms(p.last_margin.max(0.0) as u64)
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "the host's longest time without a turn was {}, the lead {}",
-            ms(f.worst_gap_us),
-            ms(self.pace.sealed_lead.max(f.lead_us)),
+            "{gap}{margin}with a lead of {}; the host's longest time without a turn was {}",
+            ms(p.sealed_lead),
+            ms(p.figures.worst_gap_us),
         )
     }
 }
