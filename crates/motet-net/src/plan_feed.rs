@@ -7,11 +7,12 @@
 //! and shortest move time give the same segments bit for bit: resuming
 //! re-plans the stopped run and compares the result with its journal.
 
-use crate::journal::JournalHeader;
+use crate::journal::{JournalHeader, JournalPace};
 use crate::source::{Sourced, SourcedPlanner};
 use motet_host::{Distributor, Machine};
 use motet_planner::{Command, Limits, Located, PlanError, Planned, Planner, SourceLoc};
 use motet_trajectory::{Point, Segment};
+use std::collections::VecDeque;
 
 /// The machine's limits as a run plans with them.
 pub fn run_limits(machine: &Machine, min_move_s: f64) -> Limits {
@@ -33,6 +34,9 @@ pub struct PlanFeed {
     finished: bool,
     exhausted: bool,
     open: bool,
+    /// Slowdowns still to apply, each before its command is planned (a
+    /// journaled run planned again).
+    paces: VecDeque<(usize, f64)>,
 }
 
 impl PlanFeed {
@@ -45,7 +49,28 @@ impl PlanFeed {
             finished: false,
             exhausted: false,
             open: false,
+            paces: VecDeque::new(),
         }
+    }
+
+    /// The slowdowns a run's journal recorded ([`PlanFeed::slow`]), applied
+    /// again at the same commands.
+    pub fn with_paces(mut self, paces: &[JournalPace]) -> PlanFeed {
+        self.paces = paces.iter().map(|p| (p.command, p.min_move_s)).collect();
+        self
+    }
+
+    /// Plans the commands not yet given to the planner with moves of at
+    /// least `min_move_s` seconds (what is planned stays as planned).
+    /// Returns the first command it applies to, for the journal.
+    pub fn slow(&mut self, min_move_s: f64) -> usize {
+        self.planner.set_min_move_s(min_move_s);
+        self.next_command
+    }
+
+    /// The shortest move time the next commands are planned with, seconds.
+    pub fn min_move_s(&self) -> f64 {
+        self.planner.min_move_s()
     }
 
     /// Keeps the feed open for [`PlanFeed::push`] until [`PlanFeed::close`].
@@ -102,6 +127,13 @@ impl PlanFeed {
                 s.item = dist.quantize(&s.item);
                 return Ok(Some(s));
             }
+            while let Some(&(from, s)) = self.paces.front() {
+                if from > self.next_command {
+                    break;
+                }
+                self.planner.set_min_move_s(s);
+                self.paces.pop_front();
+            }
             if let Some(c) = self.commands.get(self.next_command) {
                 self.planner
                     .push(self.next_command, &c.item)
@@ -121,18 +153,20 @@ impl PlanFeed {
 }
 
 /// A run's first `count` segments (fewer if the job has fewer), each with
-/// its command, planned again from what its journal header records.
+/// its command, planned again from what its journal header records and
+/// the slowdowns it journaled.
 pub fn replan(
     machine: &Machine,
     commands: Vec<Located<Command>>,
     header: &JournalHeader,
+    paces: &[JournalPace],
     count: usize,
 ) -> Result<Vec<(usize, Segment)>, (SourceLoc, PlanError)> {
     let mut dist = Distributor::new(machine);
     // As a run does when it configures the nodes: the stream starts here.
     dist.stream_setup(machine, &header.start);
     let limits = run_limits(machine, header.min_move_s);
-    let mut feed = PlanFeed::new(limits, header.start, header.t0, commands);
+    let mut feed = PlanFeed::new(limits, header.start, header.t0, commands).with_paces(paces);
     let mut out = Vec::new();
     while out.len() < count {
         match feed.next(&mut dist)? {

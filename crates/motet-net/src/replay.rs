@@ -61,7 +61,8 @@ impl Replayed {
 }
 
 /// Each machine node's tally for a run of `commands` whose journal starts
-/// with `header`, as the nodes would report it after finishing the job.
+/// with `header`, as the nodes would report it after finishing the job
+/// (a run that journaled no `pace` record: it was never slowed).
 pub fn replay(
     machine: &Machine,
     commands: Vec<Located<Command>>,

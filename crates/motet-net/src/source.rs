@@ -46,6 +46,16 @@ impl SourcedPlanner {
         Ok(())
     }
 
+    /// Moves pushed from now on take at least `min_move_s` seconds.
+    pub fn set_min_move_s(&mut self, min_move_s: f64) {
+        self.planner.set_min_move_s(min_move_s);
+    }
+
+    /// The shortest move time moves are planned with now, seconds.
+    pub fn min_move_s(&self) -> f64 {
+        self.planner.limits().min_move_s
+    }
+
     /// The job has ended: the planner plans its tail to rest.
     pub fn finish(&mut self) {
         self.planner.finish();

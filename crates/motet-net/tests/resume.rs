@@ -770,3 +770,85 @@ thread_local! {
     /// One stopped run for the property test (a stopped plotter job).
     static BASE: Evidence0 = Evidence0::of(&plotter_stopped());
 }
+
+/// A host that had no turn for longer than its lead: the nodes braked on
+/// their tails, the host stopped saying why, and the run resumes from its
+/// journal to the job's end.
+#[test]
+fn a_run_stopped_by_a_stalled_host_resumes_exactly() {
+    let machine = "examples/gestalt-3axis.toml";
+    let job = "examples/jobs/gestalt-3d.gcode";
+    let (mut s, jpath) = started(machine, job);
+    let want: Vec<i64> = simulated(&s.m, &s.cmds).iter().map(|&(_, p)| p).collect();
+    while s.lb.now < 9_000_000 {
+        s.lb.step().unwrap();
+    }
+    assert_eq!(s.lb.run.phase(), &Phase::Streaming);
+    s.lb.host_alive = false;
+    while s.lb.now < 14_000_000 {
+        s.lb.step().unwrap();
+    }
+    s.lb.host_alive = true;
+    let Phase::Stopped(info) = s.lb.run_until_settled(60_000_000).unwrap() else {
+        panic!("expected a stop");
+    };
+    assert!(info.reason.contains("the host had no turn"), "{info:?}");
+    assert!(info.all_at_rest(), "{info:?}");
+    s.journal = std::fs::read_to_string(&jpath).unwrap();
+    assert!(s.journal().stop.is_some());
+    let r = s.prove(None).unwrap();
+    assert_eq!(r.window_end, info.window_end);
+    finish(&mut s, &r);
+    assert_eq!(positions(&s.m, &s.lb), want);
+}
+
+/// Tiny moves, and a host stalled longer and longer: the run slows the
+/// moves it has not planned yet (journaled), then a stall longer than any
+/// lead stops it. Resume plans the job again with the same slowdowns, bit
+/// for bit, and finishes it.
+#[test]
+fn a_slowed_run_resumes_with_the_same_slowdowns() {
+    let dir = temp_dir();
+    let job = dir.path().join("arc.gcode");
+    let r = 0.02 / 1e-4;
+    let text: String = (1..=2_000)
+        .map(|k| {
+            let a = k as f64 * 1e-4;
+            format!("G1 X{:.4} Y{:.4} F250\n", r * a.sin(), r * (1.0 - a.cos()))
+        })
+        .collect();
+    std::fs::write(&job, text).unwrap();
+    let (mut s, jpath) = started("examples/printer.toml", job.to_str().unwrap());
+    let want: Vec<i64> = simulated(&s.m, &s.cmds).iter().map(|&(_, p)| p).collect();
+    while s.lb.run.progress().0 < 100 {
+        s.lb.step().unwrap();
+    }
+    let mut slowed = false;
+    for off in [60_000u64, 120_000, 200_000] {
+        let end = s.lb.now + 3_000_000;
+        while s.lb.now < end {
+            s.lb.host_alive = s.lb.now % 240_000 < 240_000 - off;
+            s.lb.step().unwrap();
+            slowed |= s.lb.run.take_notes().iter().any(|n| n.contains("slowed"));
+        }
+        s.lb.host_alive = true;
+        assert_eq!(s.lb.run.phase(), &Phase::Streaming);
+    }
+    assert!(slowed);
+    s.lb.host_alive = false;
+    let end = s.lb.now + 5_000_000;
+    while s.lb.now < end {
+        s.lb.step().unwrap();
+    }
+    s.lb.host_alive = true;
+    let Phase::Stopped(info) = s.lb.run_until_settled(60_000_000).unwrap() else {
+        panic!("expected a stop");
+    };
+    assert!(info.all_at_rest(), "{info:?}");
+    s.journal = std::fs::read_to_string(&jpath).unwrap();
+    assert!(!s.journal().paces.is_empty());
+    let r = s.prove(None).unwrap();
+    assert_eq!(r.window_end, info.window_end);
+    finish(&mut s, &r);
+    assert_eq!(positions(&s.m, &s.lb), want);
+}

@@ -214,6 +214,14 @@ impl Planner {
         &self.limits
     }
 
+    /// Plans the moves pushed from now on with this shortest move time,
+    /// seconds ([`Limits::min_move_s`]): a networked run slows what it has
+    /// not planned yet when the host falls behind. Moves already pushed
+    /// keep theirs.
+    pub fn set_min_move_s(&mut self, min_move_s: f64) {
+        self.limits.min_move_s = min_move_s;
+    }
+
     /// Host time at the end of everything emitted so far, µs.
     pub fn clock(&self) -> f64 {
         self.clock

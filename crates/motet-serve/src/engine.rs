@@ -59,6 +59,9 @@ pub fn serve_config() -> NetConfig {
     NetConfig {
         clock_bound_us: 1_000.0,
         lead_min_us: 10_000,
+        // A busy computer may lengthen the lead, but a person waiting for a
+        // hold to brake should not wait much longer.
+        lead_max_us: 200_000,
         window_us: 20_000,
         max_move_us: 20_000,
         ..NetConfig::default()

@@ -53,6 +53,9 @@ fn cfg(r: &RunRecord) -> NetConfig {
     // Timeouts are in the run's own (possibly scaled) time.
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c.connect_timeout_us = (c.connect_timeout_us as f64 * time_scale.max(1.0)) as u64;
+    // A busy computer's stalls are in wall time: the lead may grow to
+    // cover a quarter second of them, however fast the run's time goes.
+    c.lead_max_us = c.lead_max_us.max((250_000.0 * time_scale) as u64);
     c
 }
 
@@ -193,22 +196,15 @@ fn drive(
     let total = commands.len();
     let mut run = NetRun::new(machine, commands, peers, start, cfg(&record), Some(journal))
         .with_identity(identity);
-    let bar = if quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(total as u64);
-        b.set_style(
-            ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {pos}/{len} commands ({eta})")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        b
-    };
+    let bar = progress_bar(total, quiet);
     let started = std::time::Instant::now();
     let phase = loop {
         let now = clock.now_us();
         let phase = run.poll(now)?.clone();
         bar.set_position(run.progress().0 as u64);
+        for note in run.take_notes().into_iter().filter(|_| !quiet) {
+            bar.suspend(|| eprintln!("warning: {note}"));
+        }
         bar.set_message(match phase {
             Phase::Starting => "connecting",
             Phase::Streaming => "streaming",
@@ -235,6 +231,7 @@ fn drive(
         "windows": run.windows,
         "wall_s": started.elapsed().as_secs_f64(),
         "outcome": match &phase { Phase::Done => "done".to_string(), Phase::Stopped(s) => format!("stopped: {}", s.reason), _ => "?".into() },
+        "pace": pace_json(run.pace()),
         "lost": match &phase { Phase::Stopped(s) => s.lost.iter().map(|l| serde_json::json!({ "node": l.name, "why": l.why })).collect::<Vec<_>>(), _ => Vec::new() },
         "nodes": figures.iter().enumerate().map(|(k, f)| serde_json::json!({
             "name": f.name,
@@ -294,6 +291,35 @@ fn drive(
         }
         _ => unreachable!("the loop ends only when done or stopped"),
     }
+}
+
+/// The run's progress bar on a terminal (hidden with `-q` or when stderr
+/// is not one).
+fn progress_bar(total: usize, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(total as u64);
+    b.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {pos}/{len} commands ({eta})")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    b
+}
+
+/// How late the host ran (ms of the run's time) and the lead it ended with.
+fn pace_json(pace: motet_net::run::PaceFigures) -> serde_json::Value {
+    let least = pace
+        .least_margin_us
+        .is_finite()
+        .then_some(pace.least_margin_us / 1000.0);
+    serde_json::json!({
+        "worst_gap_ms": pace.worst_gap_us as f64 / 1000.0,
+        "worst_seal_late_ms": pace.worst_seal_late_us as f64 / 1000.0,
+        "least_margin_ms": least,
+        "lead_ms": pace.lead_us as f64 / 1000.0,
+    })
 }
 
 /// The node's committed window end and whether it stopped on its tail.

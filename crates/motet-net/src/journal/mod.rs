@@ -20,6 +20,9 @@
 //! stop END TAIL DONE TIME LOST                     the run stopped there; LOST: the
 //!                                                  machine nodes (indices, `,`) that
 //!                                                  stopped answering, or `-`
+//! pace COMMAND S                                   the commands from COMMAND on were
+//!                                                  planned with moves of at least S
+//!                                                  seconds (the host fell behind)
 //! ```
 //!
 //! The header carries what the plan depends on beyond the two files: where
@@ -205,6 +208,14 @@ pub enum BadRecord {
         /// The previous seal's.
         last: u32,
     },
+    /// A `pace` record for an earlier command than the one before it.
+    #[error("pace from command {command}, before the last pace's command {last}")]
+    PaceBack {
+        /// This record's first command.
+        command: usize,
+        /// The previous pace record's.
+        last: usize,
+    },
     /// A seal with fewer segments done, or an earlier host time, than the
     /// seal before it.
     #[error("segments done or host time going back")]
@@ -257,6 +268,16 @@ pub struct JournalSeal {
     pub done: u32,
     /// Host time of that report, µs.
     pub time: u64,
+}
+
+/// The run slowed what it had not planned yet: the commands from `command`
+/// on were planned with moves of at least `min_move_s` seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JournalPace {
+    /// The first command planned with it.
+    pub command: usize,
+    /// Shortest move time, s.
+    pub min_move_s: f64,
 }
 
 /// How a run stopped: the window and tail it stopped on, the segments every
@@ -374,6 +395,65 @@ mod tests {
         assert_eq!(j.done(), 4);
         assert_eq!(j.stop.as_ref().map(|s| s.lost.clone()), Some(vec![0, 2]));
         assert!(!j.torn_tail);
+    }
+
+    /// Pace records where the run wrote them (before the first segment,
+    /// after a seal, before the stop) read back and are written again in
+    /// the same places; one for an earlier command is refused.
+    #[test]
+    fn pace_records_read_back_in_place() {
+        let dir = tempfile::Builder::new()
+            .prefix("motet-journal-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("journal");
+        let mut w = JournalWriter::create(&path).unwrap();
+        w.header(&header()).unwrap();
+        let pace = |command, min_move_s| JournalPace {
+            command,
+            min_move_s,
+        };
+        w.pace(&pace(0, 0.01)).unwrap();
+        let segs = segs();
+        for s in &segs[..3] {
+            w.segment(s).unwrap();
+        }
+        let seal = JournalSeal {
+            end: 3,
+            tail: 1,
+            done: 0,
+            time: 10,
+        };
+        w.seal(seal).unwrap();
+        w.pace(&pace(4, 0.1 / 3.0)).unwrap();
+        for s in &segs[3..] {
+            w.segment(s).unwrap();
+        }
+        w.pace(&pace(7, 0.25)).unwrap();
+        w.stop(&JournalStop {
+            seal: JournalSeal { end: 3, ..seal },
+            lost: vec![],
+        })
+        .unwrap();
+        drop(w);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let j = Journal::parse(&text, "j").unwrap();
+        assert_eq!(
+            j.paces,
+            vec![pace(0, 0.01), pace(4, 0.1 / 3.0), pace(7, 0.25)]
+        );
+        assert_eq!(j.pace_after, vec![(0, 0), (3, 1), (5, 1)]);
+        assert_eq!(j.to_text(), text);
+        let lines: Vec<String> = text
+            .lines()
+            .map(|l| l.rsplit_once(" *").unwrap().0.replace("pace 7 ", "pace 3 "))
+            .collect();
+        let err = Journal::parse(&resign(&lines), "j").unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("pace from command 3, before the last pace's command 4"),
+            "{err}"
+        );
     }
 
     #[test]

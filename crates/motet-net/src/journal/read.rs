@@ -19,6 +19,10 @@ pub struct Journal {
     pub seals: Vec<JournalSeal>,
     /// How the run stopped; `None` if the host died before writing it.
     pub stop: Option<JournalStop>,
+    /// Every `pace` record, in order.
+    pub paces: Vec<JournalPace>,
+    /// How many segment and seal records came before each `pace` record.
+    pub pace_after: Vec<(usize, usize)>,
     /// Line of each segment record, for errors that name it.
     pub segment_lines: Vec<usize>,
     /// The file ended in a line cut short (the host died writing it). Only
@@ -56,6 +60,8 @@ impl Journal {
             segments: Vec::new(),
             seals: Vec::new(),
             stop: None,
+            paces: Vec::new(),
+            pace_after: Vec::new(),
             segment_lines: Vec::new(),
             torn_tail,
         };
@@ -115,6 +121,11 @@ impl Journal {
                         j.stop = Some(JournalStop { seal, lost });
                     }
                 }
+                "pace" => {
+                    let p = parse_pace(&mut words, j.paces.last()).map_err(|m| err(n, m))?;
+                    j.paces.push(p);
+                    j.pace_after.push((j.segments.len(), j.seals.len()));
+                }
                 "motet-journal" => return Err(err(n, BadRecord::SecondHeader)),
                 w => return Err(err(n, BadRecord::UnknownRecord(w.into()))),
             }
@@ -132,17 +143,29 @@ impl Journal {
         };
         out += &signed(&mut chain, &header_text(h));
         let mut next = 0usize;
-        for seal in &self.seals {
+        let mut paces = self.paces.iter().zip(&self.pace_after).peekable();
+        // The pace records written with `next` segments and `seals` seals before them.
+        let mut pace = |out: &mut String, chain: &mut u32, next: usize, seals: usize| {
+            while let Some((p, _)) = paces.next_if(|(_, &at)| at <= (next, seals)) {
+                *out += &signed(chain, &pace_text(p));
+            }
+        };
+        for (k, seal) in self.seals.iter().enumerate() {
             while next < seal.end as usize {
+                pace(&mut out, &mut chain, next, k);
                 out += &signed(&mut chain, &segment_text(&self.segments[next]));
                 next += 1;
             }
+            pace(&mut out, &mut chain, next, k);
             out += &signed(&mut chain, &seal_text("seal", seal));
         }
+        let seals = self.seals.len();
         while next < self.segments.len() {
+            pace(&mut out, &mut chain, next, seals);
             out += &signed(&mut chain, &segment_text(&self.segments[next]));
             next += 1;
         }
+        pace(&mut out, &mut chain, usize::MAX, seals);
         if let Some(stop) = &self.stop {
             out += &signed(&mut chain, &stop_text(stop));
         }
@@ -263,6 +286,29 @@ fn parse_segment<'a>(
         t1,
         start,
         end,
+    })
+}
+
+fn parse_pace<'a>(
+    words: &mut impl Iterator<Item = &'a str>,
+    last: Option<&JournalPace>,
+) -> Result<JournalPace, BadRecord> {
+    let command = num(words.next(), "command index")?;
+    let min_move_s = finite(
+        words
+            .next()
+            .ok_or(BadRecord::Missing("shortest move time"))?,
+    )?;
+    if let Some(w) = words.next() {
+        return Err(trailing(w, "pace"));
+    }
+    let last = last.map_or(0, |p| p.command);
+    if command < last {
+        return Err(BadRecord::PaceBack { command, last });
+    }
+    Ok(JournalPace {
+        command,
+        min_move_s,
     })
 }
 

@@ -34,6 +34,10 @@ pub(super) fn segment_text(s: &JournalSegment) -> String {
     )
 }
 
+pub(super) fn pace_text(p: &JournalPace) -> String {
+    format!("pace {} {:?}", p.command, p.min_move_s)
+}
+
 pub(super) fn seal_text(kind: &str, s: &JournalSeal) -> String {
     format!("{kind} {} {} {} {}", s.end, s.tail, s.done, s.time)
 }

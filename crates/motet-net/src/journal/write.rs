@@ -48,6 +48,12 @@ impl JournalWriter {
         self.sync()
     }
 
+    /// Appends a pace record (buffered: on disk with the next seal, before
+    /// any segment planned with it is sent).
+    pub fn pace(&mut self, p: &JournalPace) -> Result<(), JournalError> {
+        self.record(&pace_text(p))
+    }
+
     /// Appends the stop record, the last; on disk when this returns.
     pub fn stop(&mut self, s: &JournalStop) -> Result<(), JournalError> {
         self.record(&stop_text(s))?;

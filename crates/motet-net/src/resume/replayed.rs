@@ -59,7 +59,7 @@ impl<'a> Replayed<'a> {
                         });
                     }
                 }
-                replan(m, r.run_commands(ev.job), h, j.segments.len() + 1)
+                replan(m, r.run_commands(ev.job), h, &j.paces, j.segments.len() + 1)
                     .map_err(|(loc, error)| ResumeError::Replan { loc, error })?
             }
         };

@@ -13,10 +13,12 @@
 
 mod figures;
 mod group;
+mod pace;
 mod stop;
 mod window;
 
 pub use figures::{PeerFigures, Tally};
+pub use pace::PaceFigures;
 pub use stop::{LostNode, StopInfo};
 
 use crate::digest::Digest;
@@ -66,6 +68,10 @@ pub struct NetConfig {
     /// bus), each answer is an exact sample (reference broadcast). Off:
     /// one exchange per node, as on separate links.
     pub sync_to_all: bool,
+    /// Longest lead the run raises to when the host falls behind, µs
+    /// ([`NetRun::take_notes`] says when it does): a longer lead rides out
+    /// longer stalls of a busy host, and brakes that much later on a stop.
+    pub lead_max_us: u64,
 }
 
 impl Default for NetConfig {
@@ -80,6 +86,7 @@ impl Default for NetConfig {
             window_us: 1_000_000,
             max_move_us: 0,
             sync_to_all: true,
+            lead_max_us: 2_000_000,
         }
     }
 }
@@ -241,6 +248,8 @@ pub struct NetRun {
     status: Vec<Option<NodeMessage>>,
     /// Seals and stops to every node in one frame (a shared medium).
     group: Option<group::Group>,
+    /// How late the host runs, and the lead that covers it.
+    pace: pace::Pace,
 }
 
 impl NetRun {
@@ -298,6 +307,7 @@ impl NetRun {
             pauses: 0,
             status: vec![None; n],
             group: None,
+            pace: pace::Pace::new(cfg.lead_max_us),
         }
     }
 
@@ -404,8 +414,15 @@ impl NetRun {
         self.committed_end
     }
 
-    /// Least lead: the configured minimum or 2×RTT + 4×RTTVAR of the slowest link.
+    /// The lead kept: the least one ([`NetRun::base_lead_us`]), longer by
+    /// twice the worst lateness of the host seen so far, at most
+    /// [`NetConfig::lead_max_us`].
     pub fn lead_us(&self) -> u64 {
+        self.pace.lead(self.base_lead_us())
+    }
+
+    /// Least lead: the configured minimum or 2×RTT + 4×RTTVAR of the slowest link.
+    pub fn base_lead_us(&self) -> u64 {
         let rtt = self
             .peers
             .iter()
@@ -422,6 +439,11 @@ impl NetRun {
     pub fn poll(&mut self, now: u64) -> Result<&Phase, NetError> {
         if self.started_at.is_none() {
             self.started_at = Some(now);
+        }
+        if !matches!(self.phase, Phase::Done | Phase::Stopped(_)) {
+            let base = self.base_lead_us();
+            // Short stalls, however frequent, never hide a dead node.
+            self.pace.turn(now, base, self.cfg.node_timeout_us / 4);
         }
         let mut failed = None;
         for (k, p) in self.peers.iter_mut().enumerate() {
@@ -444,6 +466,9 @@ impl NetRun {
                 self.lose(k, format!("link error: {source}"), now);
             }
         }
+        // Before the replies: a node's refusal after its tail started says
+        // less than the host's own lateness.
+        self.check_behind(now);
         self.take_replies(now)?;
         self.keep_time(now)?;
         self.keep_group(now);
@@ -523,9 +548,12 @@ impl NetRun {
                     }
                     Incoming::Motion(NodeMessage::Refused { reason }) => {
                         let node = self.peers[k].name.clone();
-                        let message = format!("refused a message: {reason}");
+                        let mut message = format!("refused a message: {reason}");
                         if matches!(self.phase, Phase::Starting) {
                             return Err(NetError::Node { node, message });
+                        }
+                        if matches!(reason, Refusal::Stopped | Refusal::TailStarted) {
+                            message += &format!(" ({})", self.pace_context());
                         }
                         self.stop(&format!("node {node} {message}"), now);
                     }

@@ -169,7 +169,9 @@ impl NetRun {
                 lost = Some((k, format!("link failed ({e:?})")));
                 break;
             }
-            let silent = now.saturating_sub(p.last_heard.unwrap_or(now));
+            // Silence while the host itself had no turn is not the node's.
+            let heard = p.last_heard.unwrap_or(now).max(self.pace.listening_since);
+            let silent = now.saturating_sub(heard);
             if silent > self.cfg.node_timeout_us {
                 lost = Some((
                     k,
@@ -199,7 +201,10 @@ impl NetRun {
         if open.is_empty() {
             return self.stopped(info, now);
         }
-        if now as f64 > info.rest_time + self.cfg.node_timeout_us as f64 {
+        // Counted from the stop at the earliest: a host that stalled past
+        // the rest time gives the nodes a timeout to answer once it is back.
+        let rest = info.rest_time.max(info.braking_at);
+        if now as f64 > rest + self.cfg.node_timeout_us as f64 {
             for k in open {
                 self.lose(k, "did not report itself at rest".into(), now);
             }

@@ -130,7 +130,15 @@ impl NetRun {
                 }
                 break;
             }
+            let base = self.base_lead_us();
+            self.pace.sealing(now, self.deadline - t, base);
             self.seal(now)?;
+            let lead = self.lead_us();
+            self.pace.sealed(now, self.deadline, lead);
+        }
+        let short = self.deadline < t + lead && self.queued_on_nodes(now) >= self.capacity();
+        if short && matches!(self.phase, Phase::Streaming) {
+            self.slow_feed(lead as u64)?;
         }
         Ok(())
     }
