@@ -46,6 +46,9 @@ pub struct NodeClock {
     fault: Option<ClockFault>,
     /// When to exchange next, host µs.
     next_exchange: u64,
+    /// When the exchanges' own pace puts the next one, host µs (a probe of
+    /// a quiet node may come sooner).
+    planned: u64,
     /// When the last exchange went out, host µs.
     last_sent: Option<u64>,
     /// Models sent, and how many of them slewed.
@@ -60,6 +63,7 @@ impl Default for NodeClock {
             slewing_until: None,
             fault: None,
             next_exchange: 0,
+            planned: 0,
             last_sent: None,
             models_sent: (0, 0),
         }
@@ -147,6 +151,7 @@ impl NodeClock {
             (((limit - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
         };
         self.next_exchange = now + interval;
+        self.planned = self.next_exchange;
         self.last_sent = Some(now);
     }
 
@@ -171,7 +176,9 @@ impl NodeClock {
             }
             (h, sent) => h.max(sent).unwrap_or(0) + quiet_us,
         };
-        self.next_exchange = self.next_exchange.min(next);
+        // From the planned time each round: a repeat planned while an
+        // answer was on its way is dropped once it came.
+        self.next_exchange = self.planned.min(next);
     }
 
     /// The model to send at host time `now`, if the node needs one: its

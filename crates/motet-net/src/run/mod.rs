@@ -783,9 +783,19 @@ impl NetRun {
 
 /// A node's clock target, µs: the run's, or a quarter of the link's
 /// least round trip on a slow link (a serial line's byte times bound
-/// what its timestamps can tell).
+/// what its timestamps can tell). A node whose clock is measured by
+/// reference samples (a sync frame on a bus) is held to
+/// [`REFERENCE_TARGET_US`] at most: they can tell that much.
 fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
+    if p.references > 0 {
+        return cfg.clock_bound_us.min(REFERENCE_TARGET_US);
+    }
     let rtt = p.sync.min_rtt();
     let slow = if rtt.is_finite() { 0.25 * rtt } else { 0.0 };
     cfg.clock_bound_us.max(slow)
 }
+
+/// The clock target of a node measured by reference samples, µs: its
+/// model is replaced once a quarter of this off, so the node keeps within
+/// about 2 µs of the host.
+const REFERENCE_TARGET_US: f64 = 5.0;
