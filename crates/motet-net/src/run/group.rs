@@ -170,7 +170,7 @@ impl NetRun {
         // A lost datagram is only a missing sample.
         let _ = self.peers[k].send_time_to_all(now);
         for p in self.peers.iter_mut() {
-            let target = super::clock_target(&self.cfg, p);
+            let target = super::clocks::clock_target(&self.cfg, p);
             p.sync.exchanged(now, target, self.cfg.sync_interval_us);
             p.asked(now);
         }

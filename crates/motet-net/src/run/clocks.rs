@@ -1,0 +1,79 @@
+//! The run's clocks: exchanges with each node (or one sync frame for all
+//! on a shared medium), the models sent, and each node's clock target.
+
+use super::{NetConfig, NetError, NetRun, Phase};
+use crate::peer::Peer;
+use motet_wire::link::State;
+use motet_wire::service::ServiceRequest;
+
+impl NetRun {
+    /// Clock exchanges (also the heartbeat of a quiet node) and models,
+    /// in every phase; a node whose clock answered nonsense is refused.
+    pub(super) fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
+        let at_rest = matches!(self.phase, Phase::Starting);
+        // A node not heard for two thirds of its timeout is asked, and
+        // asked again every fifteenth (see `NodeClock::probe_after`).
+        let quiet = self.cfg.node_timeout_us * 2 / 3;
+        let mut fault = None;
+        // On a shared medium one sync frame serves every node.
+        let shared = self.group.is_some() && self.cfg.sync_to_all;
+        let mut to_all = false;
+        for p in self.peers.iter_mut() {
+            let target = clock_target(&self.cfg, p);
+            p.sync.probe_after(p.last_heard, quiet);
+            if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
+                // A lost datagram is only a missing sample.
+                if shared {
+                    to_all = true;
+                } else {
+                    let _ = p.send_time_get(now);
+                }
+            }
+            if let Some(f) = p.sync.fault() {
+                fault.get_or_insert((p.name.clone(), f));
+                continue;
+            }
+            if !matches!(p.link_state(), State::Established { .. }) {
+                continue;
+            }
+            // The model reaches the node about half a round trip later.
+            let delay = 0.5 * p.link().stats().srtt_us as f64;
+            if let Some(m) = p.sync.model_due(now, target, delay, at_rest) {
+                p.send_service(&ServiceRequest::TimeSet {
+                    offset: m.offset,
+                    skew: m.skew,
+                });
+            }
+        }
+        if to_all {
+            self.sync_all(now);
+        }
+        if let Some((node, f)) = fault {
+            let message = format!("its clock cannot be trusted: {f}; nothing moves on it");
+            if at_rest {
+                return Err(NetError::Node { node, message });
+            }
+            self.stop(&format!("node {node}: {message}"), now);
+        }
+        Ok(())
+    }
+}
+
+/// A node's clock target, µs: the run's, or a quarter of the link's
+/// least round trip on a slow link (a serial line's byte times bound
+/// what its timestamps can tell). A node whose clock is measured by
+/// reference samples (a sync frame on a bus) is held to
+/// [`REFERENCE_TARGET_US`] at most: they can tell that much.
+pub(super) fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
+    if p.references > 0 {
+        return cfg.clock_bound_us.min(REFERENCE_TARGET_US);
+    }
+    let rtt = p.sync.min_rtt();
+    let slow = if rtt.is_finite() { 0.25 * rtt } else { 0.0 };
+    cfg.clock_bound_us.max(slow)
+}
+
+/// The clock target of a node measured by reference samples, µs: its
+/// model is replaced once a quarter of this off, so the node keeps within
+/// about 2 µs of the host.
+const REFERENCE_TARGET_US: f64 = 5.0;
