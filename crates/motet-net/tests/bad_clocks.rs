@@ -1,0 +1,199 @@
+//! Nodes whose clocks cannot be trusted, on the three-node machine: a
+//! crystal out of range, a node started with another time scale, and a
+//! node whose clock answers exchanges no clock produces. Before the start
+//! the run is refused with an error naming the node; while moving it stops,
+//! every node resting on the path, and the other nodes' clocks are kept.
+
+mod common;
+
+use common::*;
+use motet_link::{Stamp, Transport};
+use motet_net::loopback::{Crystal, Loopback};
+use motet_net::{NetConfig, NetError, Phase};
+use motet_wire::frame::{self, MAX_FRAME, MAX_RAW};
+use motet_wire::service::{port, ServiceReply};
+use motet_wire::MAX_MESSAGE;
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+
+const MACHINE: &str = "examples/gestalt-3axis.toml";
+const JOB: &str = "examples/jobs/gestalt-3d.gcode";
+
+/// How a [`Liar`] rewrites the clock answers it sends.
+const HONEST: u8 = 0;
+/// `t3` before `t2`: the answer left before the request came.
+const ANSWERS_FIRST: u8 = 1;
+/// From the sixth answer on, the clock reads 10 s less than it does: it
+/// went back.
+const BACKWARDS: u8 = 2;
+
+/// A node's transport that rewrites its clock answers as `mode` says
+/// (switched while the run goes on).
+struct Liar {
+    inner: Box<dyn Transport + Send>,
+    mode: Arc<AtomicU8>,
+    /// Clock answers sent so far.
+    answers: u32,
+}
+
+impl Liar {
+    fn rewrite(&mut self, bytes: &[u8]) -> Option<Vec<u8>> {
+        let mode = self.mode.load(Ordering::Relaxed);
+        let mut raw = [0u8; MAX_RAW];
+        let f = frame::decode(bytes, &mut raw).ok()?;
+        if mode == HONEST || f.header.port != port::TIME {
+            return None;
+        }
+        let Ok(ServiceReply::Time { t1, t2, t3 }) = motet_wire::decode(f.payload) else {
+            return None;
+        };
+        self.answers += 1;
+        if mode == BACKWARDS && self.answers <= 5 {
+            return None;
+        }
+        let (t2, t3) = match mode {
+            ANSWERS_FIRST => (t3 + 50, t2),
+            _ => (t2 - 10_000_000, t3 - 10_000_000),
+        };
+        let mut buf = [0u8; MAX_MESSAGE];
+        let payload = motet_wire::encode(&ServiceReply::Time { t1, t2, t3 }, &mut buf).ok()?;
+        let mut out = [0u8; MAX_FRAME];
+        let n = frame::encode(&f.header, payload, &mut out).ok()?;
+        Some(out[..n].to_vec())
+    }
+}
+
+impl Transport for Liar {
+    fn name(&self) -> &str {
+        "liar"
+    }
+    fn send(&mut self, frame: &[u8]) -> std::io::Result<()> {
+        match self.rewrite(frame) {
+            Some(f) => self.inner.send(&f),
+            None => self.inner.send(frame),
+        }
+    }
+    fn recv(&mut self, t: Option<std::time::Duration>) -> std::io::Result<Option<Vec<u8>>> {
+        self.inner.recv(t)
+    }
+    fn stats(&self) -> &motet_link::LinkStats {
+        self.inner.stats()
+    }
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.inner.last_stamp()
+    }
+}
+
+/// The three-node run with node 1 (y_node) on `crystal` behind a [`Liar`]
+/// in `mode`; returns the run and the liar's switch.
+fn run_with(crystal: Crystal, mode: u8) -> (Loopback, Arc<AtomicU8>) {
+    let (m, cmds) = load(MACHINE, JOB);
+    let mut crystals = clocks(m.nodes.len());
+    crystals[1] = crystal;
+    let switch = Arc::new(AtomicU8::new(mode));
+    let mut links = clean_links(m.nodes.len());
+    let (host, node) = links.remove(1);
+    let liar = Liar {
+        inner: node,
+        mode: switch.clone(),
+        answers: 0,
+    };
+    links.insert(1, (host, Box::new(liar)));
+    let cfg = NetConfig::default();
+    let lb = Loopback::new(&m, cmds, m.start, links, &crystals, cfg);
+    (lb, switch)
+}
+
+/// Steps until the run streams, stops or fails, at most `max_us`.
+fn until_streaming(lb: &mut Loopback, max_us: u64) -> Result<(), NetError> {
+    while lb.now < max_us && lb.run.phase() != &Phase::Streaming {
+        lb.step()?;
+    }
+    Ok(())
+}
+
+#[test]
+fn a_clock_that_cannot_be_trusted_is_refused_before_anything_moves() {
+    let steady = Crystal {
+        ppm: 150.0,
+        offset_us: 77_000_000,
+    };
+    // (y_node's crystal, its answers, what the error says)
+    let cases = [
+        (
+            Crystal {
+                ppm: 800.0,
+                ..steady
+            },
+            HONEST,
+            "+800 ppm off the host's",
+        ),
+        (
+            Crystal {
+                ppm: -900.0,
+                ..steady
+            },
+            HONEST,
+            "-900 ppm off the host's",
+        ),
+        (Crystal { ppm: 1e6, ..steady }, HONEST, "--time-scale"),
+        (steady, ANSWERS_FIRST, "answered before it was asked"),
+        (steady, BACKWARDS, "cannot be trusted"),
+    ];
+    for (crystal, mode, says) in cases {
+        let (mut lb, _) = run_with(crystal, mode);
+        let Err(err) = until_streaming(&mut lb, 20_000_000) else {
+            panic!("{crystal:?} mode {mode}: not refused, {:?}", lb.run.phase())
+        };
+        let text = err.to_string();
+        assert!(
+            text.starts_with("node y_node: ") && text.contains(says),
+            "{crystal:?} mode {mode}: {text}"
+        );
+        // Nothing moved on any node.
+        assert!(
+            lb.nodes
+                .iter()
+                .all(|n| n.node.board.steps.iter().all(|&s| s == 0)),
+            "{crystal:?} mode {mode}: a node moved"
+        );
+    }
+}
+
+/// A clock that starts answering nonsense while the machine moves stops
+/// the run: every node brakes on its tail and rests on the path, the stop
+/// names the node, and the other nodes' clocks are still trusted.
+#[test]
+fn a_clock_that_turns_to_nonsense_while_moving_stops_the_run_on_the_path() {
+    let (mut lb, switch) = run_with(
+        Crystal {
+            ppm: 150.0,
+            offset_us: 77_000_000,
+        },
+        HONEST,
+    );
+    until_streaming(&mut lb, 20_000_000).unwrap();
+    let moving_at = lb.now + 5_000_000;
+    while lb.now < moving_at {
+        lb.step().unwrap();
+    }
+    switch.store(BACKWARDS, Ordering::Relaxed);
+    let Phase::Stopped(info) = lb.run_until_settled(60_000_000).unwrap() else {
+        panic!("the run must stop")
+    };
+    assert!(
+        info.reason.contains("y_node") && info.reason.contains("cannot be trusted"),
+        "{}",
+        info.reason
+    );
+    let peers = lb.run.peers();
+    assert!(peers[1].sync.fault().is_some());
+    assert!(peers[0].sync.fault().is_none() && peers[2].sync.fault().is_none());
+    // Every node came to rest where the plan says the stop put the machine.
+    lb.host_alive = false;
+    lb.run_until_settled(30_000_000).unwrap();
+    let m = load(MACHINE, JOB).0;
+    let want = steps_at(&m, &info.point);
+    let got: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
+    assert_eq!(got, want, "{info:?}");
+}
