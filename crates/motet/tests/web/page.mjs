@@ -47,6 +47,15 @@ try {
   out.age_ms = { p50: ages[Math.floor(ages.length / 2)], p95: ages[Math.floor(ages.length * 0.95)], max: ages[ages.length - 1] };
   step("running");
 
+  // A run that left "running" by itself says why on the page: show it.
+  if ((await page.evaluate(() => document.body.dataset.state)) !== "running") {
+    const said = await page.evaluate(() => ({
+      state: document.body.dataset.state,
+      error: document.getElementById("error").textContent,
+      events: document.getElementById("events").textContent.slice(-2000),
+    }));
+    throw new Error("the run left running before the pause: " + JSON.stringify(said));
+  }
   await page.click("#pause");
   await waitState("paused");
   const held = await page.textContent("#position");
