@@ -12,7 +12,7 @@ impl NetRun {
     pub(super) fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
         let at_rest = matches!(self.phase, Phase::Starting);
         // A node not heard for two thirds of its timeout is asked, and
-        // asked again every tenth of that (see `NodeClock::probe_after`).
+        // asked again every fifteenth (see `NodeClock::probe_after`).
         let quiet = self.cfg.node_timeout_us * 2 / 3;
         let mut fault = None;
         // On a shared medium one sync frame serves every node.
@@ -55,31 +55,6 @@ impl NetRun {
             }
             self.stop(&format!("node {node}: {message}"), now);
         }
-        // A crystal that leaves its range while the machine moves (a fault,
-        // a clock source gone bad) stops it as it would refuse the start;
-        // so does a clock the host no longer knows within a hundred times
-        // its target: the node moves on a time nobody can vouch for.
-        if matches!(self.phase, Phase::Streaming | Phase::Draining) {
-            if let Err(NetError::Node { node, message }) = self.check_rates() {
-                self.stop(&format!("node {node}: {message}"), now);
-                return Ok(());
-            }
-            // A node without a model (it restarted) or lost is another
-            // matter, handled where the run watches its nodes.
-            let lost = self.peers.iter().enumerate().find_map(|(k, p)| {
-                let limit = (LOST_TARGETS * clock_target(&self.cfg, p)).max(LOST_MIN_US);
-                let bound = p.sync.error_bound(now as f64);
-                let watched = !self.lost.iter().any(|l| l.node == k);
-                (watched && bound.is_finite() && bound > limit)
-                    .then(|| (p.name.clone(), bound, limit))
-            });
-            if let Some((node, bound, limit)) = lost {
-                self.stop(
-                    &format!("node {node}: its clock is no longer known within {limit:.0} µs (±{bound:.0} µs): it may have changed its rate"),
-                    now,
-                );
-            }
-        }
         Ok(())
     }
 }
@@ -102,9 +77,3 @@ pub(super) fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
 /// model is replaced once a quarter of this off, so the node keeps within
 /// about 2 µs of the host.
 const REFERENCE_TARGET_US: f64 = 5.0;
-
-/// A moving node's clock known no better than this many times its target
-/// stops the run.
-const LOST_TARGETS: f64 = 100.0;
-/// ... and never for less than this, µs.
-const LOST_MIN_US: f64 = 1_000.0;
