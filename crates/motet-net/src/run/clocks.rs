@@ -12,7 +12,7 @@ impl NetRun {
     pub(super) fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
         let at_rest = matches!(self.phase, Phase::Starting);
         // A node not heard for two thirds of its timeout is asked, and
-        // asked again every fifteenth (see `NodeClock::probe_after`).
+        // asked again every tenth of that (see `NodeClock::probe_after`).
         let quiet = self.cfg.node_timeout_us * 2 / 3;
         let mut fault = None;
         // On a shared medium one sync frame serves every node.
