@@ -11,10 +11,8 @@ use motet_link::Transport;
 use motet_net::digest::Digest;
 use motet_net::journal::{Journal, JournalWriter};
 use motet_net::loopback::Loopback;
-use motet_net::pairing_file::format_uid;
 use motet_net::resume::{prove, Evidence, Resumption};
-use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
-use motet_net::sim_node::sim_firmware;
+use motet_net::run_record::RunRecord;
 use motet_net::{NetConfig, Phase, RunIdentity};
 use motet_planner::{Command, Located};
 use motet_wire::frame::{self, Flags, Header, BROADCAST, MAX_FRAME};
@@ -64,31 +62,7 @@ impl BusRun {
             Some(JournalWriter::create(&journal).unwrap()),
         );
         lb.run.set_identity(identity);
-        let record = RunRecord {
-            format: RECORD_FORMAT,
-            run: format!("{:08x}", identity.run),
-            machine: root().join(MACHINE),
-            machine_sha256: identity.machine,
-            job: root().join(JOB),
-            job_sha256: identity.job,
-            allow_unknown: false,
-            time_scale: 1.0,
-            lead_ms: 100.0,
-            sync_ms: 400.0,
-            continues: None,
-            nodes: m
-                .nodes
-                .iter()
-                .enumerate()
-                .map(|(k, spec)| RunNode {
-                    name: spec.name.clone(),
-                    link: format!("can{k}"),
-                    address: 2 + k as u16,
-                    uid: format_uid(0x5157_0000 + k as u64),
-                    firmware: sim_firmware().to_string(),
-                })
-                .collect(),
-        };
+        let record = loopback_record(&m, root().join(MACHINE), root().join(JOB), identity, "can");
         BusRun {
             m,
             cmds,

@@ -9,10 +9,8 @@ use motet_host::Machine;
 use motet_net::digest::Digest;
 use motet_net::journal::{record_checksum, Journal, JournalWriter};
 use motet_net::loopback::Loopback;
-use motet_net::pairing_file::format_uid;
 use motet_net::resume::{prove, Evidence, NodeSeen, ResumeError, Resumption};
-use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
-use motet_net::sim_node::sim_firmware;
+use motet_net::run_record::RunRecord;
 use motet_net::{NetConfig, Phase, RunIdentity};
 use motet_planner::{Command, Located};
 use proptest::prelude::*;
@@ -85,31 +83,7 @@ fn started(machine: &str, job: &str) -> (Stopped, PathBuf) {
         Some(JournalWriter::create(&jpath).unwrap()),
     );
     lb.run.set_identity(identity);
-    let record = RunRecord {
-        format: RECORD_FORMAT,
-        run: format!("{:08x}", identity.run),
-        machine: root().join(machine),
-        machine_sha256: identity.machine,
-        job: job_path.clone(),
-        job_sha256: identity.job,
-        allow_unknown: false,
-        time_scale: 1.0,
-        lead_ms: 100.0,
-        sync_ms: 400.0,
-        continues: None,
-        nodes: m
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(k, spec)| RunNode {
-                name: spec.name.clone(),
-                link: format!("mem{k}"),
-                address: 2 + k as u16,
-                uid: format_uid(0x5157_0000 + k as u64),
-                firmware: sim_firmware().to_string(),
-            })
-            .collect(),
-    };
+    let record = loopback_record(&m, root().join(machine), job_path.clone(), identity, "mem");
     (
         Stopped {
             machine_text,

@@ -214,12 +214,7 @@ impl NetRun {
             return;
         }
         let lead = self.lead_us();
-        let rtt = self
-            .peers
-            .iter()
-            .map(|p| p.link().stats().srtt_us)
-            .max()
-            .unwrap_or(0);
+        let rtt = self.slowest_srtt_us();
         if sent && !repaired && now >= sent_at + (2 * rtt).max(lead / 8) {
             // It may have missed the frame: the seal again, through its link.
             for &(k, m) in &open {

@@ -26,15 +26,19 @@ pub(super) struct Committed {
 }
 
 impl NetRun {
-    /// Asks every node that takes segments for its status, at most once per
-    /// round trip.
-    pub(super) fn ask_room(&mut self, now: u64) {
-        let rtt = self
-            .peers
+    /// The smoothed round trip of the slowest link, µs.
+    pub(super) fn slowest_srtt_us(&self) -> u64 {
+        self.peers
             .iter()
             .map(|p| p.link().stats().srtt_us)
             .max()
-            .unwrap_or(0);
+            .unwrap_or(0)
+    }
+
+    /// Asks every node that takes segments for its status, at most once per
+    /// round trip.
+    pub(super) fn ask_room(&mut self, now: u64) {
+        let rtt = self.slowest_srtt_us();
         if self.room_asked_at.is_some_and(|t| now < t + rtt.max(1_000)) {
             return;
         }

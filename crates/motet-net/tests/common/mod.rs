@@ -130,3 +130,39 @@ pub fn node_windows(lb: &Loopback) -> Vec<(u32, bool)> {
         })
         .collect()
 }
+
+/// The run record `motet run` writes, for a loopback run of `m` with
+/// identity `identity`; node `k`'s link is named `{link}{k}`.
+pub fn loopback_record(
+    m: &Machine,
+    machine: std::path::PathBuf,
+    job: std::path::PathBuf,
+    identity: motet_net::RunIdentity,
+    link: &str,
+) -> motet_net::run_record::RunRecord {
+    motet_net::run_record::RunRecord {
+        format: motet_net::run_record::RECORD_FORMAT,
+        run: format!("{:08x}", identity.run),
+        machine,
+        machine_sha256: identity.machine,
+        job,
+        job_sha256: identity.job,
+        allow_unknown: false,
+        time_scale: 1.0,
+        lead_ms: 100.0,
+        sync_ms: 400.0,
+        continues: None,
+        nodes: m
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(k, spec)| motet_net::run_record::RunNode {
+                name: spec.name.clone(),
+                link: format!("{link}{k}"),
+                address: 2 + k as u16,
+                uid: motet_net::pairing_file::format_uid(0x5157_0000 + k as u64),
+                firmware: motet_net::sim_node::sim_firmware().to_string(),
+            })
+            .collect(),
+    }
+}

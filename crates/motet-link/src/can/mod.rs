@@ -7,10 +7,7 @@
 //! arbitration key wins; the losers try again in the next slot. The winner
 //! is delivered to every other node, in order.
 //!
-//! [`CanTransport`] splits the COBS-stuffed frame into 64-byte CAN-FD
-//! payloads under its node's id (the last one padded with 0x00 to a DLC
-//! length); the 0x00 delimiter ends the motet frame, so no fragment header
-//! is needed, and the receiver collects fragments per sender id.
+//! [`CanTransport`] (`transport.rs`) carries motet frames over a bus node.
 //!
 //! A bus made with [`CanBus::timed`] also takes time: a frame occupies the
 //! bus for its bits at the nominal and data rates ([`BusTiming`]), the next
@@ -21,14 +18,17 @@
 //! SocketCAN's `CAN_RAW_RECV_OWN_MSGS`): a frame every node hears at one
 //! instant is a shared reference for their clocks.
 
-use crate::clock::{Clock, Crystal};
+mod timing;
+mod transport;
+
+pub use timing::BusTiming;
+pub use transport::{fragment, CanTransport};
+
+use crate::clock::Clock;
 use crate::slcan::{fd_round_up, CanFrame, MAX_EXT_ID, MAX_STD_ID};
-use crate::{LinkStats, Stamp, StreamSplitter, Transport};
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::fmt;
-use std::io;
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::Duration;
 
 /// CAN-FD payload per fragment.
 pub const FD_CHUNK: usize = 64;
@@ -58,51 +58,6 @@ impl fmt::Display for BusError {
 }
 
 impl std::error::Error for BusError {}
-
-/// How long frames take on the bus: the arbitration and acknowledgement
-/// bits at the nominal rate, a CAN-FD frame's data phase (with the bit-rate
-/// switch) at the data rate. Stuff bits are not counted.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BusTiming {
-    /// Nominal (arbitration) bit rate, bits per second.
-    pub nominal_bps: f64,
-    /// Data-phase bit rate, bits per second.
-    pub data_bps: f64,
-}
-
-impl BusTiming {
-    /// CAN-FD at 1 Mbit/s nominal and 5 Mbit/s data, as common FD
-    /// controllers and transceivers run.
-    pub const FD_1M_5M: BusTiming = BusTiming {
-        nominal_bps: 1e6,
-        data_bps: 5e6,
-    };
-
-    /// Time `f` occupies the bus, µs, with the interframe space.
-    pub fn frame_us(&self, f: &CanFrame) -> f64 {
-        let n = f.data.len() as f64;
-        let id_bits = if f.extended { 31.0 } else { 12.0 };
-        // ACK slot and delimiter, end of frame, interframe space.
-        let tail = 12.0;
-        if f.fd {
-            // SOF, id, RRS/IDE/FDF/res/BRS; then ESI, DLC, data, stuff
-            // count, CRC (17 bits up to 16 bytes, 21 beyond), delimiter.
-            let head = 1.0 + id_bits + 5.0;
-            let crc = if n <= 16.0 { 17.0 } else { 21.0 };
-            let data = 1.0 + 4.0 + 8.0 * n + 4.0 + crc + 1.0;
-            let data_rate = if f.brs {
-                self.data_bps
-            } else {
-                self.nominal_bps
-            };
-            1e6 * ((head + tail) / self.nominal_bps + data / data_rate)
-        } else {
-            // SOF, id, RTR/IDE/r0, DLC, data, CRC 15 and delimiter.
-            let bits = 1.0 + id_bits + 3.0 + 4.0 + 8.0 * n + 16.0 + tail;
-            1e6 * bits / self.nominal_bps
-        }
-    }
-}
 
 /// A frame as a node receives it: when its end of frame passed (bus µs, on
 /// a timed bus) and whether the node sent it itself.
@@ -408,134 +363,11 @@ impl CanNode {
     }
 }
 
-/// Splits an encoded motet frame (delimiter added if missing) into CAN-FD
-/// payloads of at most 64 bytes, the last one padded with 0x00 to a DLC
-/// length.
-pub fn fragment(frame: &[u8]) -> Vec<Vec<u8>> {
-    let mut bytes = frame.to_vec();
-    if bytes.last() != Some(&0) {
-        bytes.push(0);
-    }
-    bytes
-        .chunks(FD_CHUNK)
-        .map(|c| {
-            let mut c = c.to_vec();
-            let n = fd_round_up(c.len()).unwrap_or(FD_CHUNK);
-            c.resize(n, 0);
-            c
-        })
-        .collect()
-}
-
-/// Bound on bus slots simulated per [`Transport::recv`].
-const MAX_SLOTS_PER_RECV: usize = 1 << 16;
-
-/// motet frames over a [`CanBus`] node.
-#[derive(Debug)]
-pub struct CanTransport {
-    name: String,
-    node: CanNode,
-    /// Only frames from this id are taken (all senders if `None`).
-    peer: Option<u32>,
-    splitters: BTreeMap<u32, StreamSplitter>,
-    /// Frames reassembled, each with the stamp of its last fragment.
-    ready: VecDeque<(Vec<u8>, Option<Stamp>)>,
-    last_stamp: Option<Stamp>,
-    /// The receiver's clock against the bus's, for stamps.
-    crystal: Crystal,
-    stats: LinkStats,
-}
-
-impl CanTransport {
-    /// A transport sending under `node`'s identifier and taking only frames
-    /// from `peer` (every sender's if `None`, each reassembled separately).
-    /// Stamps read the bus's clock as it is.
-    pub fn new(node: CanNode, peer: Option<u32>) -> CanTransport {
-        CanTransport::with_clock(node, peer, Crystal::default())
-    }
-
-    /// [`CanTransport::new`] on a receiver whose clock reads `crystal`'s
-    /// local time for the bus's: its stamps are in its own clock.
-    pub fn with_clock(node: CanNode, peer: Option<u32>, crystal: Crystal) -> CanTransport {
-        CanTransport {
-            name: format!("can:{:#x}", node.id()),
-            node,
-            peer,
-            splitters: BTreeMap::new(),
-            ready: VecDeque::new(),
-            last_stamp: None,
-            crystal,
-            stats: LinkStats::default(),
-        }
-    }
-
-    /// The bus node it sends under.
-    pub fn node(&self) -> &CanNode {
-        &self.node
-    }
-}
-
-impl Transport for CanTransport {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
-        let parts = fragment(frame);
-        let n: usize = parts.iter().map(Vec::len).sum();
-        for p in parts {
-            self.node
-                .transmit(&p)
-                .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
-        }
-        self.stats.sent(n);
-        Ok(())
-    }
-
-    /// The simulated bus is synchronous: this runs it until idle and never
-    /// waits, whatever `timeout` says.
-    fn recv(&mut self, _timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        if self.ready.is_empty() {
-            self.node.bus().run(MAX_SLOTS_PER_RECV);
-            while let Some(r) = self.node.receive_stamped() {
-                let f = &r.frame;
-                if self.peer.is_some_and(|p| p != f.id) || !f.fd {
-                    continue;
-                }
-                let stamp = r.at_us.map(|t| Stamp {
-                    at_us: self.crystal.local(t),
-                    own: r.own,
-                });
-                let ready = &mut self.ready;
-                self.splitters
-                    .entry(f.id)
-                    .or_default()
-                    .push(&f.data, &mut |bytes| ready.push_back((bytes, stamp)));
-            }
-        }
-        let Some((f, stamp)) = self.ready.pop_front() else {
-            return Ok(None);
-        };
-        self.last_stamp = stamp;
-        self.stats.received(f.len());
-        Ok(Some(f))
-    }
-
-    fn last_stamp(&self) -> Option<Stamp> {
-        self.last_stamp
-    }
-
-    fn stats(&self) -> &LinkStats {
-        &self.stats
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::clock::SimClock;
-    use crate::testutil::link_exchange;
-    use motet_wire::frame::{decode, encode, Flags, Header, MAX_FRAME};
+    use std::collections::BTreeMap;
 
     fn tagged(node: &CanNode, tag: u8) {
         node.transmit(&[tag]).unwrap();
@@ -611,33 +443,6 @@ mod tests {
         assert_eq!(got, want);
     }
 
-    #[test]
-    fn frame_times() {
-        let t = BusTiming::FD_1M_5M;
-        // (frame, µs): bits at 1 and 5 Mbit/s, interframe space included.
-        let cases = [
-            (CanFrame::standard(0x10, &[0; 8]), 112.0),
-            (CanFrame::standard(0x10, &[]), 48.0),
-            (CanFrame::fd(0x10, false, &[0; 64]), 30.0 + 543.0 / 5.0),
-            (CanFrame::fd(0x10, false, &[0; 8]), 30.0 + 91.0 / 5.0),
-            (
-                CanFrame {
-                    brs: false,
-                    ..CanFrame::fd(0x10, false, &[0; 8])
-                },
-                30.0 + 91.0,
-            ),
-            (CanFrame::fd(0x10, true, &[0; 8]), 49.0 + 91.0 / 5.0),
-        ];
-        for (f, want) in cases {
-            assert!(
-                (t.frame_us(&f) - want).abs() < 1e-9,
-                "{f:?}: {}",
-                t.frame_us(&f)
-            );
-        }
-    }
-
     /// On a timed bus a frame reaches every receiver at its end of frame,
     /// the next arbitration waits for the wire, and every receiver (the
     /// sender hearing its own included) stamps one instant.
@@ -673,45 +478,6 @@ mod tests {
         assert_eq!(heard(&a), vec![(0x20, first, false), (0x10, second, true)]);
         assert_eq!(heard(&b), vec![(0x10, second, false)]);
         assert_eq!(bus.step(), None, "a timed bus runs on its clock");
-    }
-
-    /// A transport stamps what it receives in its own clock: the bus's end
-    /// of frame read through its crystal.
-    #[test]
-    fn transport_stamps_in_its_own_clock() {
-        let clock = SimClock::new();
-        let bus = CanBus::timed(BusTiming::FD_1M_5M, Arc::new(clock.clone()));
-        let crystal = Crystal {
-            ppm: 100.0,
-            offset_us: 5_000_000,
-        };
-        let mut a = CanTransport::new(bus.attach_hearing_own(0x10, false).unwrap(), None);
-        let mut b = CanTransport::with_clock(bus.attach(0x20, false).unwrap(), None, crystal);
-        clock.set(1_000_000);
-        a.send(&frame(1, 100)).unwrap();
-        clock.set(2_000_000);
-        let f = b.recv(None).unwrap().unwrap();
-        assert_eq!(decode(&f, &mut [0u8; MAX_FRAME]).unwrap().header.seq, 1);
-        let end = 1_000_000.0
-            + fragment(&frame(1, 100))
-                .iter()
-                .map(|p| BusTiming::FD_1M_5M.frame_us(&CanFrame::fd(0x10, false, p)))
-                .sum::<f64>();
-        assert_eq!(
-            b.last_stamp(),
-            Some(Stamp {
-                at_us: crystal.local(end),
-                own: false
-            })
-        );
-        assert!(a.recv(None).unwrap().is_some());
-        assert_eq!(
-            a.last_stamp(),
-            Some(Stamp {
-                at_us: end as u64,
-                own: true
-            })
-        );
     }
 
     #[test]
@@ -759,83 +525,5 @@ mod tests {
         );
         assert_eq!(a.transmit(&[0; 13]), Err(BusError::BadLength(13)));
         assert_eq!(a.pending(), 0);
-    }
-
-    fn frame(seq: u16, len: usize) -> Vec<u8> {
-        let h = Header {
-            dst: 2,
-            src: 1,
-            port: 10,
-            flags: Flags::DATA,
-            seq,
-            ack: 0,
-        };
-        let p: Vec<u8> = (0..len).map(|i| i as u8 ^ 0x5A).collect();
-        let mut out = [0u8; MAX_FRAME];
-        let n = encode(&h, &p, &mut out).unwrap();
-        out[..n].to_vec()
-    }
-
-    #[test]
-    fn fragment_sizes() {
-        // (payload length, CAN-FD payload lengths on the bus)
-        let cases: &[(usize, &[usize])] = &[
-            (0, &[16]),
-            (14, &[32]),
-            (48, &[64]),
-            (50, &[64, 2]),
-            (60, &[64, 12]),
-            (192, &[64, 64, 64, 16]),
-        ];
-        for &(len, want) in cases {
-            let f = frame(1, len);
-            let parts = fragment(&f);
-            let sizes: Vec<usize> = parts.iter().map(Vec::len).collect();
-            assert_eq!(sizes, want, "payload {len}");
-            let joined: Vec<u8> = parts.concat();
-            assert_eq!(&joined[..f.len()], &f[..]);
-            assert!(joined[f.len()..].iter().all(|&b| b == 0));
-        }
-    }
-
-    #[test]
-    fn transport_frames_and_lost_fragment() {
-        let bus = CanBus::new();
-        let mut a = CanTransport::new(bus.attach(0x20, false).unwrap(), Some(0x21));
-        let mut b = CanTransport::new(bus.attach(0x21, false).unwrap(), Some(0x20));
-        let stranger = bus.attach(0x01, false).unwrap();
-        stranger.transmit(&[1, 2, 3, 0]).unwrap();
-        for (i, len) in [0usize, 30, 100, 192].iter().enumerate() {
-            a.send(&frame(i as u16, *len)).unwrap();
-        }
-        let mut raw = [0u8; MAX_FRAME];
-        for (i, len) in [0usize, 30, 100, 192].iter().enumerate() {
-            let f = b.recv(None).unwrap().unwrap();
-            let d = decode(&f, &mut raw).unwrap();
-            assert_eq!((d.header.seq, d.payload.len()), (i as u16, *len));
-        }
-        assert_eq!(b.recv(None).unwrap(), None);
-        // A lost fragment spoils one frame; the next decodes.
-        let parts = fragment(&frame(7, 150));
-        for (i, p) in parts.iter().enumerate() {
-            if i != 1 {
-                a.node().transmit(p).unwrap();
-            }
-        }
-        a.send(&frame(8, 20)).unwrap();
-        let bad = b.recv(None).unwrap().unwrap();
-        assert!(decode(&bad, &mut raw).is_err());
-        let good = b.recv(None).unwrap().unwrap();
-        assert_eq!(decode(&good, &mut raw).unwrap().header.seq, 8);
-    }
-
-    #[test]
-    fn link_over_can_delivers_1000_in_order() {
-        let bus = CanBus::new();
-        let mut a = CanTransport::new(bus.attach(0x10, false).unwrap(), Some(0x11));
-        let mut b = CanTransport::new(bus.attach(0x11, false).unwrap(), Some(0x10));
-        let x = link_exchange(&mut a, &mut b, 1000, None);
-        assert_eq!(x.got, (0..1000).collect::<Vec<u32>>());
-        assert_eq!(x.host.retransmits, 0);
     }
 }
