@@ -34,7 +34,7 @@ pub fn fragment(frame: &[u8]) -> Vec<Vec<u8>> {
 /// Bound on bus slots simulated per [`Transport::recv`].
 const MAX_SLOTS_PER_RECV: usize = 1 << 16;
 
-/// motet frames over a [`CanBus`] node.
+/// motet frames over a [`CanBus`](super::CanBus) node.
 #[derive(Debug)]
 pub struct CanTransport {
     name: String,
