@@ -77,8 +77,16 @@ impl NodeClock {
         if self.fault.is_some() {
             return;
         }
+        let changes = self.est.changes();
         if let Err(f) = self.est.add(e) {
             self.fault = Some(f);
+        }
+        if self.est.changes() > changes {
+            // The node's rate changed: the estimate starts again, and its
+            // exchanges are fast again at once, not at the rare time the
+            // old estimate had planned.
+            self.next_exchange = self.next_exchange.min(e.t4 + FAST_US);
+            self.planned = self.planned.min(self.next_exchange);
         }
     }
 
@@ -161,14 +169,16 @@ impl NodeClock {
     }
 
     /// Brings the next exchange forward to `quiet_us` after the later of
-    /// the last frame heard (`heard`) and the last exchange: an exchange is
-    /// also the heartbeat of a node that has nothing else to say. One not
-    /// answered (nothing heard since) is repeated after a tenth of that, or
-    /// four least round trips if longer: a quiet node is asked several
-    /// times within its timeout, so a few frames lost in a row do not make
-    /// it look gone.
-    pub fn probe_after(&mut self, heard: Option<u64>, quiet_us: u64) {
-        let next = match (heard, self.last_sent) {
+    /// the last frame heard (`heard`) and the last request: an exchange is
+    /// also the heartbeat of a node that has nothing else to say. Other
+    /// requests the node answers (`asked`: a seal) count as asking. One not
+    /// answered (nothing heard since) is followed by an exchange after a
+    /// tenth of that, or four least round trips if longer: a quiet node is
+    /// asked several times within its timeout, so a few frames lost in a
+    /// row do not make it look gone.
+    pub fn probe_after(&mut self, heard: Option<u64>, asked: Option<u64>, quiet_us: u64) {
+        let last = self.last_sent.max(asked);
+        let next = match (heard, last) {
             (h, Some(sent)) if h.is_none_or(|h| h < sent) => {
                 let rtt = self.est.min_rtt();
                 let rtt = if rtt.is_finite() { 4.0 * rtt } else { 0.0 };

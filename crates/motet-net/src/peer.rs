@@ -65,6 +65,9 @@ pub struct Peer {
     outbox: VecDeque<Outgoing>,
     /// Host time of the last frame from the node, µs.
     pub last_heard: Option<u64>,
+    /// Host time of the last request the node answers on the reliable
+    /// link (a seal), µs: like a clock exchange, it asks the node to speak.
+    pub last_asked: Option<u64>,
     /// Frames that came from another address than the node's.
     pub wrong_address: u64,
     /// Frames that did not decode (CRC, COBS, length).
@@ -109,6 +112,7 @@ impl Peer {
             sync: NodeClock::default(),
             outbox: VecDeque::new(),
             last_heard: None,
+            last_asked: None,
             wrong_address: 0,
             bad_frames: 0,
             inbox: VecDeque::new(),

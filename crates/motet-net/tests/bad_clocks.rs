@@ -197,3 +197,46 @@ fn a_clock_that_turns_to_nonsense_while_moving_stops_the_run_on_the_path() {
     let got: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
     assert_eq!(got, want, "{info:?}");
 }
+
+/// A crystal that leaves its range while the machine moves (its rate
+/// jumps from +150 to +900 ppm, its time going on without a jump): the run
+/// stops by name once the rate is surely out of range, every node resting
+/// on the path.
+#[test]
+fn a_crystal_that_leaves_its_range_while_moving_stops_the_run() {
+    let (mut lb, _) = run_with(
+        Crystal {
+            ppm: 150.0,
+            offset_us: 77_000_000,
+        },
+        HONEST,
+    );
+    until_streaming(&mut lb, 20_000_000).unwrap();
+    let moving_at = lb.now + 5_000_000;
+    while lb.now < moving_at {
+        lb.step().unwrap();
+    }
+    let y = &mut lb.nodes[1];
+    let h = lb.now as f64;
+    let at = y.offset_us as f64 + h * (1.0 + y.ppm * 1e-6);
+    y.ppm = 900.0;
+    y.offset_us = (at - h * (1.0 + y.ppm * 1e-6)).round() as u64;
+    let Phase::Stopped(info) = lb.run_until_settled(60_000_000).unwrap() else {
+        panic!(
+            "the run must stop: {:?}, y skew {:.1} ppm ± {:.1}",
+            lb.run.phase(),
+            lb.run.peers()[1].sync.model().skew * 1e6,
+            lb.run.peers()[1].sync.skew_bound() * 1e6
+        )
+    };
+    assert!(
+        info.reason.contains("y_node") && info.reason.contains("ppm off the host's"),
+        "{}",
+        info.reason
+    );
+    lb.host_alive = false;
+    lb.run_until_settled(30_000_000).unwrap();
+    let m = load(MACHINE, JOB).0;
+    let got: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
+    assert_eq!(got, steps_at(&m, &info.point), "{info:?}");
+}

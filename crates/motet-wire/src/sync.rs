@@ -352,13 +352,35 @@ impl ClockSync {
             let allowed = self.cfg.confidence * 2.0 * before.halves[1].edge + 2.0;
             if self.fit.gap() < before.gap() - allowed {
                 self.changes += 1;
+                // A change found again before the data decided the last:
+                // the rate moved further than the prior allows, which then
+                // only holds the fit back (it would restart at every few
+                // exchanges, never reaching the new rate). The new
+                // exchanges decide alone.
+                let unresolved = self.prior_bound < B_RANGE;
                 self.prior_b = before.b;
-                self.prior_bound = CHANGE_BOUND;
-                // The old fit was right until shortly before the change:
-                // its band where the newest exchanges begin anchors the
-                // new fit's offset, and the new exchanges give the slope.
-                let keep = RECENT / 2;
-                let x = self.samples[self.len - keep].xf;
+                self.prior_bound = if unresolved { B_RANGE } else { CHANGE_BOUND };
+                // The old fit was right until the change: its band at the
+                // last exchange it still explains anchors the new fit's
+                // offset, and the exchanges it does not explain (the
+                // newest, at most a few) give the slope. With rare
+                // exchanges that is one: keeping older ones would mix the
+                // two rates into a fit that suits neither.
+                let tol = 0.5 * allowed;
+                let off = |s: &Sample| {
+                    let below = (before.c_f + before.b * s.xf) - s.f;
+                    let above = s.r - (before.c_r + before.b * s.xr);
+                    below.max(above) > tol
+                };
+                let keep = (1..=RECENT / 2)
+                    .take_while(|&k| off(&self.samples[self.len - k]))
+                    .count()
+                    .max(1);
+                let x = if self.len > keep {
+                    self.samples[self.len - keep - 1].xr
+                } else {
+                    self.samples[0].xf
+                };
                 let (theta, half) = (before.theta(x), 0.5 * before.gap());
                 self.samples.copy_within(self.len - keep..self.len, 1);
                 self.samples[0] = Sample {

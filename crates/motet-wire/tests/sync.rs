@@ -235,6 +235,41 @@ fn tracks_a_drift_change() {
     }
 }
 
+/// A rate that jumps further than a crystal moves at once (a clock source
+/// gone bad, a board swapped under a running host): the estimate still
+/// reaches the new rate, so the host sees it (and a run stops on a rate out
+/// of range) rather than holding on to the old one.
+#[test]
+fn follows_a_jump_beyond_the_change_bound() {
+    // (seed, skew before, skew after)
+    let cases = [
+        (21, 150e-6, 900e-6),
+        (22, 0.0, -700e-6),
+        (23, 200e-6, -200e-6),
+    ];
+    for (seed, from, to) in cases {
+        let (before, during, after, _, settle15, sync) = drift_step(seed, from, to);
+        eprintln!(
+            "jump {:+.0} → {:+.0} ppm at 60 s: max error before {before:.1} µs, in the 40 s after {during:.1} µs, from 100 s on {after:.1} µs, last over 15 µs {settle15:.1} s after; skew now {:.2} ppm, {} changes",
+            from * 1e6,
+            to * 1e6,
+            sync.model().skew * 1e6,
+            sync.changes()
+        );
+        assert!(before <= 10.0, "seed {seed}: {before:.1} µs before");
+        assert!(
+            settle15 <= 20.0,
+            "seed {seed}: settled after {settle15:.1} s"
+        );
+        assert!(after <= 10.0, "seed {seed}: {after:.1} µs after");
+        assert!(
+            (sync.model().skew - to).abs() < 1e-6,
+            "seed {seed}: skew {:.2} ppm",
+            sync.model().skew * 1e6
+        );
+    }
+}
+
 #[test]
 fn stalls_are_gated_out() {
     // Every 50th exchange is held up by 30 ms (a retransmission, a busy host).

@@ -12,15 +12,16 @@ impl NetRun {
     pub(super) fn keep_time(&mut self, now: u64) -> Result<(), NetError> {
         let at_rest = matches!(self.phase, Phase::Starting);
         // A node not heard for two thirds of its timeout is asked, and
-        // asked again every tenth of that (see `NodeClock::probe_after`).
-        let quiet = self.cfg.node_timeout_us * 2 / 3;
+        // asked again every tenth of that (see `NodeClock::probe_after`);
+        // while windows flow, a seal asks first (`NetRun::quiet_node`).
+        let quiet = self.quiet_us();
         let mut fault = None;
         // On a shared medium one sync frame serves every node.
         let shared = self.group.is_some() && self.cfg.sync_to_all;
         let mut to_all = false;
         for p in self.peers.iter_mut() {
             let target = clock_target(&self.cfg, p);
-            p.sync.probe_after(p.last_heard, quiet);
+            p.sync.probe_after(p.last_heard, p.last_asked, quiet);
             if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
                 // A lost datagram is only a missing sample.
                 if shared {
@@ -55,7 +56,42 @@ impl NetRun {
             }
             self.stop(&format!("node {node}: {message}"), now);
         }
+        // A crystal that leaves its range while the machine moves (a fault,
+        // a clock source gone bad) stops it as it would refuse the start.
+        // (Only a rate: a bound that grows, as an emulated board's does on
+        // a loaded computer, is the estimate's doubt, not the node's fault.)
+        if matches!(self.phase, Phase::Streaming | Phase::Draining) {
+            if let Err(NetError::Node { node, message }) = self.check_rates() {
+                self.stop(&format!("node {node}: {message}"), now);
+            }
+        }
         Ok(())
+    }
+}
+
+impl NetRun {
+    /// How long a node may stay silent before it is asked to speak, µs:
+    /// two thirds of its timeout, which leaves time to ask again.
+    pub(super) fn quiet_us(&self) -> u64 {
+        self.cfg.node_timeout_us * 2 / 3
+    }
+
+    /// Some node that takes segments has been neither heard nor asked for
+    /// nearly [`NetRun::quiet_us`]: sealing a window now asks it (its
+    /// status comes back) before a clock exchange would, which costs frames
+    /// of its own. (On a
+    /// shared medium every member's heartbeat says it is there.)
+    pub(super) fn quiet_node(&self, now: u64) -> bool {
+        if self.group.is_some() {
+            return false;
+        }
+        let quiet = self.quiet_us() * 9 / 10;
+        self.peers.iter().enumerate().any(|(k, p)| {
+            self.dist.next_seq(k).is_some()
+                && p.last_heard
+                    .max(p.last_asked)
+                    .is_some_and(|t| now >= t + quiet)
+        })
     }
 }
 

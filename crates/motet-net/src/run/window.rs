@@ -114,7 +114,10 @@ impl NetRun {
                 self.before = s.end;
             }
         }
-        while self.deadline < t + lead {
+        // A window is sealed when the committed one runs short, or early
+        // when a node has been quiet long enough to be asked (the seal
+        // asks, see `quiet_node`).
+        while self.deadline < t + lead || self.quiet_node(now) {
             // One seal in flight at a time: a node that missed a seal can then
             // differ from the others by at most that one window.
             if self.peers.iter().any(|p| p.seal_in_flight()) || self.group_busy() {
@@ -286,6 +289,7 @@ impl NetRun {
             }
             if let (Some(next_seq), None) = (self.dist.next_seq(k), &self.group) {
                 self.peers[k].send_motion(&HostMessage::Seal { next_seq });
+                self.peers[k].last_asked = Some(now);
             }
         }
         if self.group.is_some() {

@@ -69,15 +69,14 @@ impl<'a> BatchReader<'a> {
         } else {
             return None;
         };
-        let (mut length, mut dwell) = (None, 0.0);
+        // The length in quanta, when sent.
+        let (mut sent, mut dwell) = (None, 0.0);
         if flags & F_LENGTH != 0 {
-            let n = r.u64()?;
+            let n = i64::try_from(r.u64()?).ok()?;
             if n == 0 {
-                length = Some(0.0);
                 dwell = r.f64()?;
-            } else {
-                length = Some(n as f64 * c.quantum);
             }
+            sent = Some(n);
         }
         let accel = if flags & F_ACCEL != 0 {
             speed(r, c.accel_quantum)?
@@ -102,23 +101,40 @@ impl<'a> BatchReader<'a> {
             _ => return None,
         };
         let mut end = st.tail;
-        let mut axes = Vec::new();
-        for (i, e) in end.iter_mut().enumerate() {
-            if mask & (1 << i) != 0 {
-                let k = index(st.tail[i], c.quantum)?.checked_add(r.i64()?)?;
-                *e = k as f64 * c.quantum;
-                // At most MAX_AXES spans: cannot overflow.
-                let _ = axes.push(AxisSpan {
-                    axis: i as u8,
-                    from: st.tail[i],
-                    to: *e,
-                });
+        let mut history = st.history();
+        // The path axes, then (knowing the length) the riding ones.
+        let mut length = sent;
+        for i in c.axis_order(mask) {
+            let rider = c.path_mask & (1 << i) == 0;
+            if rider && length.is_none() {
+                length = Some(c.derived_quanta(&st.tail, &end)?);
             }
+            let known = if rider || sent.is_some() {
+                length
+            } else {
+                None
+            };
+            let delta = history.axis(i).predict(known).checked_add(r.i64()?)?;
+            let k = index(st.tail[i], c.quantum)?.checked_add(delta)?;
+            end[i] = k as f64 * c.quantum;
+            // The length is not final before every path axis is read.
+            history.record(i, delta, known, 0);
         }
         let length = match length {
             Some(l) => l,
-            None => c.derived_length(&st.tail, &end)?,
+            None => c.derived_quanta(&st.tail, &end)?,
         };
+        let mut axes = Vec::new();
+        for i in (0..MAX_AXES).filter(|i| mask & (1 << i) != 0) {
+            history.set_length(i, length);
+            // At most MAX_AXES spans: cannot overflow.
+            let _ = axes.push(AxisSpan {
+                axis: i as u8,
+                from: st.tail[i],
+                to: end[i],
+            });
+        }
+        let length = length as f64 * c.quantum;
         let profile = ProfileParams {
             length,
             v0,
@@ -141,7 +157,7 @@ impl<'a> BatchReader<'a> {
             axes,
         };
         self.next_seq = self.next_seq.wrapping_add(1);
-        st.advance(&seg, mask);
+        st.advance(&seg, mask, history);
         Some((msg, seg))
     }
 }

@@ -2,8 +2,9 @@
 
 use super::varint::{put_f64, put_i64, put_u64};
 use super::{
-    index, whole, SegmentBatch, StreamConfig, StreamError, StreamState, BATCH_BYTES, F_ACCEL,
-    F_JERK, F_LENGTH, F_MASK, F_START, F_V1, VC_EXPLICIT, VC_PREVIOUS, VC_SHIFT, VC_V0, VC_V1,
+    index, whole, History, SegmentBatch, StreamConfig, StreamError, StreamState, BATCH_BYTES,
+    F_ACCEL, F_JERK, F_LENGTH, F_MASK, F_START, F_V1, VC_EXPLICIT, VC_PREVIOUS, VC_SHIFT, VC_V0,
+    VC_V1,
 };
 use heapless::Vec;
 use motet_trajectory::{Point, Segment, MAX_AXES};
@@ -63,7 +64,7 @@ impl BatchEncoder {
     /// next. On an error nothing changes.
     pub fn push(&mut self, seg: &Segment) -> Result<Option<Batch>, StreamError> {
         let mut bytes: Vec<u8, BATCH_BYTES> = Vec::new();
-        let mask = encode_one(&self.cfg, self.axes, &self.state, seg, &mut bytes)?;
+        let (mask, history) = encode_one(&self.cfg, self.axes, &self.state, seg, &mut bytes)?;
         let full = self.open.as_ref().is_some_and(|b| {
             b.segments >= self.max_segments || b.batch.bytes.len() + bytes.len() > BATCH_BYTES
         });
@@ -90,7 +91,7 @@ impl BatchEncoder {
         let _ = open.batch.bytes.extend_from_slice(&bytes);
         open.segments += 1;
         self.next_seq = self.next_seq.wrapping_add(1);
-        self.state.advance(seg, mask);
+        self.state.advance(seg, mask, history);
         Ok(done)
     }
 
@@ -100,14 +101,15 @@ impl BatchEncoder {
     }
 }
 
-/// Encodes `seg` after `st` into `out`; returns the mask of moving axes.
+/// Encodes `seg` after `st` into `out`; returns the mask of moving axes and
+/// the history with its moves.
 fn encode_one(
     cfg: &StreamConfig,
     axes: u8,
     st: &StreamState,
     seg: &Segment,
     out: &mut Vec<u8, BATCH_BYTES>,
-) -> Result<u8, StreamError> {
+) -> Result<(u8, History), StreamError> {
     let bad = StreamError::NotQuantized;
     let p = seg.profile.params();
     let (q, sq, aq) = (cfg.quantum, cfg.speed_quantum, cfg.accel_quantum);
@@ -162,12 +164,16 @@ fn encode_one(
     if flags & F_START != 0 {
         ok &= put_f64(out, seg.t0) && put_u64(out, unsigned(v0, sq).ok_or(bad)?);
     }
+    // The length in quanta (0 for a dwell), sent or derived alike.
+    let length = if dwell {
+        0
+    } else {
+        unsigned(p.length, q).filter(|n| *n > 0).ok_or(bad)?
+    };
     if flags & F_LENGTH != 0 {
+        ok &= put_u64(out, length);
         if dwell {
-            ok &= put_u64(out, 0) && put_f64(out, p.dwell);
-        } else {
-            let n = unsigned(p.length, q).filter(|n| *n > 0).ok_or(bad)?;
-            ok &= put_u64(out, n);
+            ok &= put_f64(out, p.dwell);
         }
     }
     if flags & F_ACCEL != 0 {
@@ -182,13 +188,17 @@ fn encode_one(
     if vc_mode == VC_EXPLICIT {
         ok &= put_u64(out, unsigned(p.vc, sq).ok_or(bad)?);
     }
-    for (i, d) in deltas.iter().enumerate() {
-        if mask & (1 << i) != 0 {
-            ok &= put_i64(out, *d);
-        }
+    let mut history = st.history();
+    for i in cfg.axis_order(mask) {
+        // A riding axis is read once the path axes give the length.
+        let rider = cfg.path_mask & (1 << i) == 0;
+        let known = (rider || flags & F_LENGTH != 0).then_some(length as i64);
+        let miss = deltas[i] - history.axis(i).predict(known);
+        ok &= put_i64(out, miss);
+        history.record(i, deltas[i], known, length as i64);
     }
     if !ok {
         return Err(StreamError::TooLarge);
     }
-    Ok(mask)
+    Ok((mask, history))
 }

@@ -26,18 +26,28 @@
 //! | jerk | `JERK` | varint accel quanta; otherwise the previous segment's |
 //! | v1 | `V1` | varint speed quanta; otherwise v0 |
 //! | vc | `VC` mode 0 | varint speed quanta; mode 1 = v0, 2 = v1, 3 = the previous segment's vc |
-//! | end positions | each moving axis, ascending | zigzag varint: quanta from the previous end |
+//! | end positions | each moving axis: the path axes ascending, then the others ascending | zigzag varint: the move in quanta less its prediction |
 //!
 //! Without `LENGTH` the length is the path distance (over the configured path
 //! axes) between the segment's ends rounded to whole position quanta.
+//!
+//! Each axis's move is predicted from the axis's earlier moves in the stream
+//! ([`predict`]: none, the last move, the last move plus its change, or the
+//! last move scaled by the path lengths, whichever has missed least lately),
+//! and only the miss is sent. The path axes come first, so that a riding
+//! axis (an extruder) is predicted knowing the segment's length. A stream
+//! without a previous segment (its first, or after a plain segment or a new
+//! position) predicts from no history.
 
 mod decode;
 mod encode;
+mod predict;
 mod quantize;
 mod varint;
 
 pub use decode::BatchReader;
 pub use encode::{Batch, BatchEncoder};
+pub use predict::History;
 pub use quantize::Quantizer;
 
 use heapless::Vec;
@@ -101,11 +111,25 @@ impl StreamConfig {
     /// The length a node derives for a move between `start` and `end`, if it
     /// can: a whole number (≥ 1) of position quanta.
     pub fn derived_length(&self, start: &Point, end: &Point) -> Option<f64> {
+        self.derived_quanta(start, end)
+            .map(|n| n as f64 * self.quantum)
+    }
+
+    /// [`StreamConfig::derived_length`] in position quanta.
+    pub fn derived_quanta(&self, start: &Point, end: &Point) -> Option<i64> {
         if self.path_mask == 0 {
             return None;
         }
         let n = libm::round(distance_masked(start, end, self.path_mask) / self.quantum);
-        (n >= 1.0).then_some(n * self.quantum)
+        (1.0..9.0e15).contains(&n).then_some(n as i64)
+    }
+
+    /// The axes of `mask` in the order a batch carries them: the path axes
+    /// ascending, then the others ascending.
+    pub(crate) fn axis_order(&self, mask: u8) -> impl Iterator<Item = usize> + '_ {
+        let path = (0..MAX_AXES).filter(move |i| self.path_mask & (1 << i) != 0);
+        let rest = (0..MAX_AXES).filter(move |i| self.path_mask & (1 << i) == 0);
+        path.chain(rest).filter(move |i| mask & (1 << i) != 0)
     }
 }
 
@@ -136,6 +160,9 @@ pub struct StreamState {
     pub jerk: f64,
     /// The axes the previous segment moved (bit per axis), which the next may repeat.
     pub mask: u8,
+    /// Each axis's earlier moves, which predict its next (used only while
+    /// `valid`).
+    pub history: History,
     /// A previous segment exists: without one, the next segment carries its
     /// start time and speed.
     pub valid: bool,
@@ -152,12 +179,24 @@ impl StreamState {
             accel: 0.0,
             jerk: 0.0,
             mask: 0,
+            history: History::new(),
             valid: false,
         }
     }
 
-    /// Steps past `seg` (mask: the axes that moved in it).
-    pub(crate) fn advance(&mut self, seg: &Segment, mask: u8) {
+    /// The history the next segment is predicted from: none without a
+    /// previous segment.
+    pub(crate) fn history(&self) -> History {
+        if self.valid {
+            self.history
+        } else {
+            History::new()
+        }
+    }
+
+    /// Steps past `seg` (mask: the axes that moved in it; history: with its
+    /// moves recorded).
+    pub(crate) fn advance(&mut self, seg: &Segment, mask: u8, history: History) {
         let p = seg.profile.params();
         *self = StreamState {
             tail: seg.end,
@@ -167,6 +206,7 @@ impl StreamState {
             accel: p.accel,
             jerk: p.jerk,
             mask,
+            history,
             valid: true,
         };
     }
