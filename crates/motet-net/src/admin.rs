@@ -571,6 +571,7 @@ mod tests {
             link_up: false,
             synced: false,
             uptime_us: 1,
+            drift: None,
         });
         // A node answering from another address than the one asked.
         let e = admin_with(7, status.clone())

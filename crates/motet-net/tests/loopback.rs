@@ -74,6 +74,17 @@ fn one_percent_of_every_fault_changes_no_step() {
         .map(|p| p.link().stats().retransmits)
         .sum();
     assert!(retransmits > 0, "the faults must have cost retransmissions");
+    // Each node's own measure of its drift (from the host's send times it
+    // saw) finds its crystal.
+    for n in &lb.nodes {
+        let d = n.node.endpoint.services().status(0).drift;
+        let d = d.expect("a node measures its drift over a run");
+        assert!(
+            (d.ppb as f64 * 1e-3 - n.ppm).abs() < 5.0 && d.span_s >= 5,
+            "crystal {:+} ppm, the node's measure {d:?}",
+            n.ppm
+        );
+    }
 }
 
 #[test]

@@ -14,6 +14,7 @@
 //! Like the motion node, it reads no clock: every call takes the node's local
 //! clock in µs.
 
+use crate::drift::DriftMeter;
 use crate::storage::{Flash, Persisted, Store};
 use motet_wire::frame::Crc32c;
 use motet_wire::image::{ImageError, ImageHeader, MAX_HEADER_LEN, MIN_HEADER_LEN};
@@ -128,6 +129,8 @@ pub struct Services<S: Store, F: Flash> {
     /// Address offered by a Pair broadcast, waiting for the button.
     pairing: Option<u16>,
     clock: Option<ClockModel>,
+    /// The node's own measure of its clock's drift.
+    drift: DriftMeter,
 }
 
 fn checked_end(offset: u32, len: usize) -> Option<u32> {
@@ -163,6 +166,7 @@ impl<S: Store, F: Flash> Services<S, F> {
             blink_until_us: 0,
             pairing: None,
             clock: None,
+            drift: DriftMeter::default(),
         }
     }
 
@@ -254,6 +258,7 @@ impl<S: Store, F: Flash> Services<S, F> {
             link_up: self.link_up,
             synced: self.synced(),
             uptime_us: now_local_us.saturating_sub(self.started_us),
+            drift: self.drift.drift(),
         }
     }
 
@@ -414,11 +419,14 @@ impl<S: Store, F: Flash> Services<S, F> {
                 Err(e) => Handled::error(e),
             },
             ServiceRequest::FirmwareStart => self.firmware_start(),
-            ServiceRequest::TimeGet { t1 } => Handled::reply(ServiceReply::Time {
-                t1,
-                t2: now,
-                t3: now,
-            }),
+            ServiceRequest::TimeGet { t1 } => {
+                self.drift.take(t1, now);
+                Handled::reply(ServiceReply::Time {
+                    t1,
+                    t2: now,
+                    t3: now,
+                })
+            }
             ServiceRequest::TimeSet { offset, skew } => {
                 if !offset.is_finite() || !skew.is_finite() || skew.abs() >= MAX_SKEW {
                     return Handled::error(ServiceError::BadClock);

@@ -255,6 +255,7 @@ fn requests_against_states() {
             link_up: false,
             synced: false,
             uptime_us: NOW - START_US,
+            drift: None,
         }))
     };
     let info = |address| {

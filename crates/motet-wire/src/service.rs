@@ -252,6 +252,20 @@ pub struct Status {
     pub synced: bool,
     /// Local clock since the node started or was reset, µs.
     pub uptime_us: u64,
+    /// The node's own estimate of its clock's drift against the host's,
+    /// from the clock exchanges it answered; none before they span a
+    /// second.
+    pub drift: Option<Drift>,
+}
+
+/// How fast a node's clock runs against the host's, as the node measures
+/// it from the host's send times (`motet_node::drift`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Drift {
+    /// Node µs gained per host second, in thousandths (parts per billion).
+    pub ppb: i32,
+    /// Host seconds the estimate spans.
+    pub span_s: u32,
 }
 
 /// Answer to [`ServiceRequest::Info`].
@@ -555,6 +569,10 @@ mod tests {
                 link_up: true,
                 synced: false,
                 uptime_us: u64::MAX,
+                drift: Some(Drift {
+                    ppb: i32::MIN,
+                    span_s: u32::MAX,
+                }),
             }),
             ServiceReply::Info(Info {
                 kind: kind("0123456789abcdef"),

@@ -336,6 +336,10 @@ mod services {
             link_up: true,
             synced: true,
             uptime_us: if big { u64::MAX } else { 0 },
+            drift: big.then_some(motet_wire::service::Drift {
+                ppb: i32::MIN,
+                span_s: u32::MAX,
+            }),
         };
         let replies: Vec<(P, P, usize, usize)> = vec![
             (P::Ack, P::Ack, 1, 1),
@@ -354,7 +358,7 @@ mod services {
                 2,
                 2,
             ),
-            (P::Status(status(false)), P::Status(status(true)), 7, 18),
+            (P::Status(status(false)), P::Status(status(true)), 8, 29),
             (P::Info(info(0, false)), P::Info(info(16, true)), 14, 73),
             (
                 P::Paired { uid: 0, address: 2 },

@@ -176,7 +176,30 @@ pub fn bench_net(args: Args) -> Result<()> {
     }
     print_clock_errors(&streamed.samples, machine, &clocks, args.jitter_us);
     print_agreement(&streamed.samples, machine);
+    print_drift(&lb, machine);
     Ok(())
+}
+
+/// Prints each node's own measure of its drift (from the host's send times
+/// it saw) beside its crystal's true error and the host's estimate.
+fn print_drift(lb: &Loopback, machine: &Machine) {
+    for (k, node) in machine.nodes.iter().enumerate() {
+        let (Some(n), Some(p)) = (lb.nodes.get(k), lb.run.peers().get(k)) else {
+            continue;
+        };
+        let own = n.node.endpoint.services().status(0).drift;
+        println!(
+            "  node {}: drift {:+.3} ppm true, {:+.3} ppm the host's estimate, {}",
+            node.name,
+            n.ppm,
+            p.sync.model().skew * 1e6,
+            own.map_or("no measure of its own yet".to_string(), |d| format!(
+                "{:+.3} ppm its own measure over {} s",
+                d.ppb as f64 * 1e-3,
+                d.span_s
+            ))
+        );
+    }
 }
 
 /// Reads the machine (with `--microsteps` applied) and the job, and prints

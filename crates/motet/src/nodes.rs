@@ -262,7 +262,7 @@ pub fn status(machine_path: &Path) -> Result<()> {
         });
         match answer {
             Ok((i, s)) => println!(
-                "{name}: {}{} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}, up {:.1} s",
+                "{name}: {}{} uid {} firmware {} at {} on {} — {:?}, link {}, clock {}{}, up {:.1} s",
                 i.kind,
                 if i.board.is_empty() {
                     String::new()
@@ -276,6 +276,11 @@ pub fn status(machine_path: &Path) -> Result<()> {
                 s.state,
                 if s.link_up { "up" } else { "down" },
                 if s.synced { "synced" } else { "not synced" },
+                s.drift.map_or(String::new(), |d| format!(
+                    " (its own measure: {:+.1} ppm over {} s)",
+                    d.ppb as f64 * 1e-3,
+                    d.span_s
+                )),
                 s.uptime_us as f64 * 1e-6
             ),
             Err(e) => {
