@@ -844,6 +844,170 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
 }
 
 #[test]
+fn a_hand_driven_machines_component_parameters_are_set_live_over_the_api() {
+    let (machine, graph) = (
+        "examples/dance/game-controller/machine.toml",
+        "examples/dance/game-controller/graph.toml",
+    );
+    let s = Running::start_with(None, tempfile::tempdir().unwrap(), machine, Some(graph));
+    let (code, g) = s.call("GET", "/api/graph", None, "a");
+    assert_eq!(code, 200, "{g}");
+    check_schema("Graph", &g);
+    let param = |g: &Value, comp: &str, name: &str| -> Value {
+        let c = g["components"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == comp)
+            .unwrap_or_else(|| panic!("no component {comp}: {g}"));
+        c["params"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap_or_else(|| panic!("no parameter {comp}.{name}: {g}"))
+            .clone()
+    };
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 0.0);
+    assert_eq!(param(&g, "joy_x", "floor_value")["value"], -40.0);
+    assert_eq!(param(&g, "ch_a", "max_pulse_rate")["min"], 0.0);
+    assert_eq!(g["param_changes"], 0);
+
+    // Turn knob x's direction round, then the knobs: the machine ends where
+    // the same graph, with the same change and the same inputs, puts it
+    // offline.
+    let (code, g) = s.call(
+        "POST",
+        "/api/graph/params",
+        Some(json!({"component": "knob_x", "param": "invert", "value": 1})),
+        "b",
+    );
+    assert_eq!(code, 200, "{g}");
+    check_schema("Graph", &g);
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 1.0);
+    assert_eq!(g["param_changes"], 1);
+    let (code, g) = s.call(
+        "POST",
+        "/api/graph/inputs",
+        Some(json!({"knob_x": 300, "knob_y": -200})),
+        "b",
+    );
+    assert_eq!(code, 200, "{g}");
+    let m = motet_host::Machine::load(&root().join(machine)).unwrap();
+    let gf = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
+    let (component, id) = gf.param_id("knob_x", "invert").unwrap();
+    let mut offline = motet_sim::dance::HeldWithChanges {
+        values: vec![512.0, 512.0, 300.0, -200.0],
+        changes: [motet_sim::dance::ParamChange {
+            component,
+            param: id,
+            value: 1.0,
+        }]
+        .into(),
+        refused: Vec::new(),
+    };
+    let want = motet_sim::dance::run_dance(&m, &gf, &mut offline, 3.0, &mut |_| {})
+        .unwrap()
+        .report
+        .final_xy;
+    assert!(offline.changes.is_empty() && offline.refused.is_empty());
+    let mut plain = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 300.0, -200.0]);
+    let unchanged = motet_sim::dance::run_dance(&m, &gf, &mut plain, 3.0, &mut |_| {})
+        .unwrap()
+        .report
+        .final_xy;
+    assert!(
+        (want[0] - unchanged[0]).hypot(want[1] - unchanged[1]) > 5.0,
+        "the change moves the machine elsewhere: {want:?} {unchanged:?}"
+    );
+    let end = Instant::now() + Duration::from_secs(30);
+    loop {
+        let (_, g) = s.call("GET", "/api/graph", None, "a");
+        let p = [
+            g["position"][0].as_f64().unwrap(),
+            g["position"][1].as_f64().unwrap(),
+        ];
+        if (p[0] - want[0]).hypot(p[1] - want[1]) < 1e-9 {
+            break;
+        }
+        assert!(Instant::now() < end, "at {p:?}, want {want:?}: {g}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+
+    // Unknown names and values outside what a parameter takes are refused
+    // and change nothing; so is a body that is not one change.
+    for (body, want, words) in [
+        (
+            json!({"component": "nope", "param": "ratio", "value": 1}),
+            422,
+            "no component",
+        ),
+        (
+            json!({"component": "knob_x", "param": "ratio", "value": 1}),
+            422,
+            "no live parameter",
+        ),
+        (
+            json!({"component": "joy_x", "param": "deadband_width", "value": -3}),
+            422,
+            "outside",
+        ),
+        (
+            json!({"component": "ch_a", "param": "max_pulse_rate", "value": -1}),
+            422,
+            "outside",
+        ),
+        (
+            json!({"component": "knob_x", "param": "invert", "value": "yes"}),
+            400,
+            "",
+        ),
+        (
+            json!({"component": "knob_x", "param": "invert", "value": 0, "extra": 1}),
+            400,
+            "extra",
+        ),
+        (json!({"component": "knob_x", "value": 0}), 400, "param"),
+    ] {
+        let (code, answer) = s.call("POST", "/api/graph/params", Some(body.clone()), "a");
+        assert_eq!(code, want, "{body}: {answer}");
+        check_schema("Error", &answer);
+        let e = answer["error"].as_str().unwrap();
+        assert!(e.contains(words), "{body}: {e}");
+    }
+    // The node itself refuses a lower limit above the upper one.
+    let (code, _) = s.call(
+        "POST",
+        "/api/graph/params",
+        Some(json!({"component": "ch_a", "param": "upper", "value": 1000})),
+        "a",
+    );
+    assert_eq!(code, 200);
+    let (code, answer) = s.call(
+        "POST",
+        "/api/graph/params",
+        Some(json!({"component": "ch_a", "param": "lower", "value": 2000})),
+        "a",
+    );
+    assert_eq!(code, 422, "{answer}");
+    assert!(
+        answer["error"]
+            .as_str()
+            .unwrap()
+            .contains("the node refused"),
+        "{answer}"
+    );
+    let (_, g) = s.call("GET", "/api/graph", None, "a");
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 1.0);
+    assert_eq!(param(&g, "joy_x", "deadband_width")["value"], 6.0);
+    assert_eq!(param(&g, "ch_a", "upper")["value"], 1000.0);
+    // Unbounded below, as the file left it.
+    assert_eq!(param(&g, "ch_a", "lower")["value"], Value::Null, "{g}");
+    assert_eq!(g["param_changes"], 2);
+    assert_eq!(g["error"], Value::Null, "the graph still runs: {g}");
+}
+
+#[test]
 fn a_printers_status_carries_its_heaters_as_the_schema_says() {
     let m = motet_host::Machine::load(&root().join("examples/printer.toml")).unwrap();
     let nodes = SimNodes::new(&m, m.start, serve_config());

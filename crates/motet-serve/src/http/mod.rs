@@ -34,6 +34,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("post", "/api/jobs/{id}/start"),
     ("get", "/api/graph"),
     ("post", "/api/graph/inputs"),
+    ("post", "/api/graph/params"),
     ("get", "/api/queue"),
     ("post", "/api/queue"),
     ("delete", "/api/queue/{index}"),
@@ -70,6 +71,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/jobs/{id}/start", post(api::start))
         .route("/api/graph", get(graph::view))
         .route("/api/graph/inputs", post(graph::set_inputs))
+        .route("/api/graph/params", post(graph::set_param))
         .route("/api/queue", get(queue::list).post(queue::add))
         .route("/api/queue/{index}", delete(queue::remove))
         .route("/api/queue/start", post(queue::start))
@@ -117,6 +119,7 @@ impl From<crate::session::ActionError> for ApiError {
             E::UnknownJob(_) | E::UnknownNode { .. } | E::NoSuchEntry { .. } => {
                 StatusCode::NOT_FOUND
             }
+
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
             | E::UnknownHeater { .. }
