@@ -485,6 +485,8 @@ function showGraph(g) {
 async function refreshNodes() {
   try {
     const nodes = await api("GET", "/api/nodes");
+    // Nodes simulated in the server have no link to pair on.
+    $("pair").hidden = nodes.every((n) => n.kind === "sim");
     const tb = document.querySelector("#nodes tbody");
     tb.replaceChildren(...nodes.map((n) => {
       const tr = document.createElement("tr");
@@ -522,6 +524,11 @@ async function main() {
     // When the person pressed it, for the stop's own figure (docs/api.md).
     window.motetStats.estopPressedWall = Date.now();
     return act("POST", "/api/estop");
+  };
+  $("pair").onclick = async () => {
+    const done = await act("POST", "/api/nodes/pair");
+    if (done) addEvents([{ t_us: 0, level: "info", message: "paired: " + done.file }]);
+    refreshNodes();
   };
   $("zero").onclick = () => act("POST", "/api/position", { axes: Object.fromEntries(machine.axes.map((a) => [a.name, 0])) });
   try { buildGraph(await api("GET", "/api/graph")); } catch (_) { /* no graph: a job machine */ }

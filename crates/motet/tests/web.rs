@@ -113,6 +113,7 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     );
     assert_eq!(seen["still_when_paused"], true, "{seen}");
     assert_eq!(seen["final_state"], "stopped", "{seen}");
+    assert_eq!(seen["pair_hidden"], true, "{seen}");
     assert_eq!(seen["stop_event"], true, "{seen}");
     assert!(
         seen["click_to_braking_ms"].is_number(),
