@@ -48,8 +48,8 @@ pub struct PairOutcome {
 
 impl LinkedNodes {
     /// Pairs the devices on this server's links with the machine's nodes,
-    /// writes the pairing file and reconnects to them; the machine rests at
-    /// `at`.
+    /// writes the pairing file and, where an address changed, connects to
+    /// them again; the machine rests at `at`.
     pub(super) fn pair_here(
         &mut self,
         machine: &Machine,
@@ -78,6 +78,12 @@ impl LinkedNodes {
                 })
             })
             .collect();
+        if nodes == self.session.nodes {
+            // Every node kept its address (pairing gives them in the same
+            // order as `motet nodes pair` and `--nodes spawn`): the run's
+            // links, and the clocks they know, go on as they were.
+            return Ok(PairOutcome { lines, file: path });
+        }
         drop(self.run.take_peers());
         let mut s = Session::attach(machine, &nodes, &motet_net::clock::wall())?;
         let peers = std::mem::take(&mut s.peers);
