@@ -14,6 +14,7 @@ pub mod journal;
 pub mod loopback;
 pub mod medium;
 pub mod node_clock;
+pub mod pairing;
 pub mod pairing_file;
 pub mod peer;
 pub(crate) mod plan_feed;

@@ -401,6 +401,73 @@ function buildGraph(g) {
     label.append(name, el, out);
     box.appendChild(label);
   }
+  buildParams(g);
+}
+
+// ---- the graph's live component parameters as sliders ----------------------
+
+let paramChanges = 0;
+
+// A slider's range: the declared bounds, and where a side is unbounded,
+// twice the value's size (at least 1) beyond it.
+function paramRange(p) {
+  const v = p.value == null ? (p.min != null ? p.min : 0) : p.value;
+  const span = 2 * Math.max(Math.abs(v), 1);
+  const lo = p.min != null ? p.min : v - span;
+  const hi = p.max != null ? p.max : v + span;
+  return [lo, hi, p.integer ? 1 : (hi - lo) / 200, v];
+}
+
+function buildParams(g) {
+  paramChanges = g.param_changes;
+  const box = $("graph-params");
+  box.replaceChildren();
+  for (const c of g.components || []) {
+    for (const p of c.params) {
+      const label = document.createElement("label");
+      const name = document.createElement("span");
+      name.textContent = c.name + "." + p.name;
+      name.title = (p.doc || c.kind) + (p.unit ? " (" + p.unit + ")" : "");
+      const out = document.createElement("output");
+      const el = document.createElement("input");
+      el.id = "param-" + c.name + "-" + p.name;
+      const [lo, hi, step, v] = paramRange(p);
+      Object.assign(el, { type: "range", min: lo, max: hi, step, value: v });
+      out.textContent = p.value == null ? "–" : p.value;
+      let pending = null;
+      // Sends the newest value at most every 30 ms while the slider moves.
+      el.oninput = el.onchange = () => {
+        out.textContent = el.value;
+        if (pending) return;
+        pending = setTimeout(async () => {
+          pending = null;
+          try {
+            $("graph-error").textContent = "";
+            const now = await api("POST", "/api/graph/params", { component: c.name, param: p.name, value: Number(el.value) });
+            paramChanges = now.param_changes;
+          } catch (e) { $("graph-error").textContent = String(e.message || e); }
+        }, 30);
+      };
+      label.append(name, el, out);
+      box.appendChild(label);
+    }
+  }
+}
+
+// A stage (or another client) changed a parameter: show the values now.
+async function refreshParams() {
+  try {
+    const g = await api("GET", "/api/graph");
+    paramChanges = g.param_changes;
+    for (const c of g.components || []) {
+      for (const p of c.params) {
+        const el = $("param-" + c.name + "-" + p.name);
+        if (!el || p.value == null || document.activeElement === el) continue;
+        el.value = p.value;
+        el.nextSibling.textContent = p.value;
+      }
+    }
+  } catch (_) { /* shown by the state badge */ }
 }
 
 function showGraph(g) {
@@ -412,11 +479,14 @@ function showGraph(g) {
   graphPos = p;
   $("position").textContent = "x " + p[0].toFixed(2) + "  y " + p[1].toFixed(2) + (g.pen_down ? "" : "  (pen up)");
   if (g.error) $("graph-error").textContent = "the graph stopped: " + g.error;
+  if (g.param_changes !== paramChanges) { paramChanges = g.param_changes; refreshParams(); }
 }
 
 async function refreshNodes() {
   try {
     const nodes = await api("GET", "/api/nodes");
+    // Nodes simulated in the server have no link to pair on.
+    $("pair").hidden = nodes.every((n) => n.kind === "sim");
     const tb = document.querySelector("#nodes tbody");
     tb.replaceChildren(...nodes.map((n) => {
       const tr = document.createElement("tr");
@@ -454,6 +524,11 @@ async function main() {
     // When the person pressed it, for the stop's own figure (docs/api.md).
     window.motetStats.estopPressedWall = Date.now();
     return act("POST", "/api/estop");
+  };
+  $("pair").onclick = async () => {
+    const done = await act("POST", "/api/nodes/pair");
+    if (done) addEvents([{ t_us: 0, level: "info", message: "paired: " + done.file }]);
+    refreshNodes();
   };
   $("zero").onclick = () => act("POST", "/api/position", { axes: Object.fromEntries(machine.axes.map((a) => [a.name, 0])) });
   try { buildGraph(await api("GET", "/api/graph")); } catch (_) { /* no graph: a job machine */ }

@@ -4,6 +4,10 @@
 //! are the run's coordinated stop: every node brakes on its contingency tail
 //! and rests on the path, where the host knows it is.
 
+mod pair;
+
+pub use pair::{PairOutcome, PairRefusal};
+
 use motet_host::Machine;
 use motet_net::loopback::{Crystal, Loopback};
 use motet_net::run::PeerFigures;
@@ -44,6 +48,12 @@ pub trait Nodes: Send {
     /// can see it (in-process nodes); `None` elsewhere.
     fn identifying(&self, _k: usize, _now: u64) -> Option<bool> {
         None
+    }
+    /// Pairs the devices on the nodes' links with the machine's nodes (each
+    /// alone on its link), writes the pairing file and goes on with them;
+    /// the machine rests at `at`. Only at rest.
+    fn pair(&mut self, _machine: &Machine, _at: Point) -> Result<PairOutcome, PairRefusal> {
+        Err(PairRefusal::Simulated)
     }
 }
 
@@ -162,6 +172,8 @@ pub struct LinkedNodes {
     cfg: NetConfig,
     session: motet_net::session::Session,
     kind: &'static str,
+    /// Where pairing writes the pairing file (beside the machine file).
+    pairing: Option<std::path::PathBuf>,
 }
 
 impl LinkedNodes {
@@ -180,7 +192,15 @@ impl LinkedNodes {
             cfg,
             session,
             kind,
+            pairing: None,
         }
+    }
+
+    /// Pairing from the server writes the pairing file at `path` (beside
+    /// the machine file: `motet_net::pairing_file::pairing_path`).
+    pub fn pairing_file(mut self, path: std::path::PathBuf) -> LinkedNodes {
+        self.pairing = Some(path);
+        self
     }
 }
 
@@ -219,5 +239,9 @@ impl Nodes for LinkedNodes {
             .nodes
             .get(k)
             .map_or_else(String::new, |n| n.link.clone())
+    }
+
+    fn pair(&mut self, machine: &Machine, at: Point) -> Result<PairOutcome, PairRefusal> {
+        self.pair_here(machine, at)
     }
 }

@@ -2,15 +2,25 @@
 //! simulated node, paced to the wall clock, with the graph's inputs
 //! (knobs, joysticks, buttons: its `[inputs]`) set live over the API and
 //! from the page's sliders, as `motet dance --live` takes them from a
-//! terminal. While the graph runs, the machine is the graph's: the session
-//! takes no jobs, jogs or tool changes.
+//! terminal. Its components' live parameters (gains, scales, limits) are
+//! set the same way, each sent to the node as the wire carries it
+//! (`GraphParam`; [`params`]). While the graph runs, the machine is the
+//! graph's: the session takes no jobs, jogs or tool changes.
+
+pub mod params;
+
+pub use params::{ComponentView, ParamError, ParamView};
 
 use motet_graph::GraphFile;
 use motet_host::Machine;
-use motet_sim::dance::{watch_dance, DanceMoment, DanceOptions, HeldInputs, InputSource};
+use motet_sim::dance::{
+    watch_dance, ChangeFrom, DanceMoment, DanceOptions, HeldInputs, InputSource, ParamChange,
+};
 use motet_wire::message::GraphInputKind;
+use params::Params;
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
@@ -21,6 +31,9 @@ const WATCH_EVERY: u64 = 25;
 /// is further ahead (and falls behind, losing nothing, when it cannot keep
 /// up).
 const AHEAD_S: f64 = 0.002;
+/// How long a parameter change waits for the graph's thread to send it
+/// (it does within a frame or two of the wall clock).
+const CHANGE_WAIT: Duration = Duration::from_secs(5);
 
 /// Why an input could not be set. Nothing changed.
 #[derive(Debug, thiserror::Error)]
@@ -96,6 +109,13 @@ pub struct GraphView {
     pub frame_us: f64,
     /// Its inputs.
     pub inputs: Vec<InputView>,
+    /// Its components' live parameters (in answers to the graph's routes;
+    /// left out of the pushes, which carry `param_changes` instead).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub components: Option<Vec<ComponentView>>,
+    /// Parameter changes the node took since the graph started (a client's
+    /// or a stage's): a screen reads the parameters again when it grows.
+    pub param_changes: u64,
     /// The node's time, s.
     pub t_s: f64,
     /// The pen's x, y, mm.
@@ -110,7 +130,12 @@ struct Live {
     values: Vec<f64>,
     moment: DanceMoment,
     error: Option<String>,
+    params: Params,
 }
+
+/// A client's parameter change on its way to the graph's thread, and where
+/// the node's answer goes.
+type Ask = (ParamChange, Sender<Result<(), String>>);
 
 /// A graph running on its own thread.
 pub struct GraphRun {
@@ -118,16 +143,22 @@ pub struct GraphRun {
     frame_us: f64,
     names: Vec<String>,
     kinds: Vec<GraphInputKind>,
+    /// The graph, for checking parameter changes by name.
+    graph: GraphFile,
     live: Arc<Mutex<Live>>,
+    asks: Mutex<Sender<Ask>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
 /// The inputs as the graph reads them: the values set last, with the run
-/// kept to the wall clock.
+/// kept to the wall clock; and the clients' parameter changes.
 struct Paced {
     live: Arc<Mutex<Live>>,
     start: Instant,
+    asks: Receiver<Ask>,
+    /// Where the answer to the change being sent goes.
+    answer: Option<Sender<Result<(), String>>>,
 }
 
 impl InputSource for Paced {
@@ -138,6 +169,25 @@ impl InputSource for Paced {
         }
         let l = self.live.lock().unwrap_or_else(|e| e.into_inner());
         out.copy_from_slice(&l.values);
+    }
+
+    fn next_change(&mut self) -> Option<ParamChange> {
+        let (change, answer) = self.asks.try_recv().ok()?;
+        self.answer = Some(answer);
+        Some(change)
+    }
+
+    fn changed(&mut self, change: &ParamChange, from: ChangeFrom, result: Result<(), String>) {
+        if result.is_ok() {
+            let mut l = self.live.lock().unwrap_or_else(|e| e.into_inner());
+            l.params.taken(change);
+        }
+        if from == ChangeFrom::Source {
+            if let Some(a) = self.answer.take() {
+                // The client may have gone: the change stands all the same.
+                let _ = a.send(result);
+            }
+        }
     }
 }
 
@@ -187,19 +237,29 @@ impl GraphRun {
                 pen_down: false,
             },
             error: None,
+            params: Params::of(&graph),
         }));
         let stop = Arc::new(AtomicBool::new(false));
         let (file, frame_us) = (graph.file.clone(), graph.frame_us);
-        let (l, s) = (live.clone(), stop.clone());
+        let (asks, asked) = channel();
+        let paced = Paced {
+            live: live.clone(),
+            start: Instant::now(),
+            asks: asked,
+            answer: None,
+        };
+        let (s, g) = (stop.clone(), graph.clone());
         let thread = std::thread::Builder::new()
             .name("motet-graph".into())
-            .spawn(move || run(&machine, &graph, &l, &s))?;
+            .spawn(move || run(&machine, &g, paced, &s))?;
         Ok(GraphRun {
             file,
             frame_us,
             names,
             kinds,
+            graph,
             live,
+            asks: Mutex::new(asks),
             stop,
             thread: Some(thread),
         })
@@ -241,7 +301,40 @@ impl GraphRun {
         Ok(())
     }
 
-    /// The graph now.
+    /// Sets `component.param` on the running graph: checked against the
+    /// parameter's declared values, sent to the node as the wire carries it,
+    /// and answered with what the node did. A refusal changes nothing.
+    pub fn set_param(&self, component: &str, param: &str, value: f64) -> Result<(), ParamError> {
+        let change = self
+            .live()
+            .params
+            .check(&self.graph, component, param, value)?;
+        let (answer, answered) = channel();
+        let stopped = || ParamError::Stopped(self.live().error.clone().unwrap_or_default());
+        {
+            let asks = self.asks.lock().unwrap_or_else(|e| e.into_inner());
+            asks.send((change, answer)).map_err(|_| stopped())?;
+        }
+        match answered.recv_timeout(CHANGE_WAIT) {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(reason)) => Err(ParamError::Refused {
+                component: component.into(),
+                param: param.into(),
+                value,
+                reason,
+            }),
+            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => Err(stopped()),
+        }
+    }
+
+    /// The graph now, with its components' live parameters.
+    pub fn view_with_params(&self) -> GraphView {
+        let mut v = self.view();
+        v.components = Some(self.live().params.view().to_vec());
+        v
+    }
+
+    /// The graph now (what the pushes carry).
     pub fn view(&self) -> GraphView {
         let l = self.live();
         GraphView {
@@ -262,6 +355,8 @@ impl GraphRun {
             position: l.moment.xy,
             pen_down: l.moment.pen_down,
             error: l.error.clone(),
+            components: None,
+            param_changes: l.params.changes,
         }
     }
 }
@@ -277,11 +372,8 @@ impl Drop for GraphRun {
 
 /// The graph's thread: frames until stopped; a refusal by the node ends
 /// the run and is kept for the screen.
-fn run(machine: &Machine, graph: &GraphFile, live: &Arc<Mutex<Live>>, stop: &AtomicBool) {
-    let mut inputs = Paced {
-        live: live.clone(),
-        start: Instant::now(),
-    };
+fn run(machine: &Machine, graph: &GraphFile, mut inputs: Paced, stop: &AtomicBool) {
+    let live = inputs.live.clone();
     let mut watch = |m: &DanceMoment| {
         let mut l = live.lock().unwrap_or_else(|e| e.into_inner());
         l.moment = *m;

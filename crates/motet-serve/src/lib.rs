@@ -29,7 +29,9 @@ pub mod preview;
 pub mod server;
 pub mod session;
 
-pub use engine::{linked_config, serve_config, LinkedNodes, Nodes, SimNodes};
+pub use engine::{
+    linked_config, serve_config, LinkedNodes, Nodes, PairOutcome, PairRefusal, SimNodes,
+};
 pub use http::ROUTES;
 pub use server::{Server, ServerConfig};
 pub use session::{ActionError, Session, State, Status};

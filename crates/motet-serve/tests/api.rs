@@ -464,6 +464,15 @@ fn bad_requests_are_refused_with_their_reason_and_nothing_changes() {
             "seconds",
         ),
         ("POST", "/api/resume", None, "application/json", 409, "idle"),
+        // Nodes simulated in the server have no link to pair on.
+        (
+            "POST",
+            "/api/nodes/pair",
+            None,
+            "application/json",
+            409,
+            "nothing to pair",
+        ),
         (
             "POST",
             "/api/jobs/77/start",
@@ -750,16 +759,60 @@ fn the_queue_runs_jobs_in_turn_and_a_restarted_server_keeps_jobs_queue_and_histo
     assert_eq!(h[0]["outcome"], "emergency stop", "{h:?}");
 }
 
-#[test]
-fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
-    let (machine, graph) = (
-        "examples/dance/game-controller/machine.toml",
-        "examples/dance/game-controller/graph.toml",
-    );
-    let s = Running::start_with(None, tempfile::tempdir().unwrap(), machine, Some(graph));
+/// The game controller's machine and graph.
+const GAME: (&str, &str) = (
+    "examples/dance/game-controller/machine.toml",
+    "examples/dance/game-controller/graph.toml",
+);
+
+/// A server driven by hand through the game controller's graph, and its
+/// graph as first read (checked against the schema).
+fn hand_driven() -> (Running, Value) {
+    let s = Running::start_with(None, tempfile::tempdir().unwrap(), GAME.0, Some(GAME.1));
     let (code, g) = s.call("GET", "/api/graph", None, "a");
     assert_eq!(code, 200, "{g}");
     check_schema("Graph", &g);
+    (s, g)
+}
+
+/// Where the game controller's graph, fed by `inputs` offline for 3 s,
+/// leaves the pen.
+fn offline_end(inputs: &mut dyn motet_sim::dance::InputSource) -> [f64; 2] {
+    let m = motet_host::Machine::load(&root().join(GAME.0)).unwrap();
+    let g = motet_graph::GraphFile::load(&root().join(GAME.1)).unwrap();
+    motet_sim::dance::run_dance(&m, &g, inputs, 3.0, &mut |_| {})
+        .unwrap()
+        .report
+        .final_xy
+}
+
+/// Turns the knobs to 300 and −200 counts over the API.
+fn turn_knobs(s: &Running) {
+    let body = json!({"knob_x": 300, "knob_y": -200});
+    let (code, g) = s.call("POST", "/api/graph/inputs", Some(body), "b");
+    assert_eq!(code, 200, "{g}");
+}
+
+/// Waits until the server's pen is at `want`.
+fn pen_reaches(s: &Running, want: [f64; 2]) {
+    let end = Instant::now() + Duration::from_secs(30);
+    loop {
+        let (_, g) = s.call("GET", "/api/graph", None, "a");
+        let p = [
+            g["position"][0].as_f64().unwrap(),
+            g["position"][1].as_f64().unwrap(),
+        ];
+        if (p[0] - want[0]).hypot(p[1] - want[1]) < 1e-9 {
+            return;
+        }
+        assert!(Instant::now() < end, "at {p:?}, want {want:?}: {g}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
+    let (s, g) = hand_driven();
     let inputs: Vec<_> = g["inputs"]
         .as_array()
         .unwrap()
@@ -783,33 +836,10 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     );
     // Turn the knobs; the machine ends where the same graph, fed the same
     // values offline, puts it.
-    let (code, g) = s.call(
-        "POST",
-        "/api/graph/inputs",
-        Some(json!({"knob_x": 300, "knob_y": -200})),
-        "b",
-    );
-    assert_eq!(code, 200, "{g}");
-    let m = motet_host::Machine::load(&root().join(machine)).unwrap();
-    let gf = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
+    turn_knobs(&s);
     let mut held = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 300.0, -200.0]);
-    let want = motet_sim::dance::run_dance(&m, &gf, &mut held, 3.0, &mut |_| {})
-        .unwrap()
-        .report
-        .final_xy;
-    let end = Instant::now() + Duration::from_secs(30);
-    let got = loop {
-        let (_, g) = s.call("GET", "/api/graph", None, "a");
-        let p = [
-            g["position"][0].as_f64().unwrap(),
-            g["position"][1].as_f64().unwrap(),
-        ];
-        if (p[0] - want[0]).hypot(p[1] - want[1]) < 1e-9 {
-            break p;
-        }
-        assert!(Instant::now() < end, "at {p:?}, want {want:?}: {g}");
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let got = offline_end(&mut held);
+    pen_reaches(&s, got);
     assert!(
         got[0].hypot(got[1]) > 5.0,
         "the knobs moved nothing: {got:?}"
@@ -841,6 +871,127 @@ fn a_hand_driven_machine_follows_its_graph_inputs_set_over_the_api() {
     );
     let (code, _) = s.call("POST", "/api/jog", Some(json!({"axes": {"x": 1}})), "a");
     assert_eq!(code, 409);
+}
+
+#[test]
+fn a_hand_driven_machines_component_parameters_are_set_live_over_the_api() {
+    let (s, g) = hand_driven();
+    let param = |g: &Value, comp: &str, name: &str| -> Value {
+        let c = g["components"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == comp)
+            .unwrap_or_else(|| panic!("no component {comp}: {g}"));
+        c["params"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap_or_else(|| panic!("no parameter {comp}.{name}: {g}"))
+            .clone()
+    };
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 0.0);
+    assert_eq!(param(&g, "joy_x", "floor_value")["value"], -40.0);
+    assert_eq!(param(&g, "ch_a", "max_pulse_rate")["min"], 0.0);
+    assert_eq!(g["param_changes"], 0);
+
+    // Turn knob x's direction round, then the knobs: the machine ends where
+    // the same graph, with the same change and the same inputs, puts it
+    // offline.
+    let set = |comp: &str, name: &str, value: f64| {
+        let body = json!({"component": comp, "param": name, "value": value});
+        s.call("POST", "/api/graph/params", Some(body), "b")
+    };
+    let (code, g) = set("knob_x", "invert", 1.0);
+    assert_eq!(code, 200, "{g}");
+    check_schema("Graph", &g);
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 1.0);
+    assert_eq!(g["param_changes"], 1);
+    turn_knobs(&s);
+    let gf = motet_graph::GraphFile::load(&root().join(GAME.1)).unwrap();
+    let (component, id) = gf.param_id("knob_x", "invert").unwrap();
+    let mut offline = motet_sim::dance::HeldWithChanges {
+        values: vec![512.0, 512.0, 300.0, -200.0],
+        changes: [motet_sim::dance::ParamChange {
+            component,
+            param: id,
+            value: 1.0,
+        }]
+        .into(),
+        refused: Vec::new(),
+    };
+    let want = offline_end(&mut offline);
+    assert!(offline.changes.is_empty() && offline.refused.is_empty());
+    let mut plain = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 300.0, -200.0]);
+    let unchanged = offline_end(&mut plain);
+    assert!(
+        (want[0] - unchanged[0]).hypot(want[1] - unchanged[1]) > 5.0,
+        "the change moves the machine elsewhere: {want:?} {unchanged:?}"
+    );
+    pen_reaches(&s, want);
+
+    // Unknown names and values outside what a parameter takes are refused
+    // and change nothing; so is a body that is not one change.
+    for (body, want, words) in [
+        (
+            json!({"component": "nope", "param": "ratio", "value": 1}),
+            422,
+            "no component",
+        ),
+        (
+            json!({"component": "knob_x", "param": "ratio", "value": 1}),
+            422,
+            "no live parameter",
+        ),
+        (
+            json!({"component": "joy_x", "param": "deadband_width", "value": -3}),
+            422,
+            "outside",
+        ),
+        (
+            json!({"component": "ch_a", "param": "max_pulse_rate", "value": -1}),
+            422,
+            "outside",
+        ),
+        (
+            json!({"component": "knob_x", "param": "invert", "value": "yes"}),
+            400,
+            "",
+        ),
+        (
+            json!({"component": "knob_x", "param": "invert", "value": 0, "extra": 1}),
+            400,
+            "extra",
+        ),
+        (json!({"component": "knob_x", "value": 0}), 400, "param"),
+    ] {
+        let (code, answer) = s.call("POST", "/api/graph/params", Some(body.clone()), "a");
+        assert_eq!(code, want, "{body}: {answer}");
+        check_schema("Error", &answer);
+        let e = answer["error"].as_str().unwrap();
+        assert!(e.contains(words), "{body}: {e}");
+    }
+    // The node itself refuses a lower limit above the upper one.
+    let (code, _) = set("ch_a", "upper", 1000.0);
+    assert_eq!(code, 200);
+    let (code, answer) = set("ch_a", "lower", 2000.0);
+    assert_eq!(code, 422, "{answer}");
+    assert!(
+        answer["error"]
+            .as_str()
+            .unwrap()
+            .contains("the node refused"),
+        "{answer}"
+    );
+    let (_, g) = s.call("GET", "/api/graph", None, "a");
+    assert_eq!(param(&g, "knob_x", "invert")["value"], 1.0);
+    assert_eq!(param(&g, "joy_x", "deadband_width")["value"], 6.0);
+    assert_eq!(param(&g, "ch_a", "upper")["value"], 1000.0);
+    // Unbounded below, as the file left it.
+    assert_eq!(param(&g, "ch_a", "lower")["value"], Value::Null, "{g}");
+    assert_eq!(g["param_changes"], 2);
+    assert_eq!(g["error"], Value::Null, "the graph still runs: {g}");
 }
 
 #[test]

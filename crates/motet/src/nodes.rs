@@ -1,10 +1,11 @@
 //! `motet nodes …`: find, pair, identify, inspect and update nodes.
 
 use anyhow::{bail, Context, Result};
-use motet_host::{Machine, NodeSpec};
-use motet_net::admin::{free_address, Admin};
+use motet_host::Machine;
+use motet_net::admin::Admin;
+use motet_net::pairing::{pair_machine, Ask};
 use motet_net::pairing_file::{format_uid, pairing_path, PairedNode, PairingFile};
-use motet_wire::service::{Info, Version, UNPAIRED};
+use motet_wire::service::{Version, UNPAIRED};
 use std::path::Path;
 use std::time::Duration;
 
@@ -59,35 +60,14 @@ pub fn scan(links: &[String], wait: f64) -> Result<()> {
 pub fn pair(machine_path: &Path, links: &[String], button: bool, wait: f64) -> Result<()> {
     let machine = Machine::load(machine_path)?;
     let assigned = assign_links(&machine, links)?;
+    let wait = Duration::from_secs_f64(wait);
+    let ask = if button {
+        Ask::Button(wait)
+    } else {
+        Ask::AloneOrButton(wait)
+    };
+    let file = pair_machine(&machine, &assigned, ask, &mut |line| println!("{line}"))?;
     let path = pairing_path(machine_path);
-    let mut file = PairingFile::default();
-    let mut taken = Vec::new();
-    let mut devices: Vec<Device> = Vec::new();
-    for spec in &machine.nodes {
-        let link = &assigned
-            .iter()
-            .find(|(a, _)| *a == spec.name)
-            .expect("checked")
-            .1;
-        let ask = Ask { button, wait };
-        let (address, uid, info) = pair_node(&machine, spec, link, &taken, &devices, ask)?;
-        taken.push(address);
-        devices.push(Device {
-            node: spec.name.clone(),
-            uid,
-            link: link.clone(),
-        });
-        file.nodes.insert(
-            spec.name.clone(),
-            PairedNode {
-                link: link.clone(),
-                address,
-                uid: format_uid(uid),
-                kind: info.kind.to_string(),
-                firmware: info.firmware.to_string(),
-            },
-        );
-    }
     file.save(&path)?;
     println!("wrote {}", path.display());
     Ok(())
@@ -123,107 +103,6 @@ fn assign_links(machine: &Machine, links: &[String]) -> Result<Vec<(String, Stri
         }
     }
     Ok(assigned)
-}
-
-/// A device paired in this run.
-struct Device {
-    /// The machine node it became.
-    node: String,
-    uid: u64,
-    /// The link it answered on.
-    link: String,
-}
-
-/// Whether to ask for a button press even for a node alone on its link,
-/// and how long to wait for one, s.
-#[derive(Clone, Copy)]
-struct Ask {
-    button: bool,
-    wait: f64,
-}
-
-/// Pairs machine node `spec` on `link`: the node alone there (unless a
-/// button press is asked for), else the one whose button is pressed, gets
-/// the first address not `taken`; it must be a device not yet paired
-/// (`devices`) and of the kind the machine file asks. Returns the address,
-/// the device's uid and what it says of itself.
-fn pair_node(
-    machine: &Machine,
-    spec: &NodeSpec,
-    link: &str,
-    taken: &[u16],
-    devices: &[Device],
-    ask: Ask,
-) -> Result<(u16, u64, Info)> {
-    let mut a = admin(link)?;
-    let address = free_address(taken);
-    let found = a.scan(Duration::from_millis(600))?;
-    // A node paired before may be running a job: a new address would
-    // cut it off mid-move.
-    for f in found.iter().filter(|f| f.info.address != UNPAIRED) {
-        a.at_rest(f.info.address, "pairing it again")?;
-    }
-    let uid = if found.len() == 1 && !ask.button {
-        // Alone on its link: no button needed.
-        let uid = found[0].info.uid;
-        own_device(devices, uid, &spec.name, link)?;
-        a.set_address(uid, address)?;
-        println!(
-            "{}: the only node on {link} (uid {}) is now address {address}",
-            spec.name,
-            format_uid(uid)
-        );
-        uid
-    } else {
-        if found.is_empty() {
-            bail!("{}: no node answered on {link}", spec.name);
-        }
-        println!(
-            "{}: {} node(s) on {link}; press the button of the one to be `{}` (Enter in a simulated node's terminal)…",
-            spec.name,
-            found.len(),
-            spec.name
-        );
-        let uid = a.pair_by_button(address, Duration::from_secs_f64(ask.wait))?;
-        own_device(devices, uid, &spec.name, link)?;
-        println!(
-            "{}: uid {} is now address {address}",
-            spec.name,
-            format_uid(uid)
-        );
-        uid
-    };
-    let info = a.info(address)?;
-    if info.uid != uid {
-        bail!(
-            "{}: address {address} answered as uid {}, expected {}",
-            spec.name,
-            format_uid(info.uid),
-            format_uid(uid)
-        );
-    }
-    if let Err(e) = motet_net::registry::check(machine, spec, &info) {
-        bail!("{}: {e}", spec.name);
-    }
-    Ok((address, uid, info))
-}
-
-/// Two machine nodes on one device would each get the other's motion:
-/// refused before the device's address is changed.
-fn own_device(devices: &[Device], uid: u64, node: &str, link: &str) -> Result<()> {
-    let Some(other) = devices.iter().find(|d| d.uid == uid) else {
-        return Ok(());
-    };
-    let on = if other.link == link {
-        format!("on {link}")
-    } else {
-        format!("on {} and on {link}", other.link)
-    };
-    bail!(
-        "machine nodes `{}` and `{node}` would both be the device uid {} {on}: each machine node needs its own device; nothing was written",
-        other.node,
-        format_uid(uid)
-    )
 }
 
 /// The machine's pairing file, or an error that says how to make it.

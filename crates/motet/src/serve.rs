@@ -197,15 +197,20 @@ fn nodes(
     } else {
         "paired"
     };
-    Ok(Box::new(LinkedNodes::new(
-        machine,
-        session,
-        machine.start,
-        // Other processes and boards: a lead that outlasts a busy host's
-        // scheduling delays (and twice the round trip whatever this says).
-        motet_serve::linked_config(),
-        kind,
-    )))
+    Ok(Box::new(
+        LinkedNodes::new(
+            machine,
+            session,
+            machine.start,
+            // Other processes and boards: a lead that outlasts a busy host's
+            // scheduling delays (and twice the round trip whatever this says).
+            motet_serve::linked_config(),
+            kind,
+        )
+        // The page's Pair writes the pairing file where `motet nodes pair`
+        // does.
+        .pairing_file(pairing_path(machine_path)),
+    ))
 }
 
 /// Resolves on Ctrl-C or SIGTERM.

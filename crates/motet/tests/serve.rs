@@ -34,12 +34,24 @@ fn serve(args: &[&str]) -> Serve {
 
 /// One HTTP request on a fresh connection: (status, JSON body).
 fn http(addr: &str, method: &str, path: &str, body: &[u8], token: Option<&str>) -> (u16, Value) {
+    http_as("cli", addr, method, path, body, token)
+}
+
+/// [`http`] from the client named `client`.
+fn http_as(
+    client: &str,
+    addr: &str,
+    method: &str,
+    path: &str,
+    body: &[u8],
+    token: Option<&str>,
+) -> (u16, Value) {
     let addr = addr.replace("0.0.0.0", "127.0.0.1");
     let mut s = TcpStream::connect(&addr).unwrap();
     let auth = token.map_or(String::new(), |t| format!("Authorization: Bearer {t}\r\n"));
     write!(
         s,
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nX-Motet-Client: cli\r\n{auth}Content-Type: application/json\r\nContent-Length: {}\r\n\r\n",
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nX-Motet-Client: {client}\r\n{auth}Content-Type: application/json\r\nContent-Length: {}\r\n\r\n",
         body.len()
     )
     .unwrap();
@@ -113,6 +125,73 @@ fn a_job_runs_held_and_resumed_on_spawned_node_processes() {
     assert_eq!(code, 200);
     let done = wait_state(&s, "idle", Duration::from_secs(30));
     assert_eq!(done["position"], serde_json::json!([5.0, 5.0]), "{done}");
+}
+
+#[test]
+fn the_server_pairs_its_node_processes_and_writes_the_pairing_file() {
+    let tmp = common::scratch("serve", "pair");
+    let machine = tmp.path().join("plotter.toml");
+    std::fs::copy(common::root().join("examples/plotter.toml"), &machine).unwrap();
+    let s = serve(&[
+        machine.to_str().unwrap(),
+        "--nodes",
+        "spawn",
+        "--listen",
+        "127.0.0.1:0",
+    ]);
+    let before = wait_state(&s, "idle", Duration::from_secs(20));
+    let (_, nodes) = http(&s.addr, "GET", "/api/nodes", b"", None);
+    let link = nodes[0]["address"].as_str().unwrap().to_string();
+    // Only the client in control pairs.
+    let (code, _) = http(&s.addr, "POST", "/api/control", b"", None);
+    assert_eq!(code, 200);
+    let (code, r) = http_as("other", &s.addr, "POST", "/api/nodes/pair", b"", None);
+    assert_eq!(code, 409, "{r}");
+    assert!(
+        r["error"].as_str().unwrap().contains("another client"),
+        "{r}"
+    );
+    let pairing = tmp.path().join("plotter.nodes.toml");
+    assert!(!pairing.exists(), "a refused pairing wrote the file");
+
+    let (code, r) = http(&s.addr, "POST", "/api/nodes/pair", b"", None);
+    assert_eq!(code, 200, "{r}");
+    assert!(
+        r["paired"][0]
+            .as_str()
+            .unwrap()
+            .contains("is now address 2"),
+        "{r}"
+    );
+    assert_eq!(r["file"], pairing.display().to_string(), "{r}");
+    let text = std::fs::read_to_string(&pairing).unwrap();
+    assert!(
+        text.contains("[nodes.ebb]") && text.contains(&link),
+        "{text}"
+    );
+    let (_, events) = http(&s.addr, "GET", "/api/events", b"", None);
+    assert!(
+        events.to_string().contains("nodes paired"),
+        "no event: {events}"
+    );
+
+    // The server goes on with the node at its address: a jog moves it.
+    wait_state(&s, "idle", Duration::from_secs(20));
+    let jog = |body: &[u8]| http(&s.addr, "POST", "/api/jog", body, None);
+    let (code, r) = jog(br#"{"axes": {"x": 5}, "feed": 50}"#);
+    assert_eq!(code, 200, "{r}");
+    let after = wait_state(&s, "idle", Duration::from_secs(20));
+    let moved = after["position"][0].as_f64().unwrap() - before["position"][0].as_f64().unwrap();
+    assert!((moved - 5.0).abs() < 1e-6, "{before} {after}");
+
+    // While the machine moves, pairing is refused.
+    let (code, _) = jog(br#"{"axes": {"x": 20}, "feed": 5}"#);
+    assert_eq!(code, 200);
+    let (code, r) = http(&s.addr, "POST", "/api/nodes/pair", b"", None);
+    assert_eq!(code, 409, "{r}");
+    assert!(r["error"].as_str().unwrap().contains("while"), "{r}");
+    let (code, _) = http(&s.addr, "POST", "/api/cancel", b"", None);
+    assert_eq!(code, 200);
 }
 
 #[test]

@@ -6,7 +6,8 @@
 //! chromium and the script's npm package. A screenshot of the running page
 //! is written to `target/web/serve.png` (the README shows a copy). A
 //! hand-driven machine's page (`--graph`, `tests/web/graph.mjs`) shows the
-//! graph's inputs as sliders, and moving them moves the machine.
+//! graph's inputs and its components' live parameters as sliders, and
+//! moving them moves the machine.
 
 mod common;
 
@@ -112,6 +113,7 @@ fn the_page_drives_the_plotter_in_a_real_browser() {
     );
     assert_eq!(seen["still_when_paused"], true, "{seen}");
     assert_eq!(seen["final_state"], "stopped", "{seen}");
+    assert_eq!(seen["pair_hidden"], true, "{seen}");
     assert_eq!(seen["stop_event"], true, "{seen}");
     assert!(
         seen["click_to_braking_ms"].is_number(),
@@ -147,6 +149,7 @@ fn a_hand_driven_machine_moves_with_the_page_sliders() {
         "graph.mjs",
         &[
             url.as_ref(),
+            r#"[["knob_y", "invert", 1]]"#.as_ref(),
             r#"{"knob_x": 250, "knob_y": 400}"#.as_ref(),
             shot.as_os_str(),
         ],
@@ -162,12 +165,27 @@ fn a_hand_driven_machine_moves_with_the_page_sliders() {
             "graph-knob_y:range"
         ])
     );
+    // Every live parameter has its slider (the game controller's analog
+    // inputs have 7, the velocity generators, knobs 1 each, channels 5).
+    assert_eq!(seen["param_sliders"], 7 * 2 + 2 + 2 + 5 * 2, "{seen}");
+    assert_eq!(seen["params"]["knob_y.invert"], 1.0, "{seen}");
     assert_eq!(seen["inputs"]["knob_x"], 250.0, "{seen}");
     assert_eq!(seen["inputs"]["knob_y"], 400.0, "{seen}");
-    // Where the same graph fed the same values offline puts the machine.
+    // Where the same graph fed the same change and values offline puts the
+    // machine.
     let m = motet_host::Machine::load(&root().join(machine)).unwrap();
     let g = motet_graph::GraphFile::load(&root().join(graph)).unwrap();
-    let mut held = motet_sim::dance::HeldInputs(vec![512.0, 512.0, 250.0, 400.0]);
+    let (component, param) = g.param_id("knob_y", "invert").unwrap();
+    let mut held = motet_sim::dance::HeldWithChanges {
+        values: vec![512.0, 512.0, 250.0, 400.0],
+        changes: [motet_sim::dance::ParamChange {
+            component,
+            param,
+            value: 1.0,
+        }]
+        .into(),
+        refused: Vec::new(),
+    };
     let want = motet_sim::dance::run_dance(&m, &g, &mut held, 3.0, &mut |_| {})
         .unwrap()
         .report

@@ -119,6 +119,23 @@ pub(super) async fn identify(
     done()
 }
 
+pub(super) async fn pair(State(sh): Shared_, h: HeaderMap) -> Answer {
+    let me = client(&h);
+    // Pairing talks to the devices for a second or two; the session is
+    // held meanwhile (the machine is at rest, nothing moves).
+    let done = tokio::task::spawn_blocking(move || {
+        let done = sh.session().pair_nodes(me.as_deref());
+        sh.wake();
+        done
+    })
+    .await
+    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??;
+    Ok(Json(json!({
+        "paired": done.lines,
+        "file": done.file.display().to_string(),
+    })))
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct Since {

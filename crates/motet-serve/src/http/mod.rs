@@ -25,6 +25,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/status"),
     ("get", "/api/nodes"),
     ("post", "/api/nodes/{name}/identify"),
+    ("post", "/api/nodes/pair"),
     ("get", "/api/events"),
     ("get", "/api/history"),
     ("get", "/api/jobs"),
@@ -34,6 +35,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("post", "/api/jobs/{id}/start"),
     ("get", "/api/graph"),
     ("post", "/api/graph/inputs"),
+    ("post", "/api/graph/params"),
     ("get", "/api/queue"),
     ("post", "/api/queue"),
     ("delete", "/api/queue/{index}"),
@@ -57,6 +59,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/status", get(api::status))
         .route("/api/nodes", get(api::nodes))
         .route("/api/nodes/{name}/identify", post(api::identify))
+        .route("/api/nodes/pair", post(api::pair))
         .route("/api/events", get(api::events))
         .route("/api/history", get(api::history))
         .route(
@@ -70,6 +73,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/api/jobs/{id}/start", post(api::start))
         .route("/api/graph", get(graph::view))
         .route("/api/graph/inputs", post(graph::set_inputs))
+        .route("/api/graph/params", post(graph::set_param))
         .route("/api/queue", get(queue::list).post(queue::add))
         .route("/api/queue/{index}", delete(queue::remove))
         .route("/api/queue/start", post(queue::start))
@@ -117,6 +121,7 @@ impl From<crate::session::ActionError> for ApiError {
             E::UnknownJob(_) | E::UnknownNode { .. } | E::NoSuchEntry { .. } => {
                 StatusCode::NOT_FOUND
             }
+            E::Pair(ref p) => pair_status(p),
             E::UnknownAxis { .. }
             | E::UnknownTool { .. }
             | E::UnknownHeater { .. }
@@ -124,6 +129,17 @@ impl From<crate::session::ActionError> for ApiError {
             | E::Unreachable(_) => StatusCode::UNPROCESSABLE_ENTITY,
         };
         ApiError(code, e.to_string())
+    }
+}
+
+/// A pairing refused by what the nodes are (409), or failed on the
+/// devices (502) or the file (500).
+fn pair_status(p: &crate::engine::PairRefusal) -> StatusCode {
+    use crate::engine::PairRefusal as P;
+    match p {
+        P::Simulated | P::NoFile => StatusCode::CONFLICT,
+        P::Pair(_) | P::Reach(_) => StatusCode::BAD_GATEWAY,
+        P::File(_) => StatusCode::INTERNAL_SERVER_ERROR,
     }
 }
 

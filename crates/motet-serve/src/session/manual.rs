@@ -1,7 +1,8 @@
 //! What a person does by hand outside a job: jog, say where the machine
-//! is, set a tool, blink a node's LED.
+//! is, set a tool, blink a node's LED, pair the nodes.
 
 use super::{ActionError, Activity, Client, Session};
+use crate::engine::PairOutcome;
 use crate::events::Level;
 use motet_host::clamp_move;
 use motet_planner::{ranges, Command, Located, Move, MoveKind, SourceLoc};
@@ -134,6 +135,35 @@ impl Session {
             format!("identify node {name} for {seconds} s"),
         );
         Ok(())
+    }
+}
+
+impl Session {
+    /// Pairs the devices on the nodes' links with the machine's nodes and
+    /// writes the pairing file beside the machine file, as `motet nodes
+    /// pair` does for devices alone on their links. Only at rest (idle or
+    /// stopped), only by the client in control (who takes control if none
+    /// has it); a refusal changes nothing.
+    pub fn pair_nodes(&mut self, client: Client) -> Result<PairOutcome, ActionError> {
+        self.ready("pair the nodes")?;
+        if let (Some(c), me) = (&self.controller, client) {
+            if me != Some(c.as_str()) {
+                return Err(ActionError::NotController);
+            }
+        }
+        let done = self.nodes.pair(&self.machine, self.rest)?;
+        if let Some(c) = client {
+            self.controller = Some(c.to_string());
+        }
+        for line in &done.lines {
+            self.events.push(self.now, Level::Info, line.clone());
+        }
+        self.events.push(
+            self.now,
+            Level::Info,
+            format!("nodes paired: {} written", done.file.display()),
+        );
+        Ok(done)
     }
 }
 

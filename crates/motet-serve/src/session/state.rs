@@ -114,6 +114,10 @@ pub enum ActionError {
     /// The queue has no job to start.
     #[error("the queue is empty")]
     QueueEmpty,
+    /// The nodes could not be paired (simulated nodes, or the devices on
+    /// their links did not allow it).
+    #[error("cannot pair the nodes: {0}")]
+    Pair(#[from] crate::engine::PairRefusal),
     /// No queue entry at this place.
     #[error("no queue entry {index} (the queue holds {len})")]
     NoSuchEntry {

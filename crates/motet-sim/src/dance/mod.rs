@@ -20,7 +20,7 @@ mod stages;
 mod trace;
 mod watch;
 
-pub use inputs::{HeldInputs, InputSource};
+pub use inputs::{ChangeFrom, HeldInputs, HeldWithChanges, InputSource, ParamChange};
 pub use job::PlannedJob;
 pub use pendulums::Pendulums;
 pub use recording::Recording;

@@ -3,7 +3,7 @@
 //! where its channels put the machine; report at the end.
 
 use super::drawing::Drawing;
-use super::inputs::InputFeed;
+use super::inputs::{source_changes, InputFeed};
 use super::job_feed::JobFeed;
 use super::joints::Joints;
 use super::node::{start_node, DanceNode, StepCount};
@@ -129,9 +129,9 @@ impl<'a> Dance<'a> {
         })
     }
 
-    /// The frame starting at `t_us`: inputs, stages and job segments reach
-    /// the node, it runs to the frame's end, and the drawing follows any
-    /// steps it made.
+    /// The frame starting at `t_us`: inputs, the source's parameter
+    /// changes, stages and job segments reach the node, it runs to the
+    /// frame's end, and the drawing follows any steps it made.
     pub(super) fn frame(
         &mut self,
         t_us: f64,
@@ -139,8 +139,10 @@ impl<'a> Dance<'a> {
     ) -> Result<(), DanceError> {
         let node = &mut self.node;
         self.inputs.update(t_us * 1e-6, source, self.graph, node)?;
+        source_changes(source, node);
+        let values = &self.inputs.values;
         self.stages
-            .update(t_us, self.graph, &self.inputs.values, node, &self.board)?;
+            .update(t_us, self.graph, values, node, &self.board, source)?;
         self.job_feed.fill(node)?;
         node.poll(t_us + self.graph.frame_us, &mut self.board);
         if self.board.moved {

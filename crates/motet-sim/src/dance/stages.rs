@@ -2,8 +2,9 @@
 //! inputs and the node's components, and its parameter changes go to the
 //! node; each stage entered is marked with the channels' step counters.
 
+use super::inputs::{ChangeFrom, ParamChange};
 use super::node::{send, DanceNode, StepCount};
-use super::{DanceError, StageMark};
+use super::{DanceError, InputSource, StageMark};
 use motet_graph::{GraphFile, StageMachine, StageView};
 
 /// The stage machine and what it did.
@@ -29,7 +30,7 @@ impl Stages {
 
     /// Starts or updates the stage machine at `t_us` with the source's input
     /// `values`, marks the stages it entered, and sends the node the
-    /// parameter changes it made.
+    /// parameter changes it made (and tells `source` of each).
     pub fn update(
         &mut self,
         t_us: f64,
@@ -37,6 +38,7 @@ impl Stages {
         values: &[f64],
         node: &mut DanceNode,
         board: &StepCount,
+        source: &mut dyn InputSource,
     ) -> Result<(), DanceError> {
         let msgs = {
             let view = View {
@@ -62,6 +64,19 @@ impl Stages {
         for m in &msgs {
             send(node, m)?;
             self.param_changes += 1;
+            if let motet_wire::HostMessage::GraphParam {
+                component,
+                param,
+                value,
+            } = *m
+            {
+                let c = ParamChange {
+                    component,
+                    param,
+                    value,
+                };
+                source.changed(&c, ChangeFrom::Stage, Ok(()));
+            }
         }
         Ok(())
     }

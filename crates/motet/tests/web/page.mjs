@@ -102,6 +102,8 @@ try {
     return slowing ? (slowing[0] - clickUs) / 1000 : null;
   }, clickUs);
   out.final_state = await state();
+  // Simulated nodes have no link: the page offers no pairing.
+  out.pair_hidden = await page.$eval("#pair", (el) => el.hidden);
   // At rest on the job's path: the distance from the rest point to the
   // nearest segment of the preview.
   out.off_path = await page.evaluate(async () => {
