@@ -116,6 +116,11 @@ impl NodeClock {
         self.est.min_rtt()
     }
 
+    /// Host time the exchanges the estimate rests on span, µs.
+    pub fn span_us(&self) -> f64 {
+        self.est.span_us()
+    }
+
     /// Exchanges the estimate rests on.
     pub fn points(&self) -> u32 {
         self.est.points()

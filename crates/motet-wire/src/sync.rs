@@ -259,6 +259,17 @@ impl ClockSync {
         self.len as u32
     }
 
+    /// Host time the kept exchanges span, µs: what the slope rests on.
+    pub fn span_us(&self) -> f64 {
+        if self.len == 0 {
+            return 0.0;
+        }
+        let s = &self.samples[..self.len];
+        let first = s.iter().map(|p| p.xf).fold(f64::INFINITY, f64::min);
+        let last = s.iter().map(|p| p.xr).fold(f64::NEG_INFINITY, f64::max);
+        (last - first).max(0.0)
+    }
+
     /// Changes of the node's rate detected.
     pub fn changes(&self) -> u32 {
         self.changes
