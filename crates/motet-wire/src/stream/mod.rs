@@ -32,7 +32,7 @@
 //! axes) between the segment's ends rounded to whole position quanta.
 //!
 //! Each axis's move is predicted from the axis's earlier moves in the stream
-//! ([`predict`]: none, the last move, the last move plus its change, or the
+//! (`predict.rs`: none, the last move, the last move plus its change, or the
 //! last move scaled by the path lengths, whichever has missed least lately),
 //! and only the miss is sent. The path axes come first, so that a riding
 //! axis (an extruder) is predicted knowing the segment's length. A stream
