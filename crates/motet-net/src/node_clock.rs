@@ -116,9 +116,10 @@ impl NodeClock {
         self.est.min_rtt()
     }
 
-    /// Host time the exchanges the estimate rests on span, µs.
-    pub fn span_us(&self) -> f64 {
-        self.est.span_us()
+    /// The skews every kept exchange allows (hard limits; see
+    /// [`ClockSync::feasible_skew`]).
+    pub fn feasible_skew(&self) -> Option<(f64, f64)> {
+        self.est.feasible_skew()
     }
 
     /// Exchanges the estimate rests on.

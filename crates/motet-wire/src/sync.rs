@@ -259,17 +259,6 @@ impl ClockSync {
         self.len as u32
     }
 
-    /// Host time the kept exchanges span, µs: what the slope rests on.
-    pub fn span_us(&self) -> f64 {
-        if self.len == 0 {
-            return 0.0;
-        }
-        let s = &self.samples[..self.len];
-        let first = s.iter().map(|p| p.xf).fold(f64::INFINITY, f64::min);
-        let last = s.iter().map(|p| p.xr).fold(f64::NEG_INFINITY, f64::max);
-        (last - first).max(0.0)
-    }
-
     /// Changes of the node's rate detected.
     pub fn changes(&self) -> u32 {
         self.changes
@@ -588,6 +577,42 @@ impl ClockSync {
             return f64::INFINITY;
         }
         self.fit.skew_bound
+    }
+
+    /// The skews every kept exchange allows: the slopes of the lines that
+    /// pass below every forward observation and above every reverse one,
+    /// each taken a timestamp tick its own way. These are hard limits, not
+    /// an estimate: whatever the jitter, a late host loop or a node slow to
+    /// answer, a clock of constant rate always lies inside, and delays only
+    /// widen the interval. `None` when no constant rate explains the
+    /// exchanges since the fit last (re)started (its rate changed among
+    /// them), or before two exchanges. Costs the square of the exchanges
+    /// kept: for the rare decision that a clock is surely broken.
+    pub fn feasible_skew(&self) -> Option<(f64, f64)> {
+        // After a change the first sample is the old fit's band, not an
+        // observation: it is left out.
+        let from = usize::from(self.anchored);
+        let s = &self.samples[from..self.len];
+        if s.len() < 2 {
+            return None;
+        }
+        let (mut lo, mut hi) = (B_MIN, B_MAX);
+        for a in s {
+            for b in s {
+                // θ(a.xf) ≤ a.f + tick and θ(b.xr) ≥ b.r − tick, for
+                // θ = c + skew·x: skew · (b.xr − a.xf) ≥ (b.r − tick) − (a.f + tick).
+                let dx = b.xr - a.xf;
+                let dy = (b.r - TICK_US) - (a.f + TICK_US);
+                if dx > 0.0 {
+                    lo = lo.max(dy / dx);
+                } else if dx < 0.0 {
+                    hi = hi.min(dy / dx);
+                } else if dy > 0.0 {
+                    return None;
+                }
+            }
+        }
+        (lo <= hi).then_some((lo, hi))
     }
 
     /// A bound on the error of [`ClockSync::host_to_local`] at host time

@@ -300,3 +300,76 @@ fn stalls_are_gated_out() {
     assert_eq!(sync.counts().1, 239);
     assert!(worst <= 10.0, "{worst}");
 }
+
+/// The skews every exchange allows are hard limits: whatever delays a busy
+/// host or node adds (late stamps on either side, alone or in bursts of
+/// slow exchanges between fast ones, up to half a second), a crystal of
+/// constant rate always lies inside them, so a run is never stopped for a
+/// rate a good node does not have; on a clean path they close in on the
+/// rate. (The estimate's own bound is a statistic: bursts like these push
+/// it past the true rate by tens of ppm.)
+#[test]
+fn feasible_skews_always_hold_a_steady_rate() {
+    // (seed, skew, jitter µs, held up by up to µs, how: one exchange in
+    // `every`, or bursts of `every` slow exchanges then as many fast ones)
+    let cases = [
+        (31, 200e-6, 1_000.0, 500_000.0, Held::OneIn(5)),
+        (32, -200e-6, 50.0, 80_000.0, Held::OneIn(3)),
+        (33, 0.0, 10.0, 30_000.0, Held::OneIn(2)),
+        (34, 499e-6, 3_000.0, 200_000.0, Held::OneIn(7)),
+        (35, -37e-6, 0.0, 0.0, Held::OneIn(0)),
+        (12, 200e-6, 20.0, 60_000.0, Held::Bursts(22)),
+        (39, 200e-6, 20.0, 60_000.0, Held::Bursts(19)),
+        (7, -150e-6, 20.0, 20_000.0, Held::Bursts(17)),
+    ];
+    for (seed, skew, jitter, stall, how) in cases {
+        let clock = Crystal {
+            offset: 9e6,
+            skews: vec![(0.0, skew)],
+        };
+        let mut sync = ClockSync::default();
+        let mut rng = Rng::new(seed);
+        let mut width = f64::INFINITY;
+        let mut h: f64 = 1_000.0;
+        for i in 0..3_000u64 {
+            let slow = match how {
+                Held::OneIn(n) => n > 0 && i % n == 0,
+                Held::Bursts(n) => (i / n) % 2 == 0,
+            };
+            let held = |rng: &mut Rng| if slow { stall * rng.unit() } else { 0.0 };
+            let t1 = h.floor();
+            let d1 = 30.0 + jitter * rng.unit() + held(&mut rng);
+            let turn = 20.0 + 0.1 * held(&mut rng);
+            let d2 = 30.0 + jitter * rng.unit() + held(&mut rng);
+            let e = Exchange {
+                t1: t1 as u64,
+                t2: clock.local(t1 + d1).floor() as u64,
+                t3: clock.local(t1 + d1 + turn).floor() as u64,
+                t4: (t1 + d1 + turn + d2).floor() as u64,
+            };
+            sync.add(e).unwrap();
+            if let Some((lo, hi)) = sync.feasible_skew() {
+                assert!(
+                    lo <= skew && skew <= hi,
+                    "seed {seed}, exchange {i}: {:.1} ppm outside [{:.1}, {:.1}]",
+                    skew * 1e6,
+                    lo * 1e6,
+                    hi * 1e6
+                );
+                width = hi - lo;
+            }
+            h += 10_000.0 + held(&mut rng);
+        }
+        if jitter <= 50.0 {
+            assert!(width < 20e-6, "seed {seed}: {:.1} ppm wide", width * 1e6);
+        }
+    }
+}
+
+/// How the exchanges of [`feasible_skews_always_hold_a_steady_rate`] are
+/// held up.
+#[derive(Clone, Copy)]
+enum Held {
+    OneIn(u64),
+    Bursts(u64),
+}

@@ -61,7 +61,7 @@ impl NetRun {
         // (Only a rate: a bound that grows, as an emulated board's does on
         // a loaded computer, is the estimate's doubt, not the node's fault.)
         if matches!(self.phase, Phase::Streaming | Phase::Draining) {
-            if let Err(NetError::Node { node, message }) = self.check_rates(now) {
+            if let Err(NetError::Node { node, message }) = self.check_rates() {
                 self.stop(&format!("node {node}: {message}"), now);
             }
         }

@@ -37,10 +37,6 @@ use motet_wire::{HostMessage, NodeMessage, Refusal};
 use std::collections::VecDeque;
 use window::Committed;
 
-/// Least host time a node's exchanges must span before its rate may be
-/// judged out of range, µs.
-const RATE_SPAN_US: f64 = 2_000_000.0;
-
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NetConfig {
@@ -604,7 +600,11 @@ impl NetRun {
         if !all_up {
             return Ok(());
         }
-        self.check_rates(now)?;
+        if !self.check_rates()? {
+            // A rate that looks out of range is measured further before
+            // anything is configured (or refused by name).
+            return Ok(());
+        }
         if !self.configured {
             let setups = self.dist.stream_setup(&self.machine, &self.start_point);
             for (k, mut msgs) in setups.into_iter().enumerate() {
@@ -668,6 +668,17 @@ impl NetRun {
             }
             let bound = p.sync.error_bound(now as f64);
             let target = clock_target(&self.cfg, p);
+            let skew = p.sync.model().skew;
+            if p.sync.synced() && skew.abs() - p.sync.skew_bound() > MAX_CRYSTAL {
+                let message = format!(
+                    "its clock seems to run {:+.0} ppm off the host's, beyond a crystal's ±{:.0} ppm, but its exchanges after {secs:.1} s do not make that sure ({} kept, least round trip {:.0} µs); nothing moves on it",
+                    skew * 1e6,
+                    MAX_CRYSTAL * 1e6,
+                    p.sync.points(),
+                    p.sync.min_rtt(),
+                );
+                return NetError::Node { node, message };
+            }
             if bound > target {
                 let message = format!(
                     "its clock is known to ±{bound:.1} µs after {secs:.1} s ({} exchanges kept, least round trip {:.0} µs); nothing moves before it is within ±{:.0} µs",
@@ -685,20 +696,31 @@ impl NetRun {
     }
 
     /// Refuses a node whose clock runs at a rate no crystal has: started
-    /// with another --time-scale, or broken.
-    fn check_rates(&self, now: u64) -> Result<(), NetError> {
+    /// with another --time-scale, or broken. The estimate points at such a
+    /// node (its rate beyond the range by more than its slope's bound), but
+    /// that bound is a statistic a busy host's bursts of late exchanges can
+    /// fool; a node is refused only when every rate its exchanges allow is
+    /// out of range ([`ClockSync::feasible_skew`]: hard limits, which
+    /// delays only widen). `Ok(false)`: some node looks out of range but is
+    /// not surely so yet (a start waits for more exchanges).
+    ///
+    /// [`ClockSync::feasible_skew`]: motet_wire::sync::ClockSync::feasible_skew
+    fn check_rates(&self) -> Result<bool, NetError> {
+        let mut clear = true;
         for p in &self.peers {
-            // Only a rate surely out of range, from an estimate good enough
-            // to start on or measured over long enough: a few exchanges of a
-            // busy host (its loop late in bursts) can fake a steep slope
-            // with a bound that believes it.
-            let rough = p.sync.span_us() < RATE_SPAN_US
-                && p.sync.error_bound(now as f64) > clock_target(&self.cfg, p);
-            if !p.sync.synced() || rough {
+            if !p.sync.synced() {
                 continue;
             }
             let skew = p.sync.model().skew;
-            let surely = skew.abs() - p.sync.skew_bound();
+            if skew.abs() - p.sync.skew_bound() <= MAX_CRYSTAL {
+                continue;
+            }
+            // The least |rate| the exchanges allow.
+            let surely = match p.sync.feasible_skew() {
+                Some((lo, _)) if lo > 0.0 => lo,
+                Some((_, hi)) if hi < 0.0 => -hi,
+                _ => 0.0,
+            };
             let node = p.name.clone();
             if surely >= MAX_SKEW {
                 return Err(NetError::Node {
@@ -714,14 +736,16 @@ impl NetRun {
                 return Err(NetError::Node {
                     node,
                     message: format!(
-                        "its clock runs {:+.0} ppm off the host's; a crystal is within ±{:.0} ppm, so nothing moves on it",
+                        "its clock runs {:+.0} ppm off the host's (at least {:.0} ppm, by every exchange); a crystal is within ±{:.0} ppm, so nothing moves on it",
                         skew * 1e6,
+                        surely * 1e6,
                         MAX_CRYSTAL * 1e6
                     ),
                 });
             }
+            clear = false;
         }
-        Ok(())
+        Ok(clear)
     }
 
     fn ask_status(&mut self, now: u64) {
