@@ -20,6 +20,9 @@ pub struct IdealTrajectory {
     linear: Vec<Option<Point>>,
     /// The axis whose forward motion is extrusion, if any.
     extruder: Option<usize>,
+    /// The axes whose path deviation is checked, in order; `checked` of them.
+    axes: [usize; MAX_AXES],
+    checked: usize,
     /// The front segment as followed; `None` until a step needs it, and
     /// again whenever the front changes.
     front: Option<Followed>,
@@ -37,9 +40,14 @@ struct Followed {
     profile: Profile,
     /// Whether the segment moves the extruder forward.
     extruding: bool,
-    /// Per actuator with a linear joint, `(joint at s = 0, joint per unit
-    /// distance)`, in steps.
-    lines: Vec<Option<(f64, f64)>>,
+    /// Per actuator, for a linear joint, `(joint at s = 0, joint per unit
+    /// distance)`, in steps; NaN for any other joint.
+    lines: Vec<(f64, f64)>,
+    /// The checked axes' start and change per unit distance, in the order
+    /// of [`IdealTrajectory::new`]'s `checked` (plain arrays: the path
+    /// check runs once per step).
+    c_start: [f64; MAX_AXES],
+    c_unit: [f64; MAX_AXES],
     piece: PieceCursor,
 }
 
@@ -73,11 +81,19 @@ pub struct Moment {
 
 impl IdealTrajectory {
     /// For a machine whose actuators follow `maps`, each at `spu` unsigned
-    /// steps per joint unit, extruding on axis `extruder`.
+    /// steps per joint unit, extruding on axis `extruder`, its path checked
+    /// on the axes `checked` (at most [`MAX_AXES`], each below it).
     pub fn new(
         maps: impl IntoIterator<Item = (JointMap, f64)>,
         extruder: Option<usize>,
+        checked: &[usize],
     ) -> IdealTrajectory {
+        let mut axes = [0; MAX_AXES];
+        let mut n = 0;
+        for &k in checked.iter().filter(|&&k| k < MAX_AXES).take(MAX_AXES) {
+            axes[n] = k;
+            n += 1;
+        }
         let linear = maps
             .into_iter()
             .map(|(map, spu)| match map {
@@ -89,6 +105,8 @@ impl IdealTrajectory {
             window: VecDeque::new(),
             linear,
             extruder,
+            axes,
+            checked: n,
             front: None,
         }
     }
@@ -139,7 +157,12 @@ impl IdealTrajectory {
         }
         if self.front.is_none() {
             let seg = self.window.front()?;
-            self.front = Some(Followed::new(seg, &self.linear, self.extruder));
+            self.front = Some(Followed::new(
+                seg,
+                &self.linear,
+                self.extruder,
+                &self.axes[..self.checked],
+            ));
         }
         let f = self.front.as_mut()?;
         if !(f.t0 <= t && t <= f.t1) {
@@ -156,18 +179,18 @@ impl IdealTrajectory {
         }
     }
 
-    /// Squared distance from `p` to the commanded point at `i`, over `axes`.
+    /// Squared distance from `p` to the commanded point at `i`, over the
+    /// checked axes.
     #[inline]
-    pub fn distance2(&self, i: Moment, p: &Point, axes: &[usize]) -> f64 {
+    pub fn distance2(&self, i: Moment, p: &Point) -> f64 {
         let Some(f) = &self.front else {
             return 0.0;
         };
+        let n = self.checked.min(MAX_AXES);
         let mut d2 = 0.0;
-        for &k in axes {
-            if k < MAX_AXES {
-                let d = p[k] - (f.start[k] + f.unit[k] * i.s);
-                d2 += d * d;
-            }
+        for ((&k, &a), &w) in self.axes[..n].iter().zip(&f.c_start[..n]).zip(&f.c_unit[..n]) {
+            let d = p[k] - (a + w * i.s);
+            d2 += d * d;
         }
         d2
     }
@@ -176,8 +199,9 @@ impl IdealTrajectory {
     /// linear in the axes.
     #[inline]
     pub fn joint_steps(&self, a: usize, i: Moment) -> Option<f64> {
-        let (q0, k) = (*self.front.as_ref()?.lines.get(a)?)?;
-        Some(q0 + k * i.s)
+        let (q0, k) = *self.front.as_ref()?.lines.get(a)?;
+        let v = q0 + k * i.s;
+        (!v.is_nan()).then_some(v)
     }
 
     /// Actuator `a`'s ideal joint speed in steps per µs at `i`, when its
@@ -185,7 +209,10 @@ impl IdealTrajectory {
     #[inline]
     pub fn joint_rate(&self, a: usize, i: Moment) -> Option<f64> {
         let f = self.front.as_ref()?;
-        let (_, k) = (*f.lines.get(a)?)?;
+        let (q0, k) = *f.lines.get(a)?;
+        if q0.is_nan() {
+            return None;
+        }
         let p = &f.piece;
         Some(k * (p.v + i.u * (2.0 * p.half_a + 3.0 * i.u * p.sixth_j)))
     }
@@ -215,7 +242,12 @@ impl IdealTrajectory {
 }
 
 impl Followed {
-    fn new(seg: &Segment, linear: &[Option<Point>], extruder: Option<usize>) -> Followed {
+    fn new(
+        seg: &Segment,
+        linear: &[Option<Point>],
+        extruder: Option<usize>,
+        checked: &[usize],
+    ) -> Followed {
         let length = seg.profile.length();
         let mut unit = [0.0; MAX_AXES];
         if length > 0.0 {
@@ -225,17 +257,23 @@ impl Followed {
         }
         let lines = linear
             .iter()
-            .map(|c| {
-                c.map(|c| {
+            .map(|c| match c {
+                Some(c) => {
                     let (mut q0, mut k) = (0.0, 0.0);
                     for i in 0..MAX_AXES {
                         q0 += c[i] * seg.start[i];
                         k += c[i] * unit[i];
                     }
                     (q0, k)
-                })
+                }
+                None => (f64::NAN, f64::NAN),
             })
             .collect();
+        let (mut c_start, mut c_unit) = ([0.0; MAX_AXES], [0.0; MAX_AXES]);
+        for (j, &k) in checked.iter().enumerate().take(MAX_AXES) {
+            c_start[j] = seg.start[k];
+            c_unit[j] = unit[k];
+        }
         let mut f = Followed {
             t0: seg.t0,
             t1: seg.t1(),
@@ -245,6 +283,8 @@ impl Followed {
             profile: seg.profile,
             extruding: extruder.is_some_and(|e| seg.end[e] > seg.start[e]),
             lines,
+            c_start,
+            c_unit,
             piece: PieceCursor::enter(&seg.profile, 0),
         };
         if length <= 0.0 {
@@ -343,7 +383,7 @@ mod tests {
                 coeffs: [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
             };
             let spu = 80.0;
-            let mut ideal = IdealTrajectory::new([(map, spu)], None);
+            let mut ideal = IdealTrajectory::new([(map, spu)], None, &[0, 1, 2]);
             ideal.push(seg);
             let n = 2000;
             for k in 0..=n {

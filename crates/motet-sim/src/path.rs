@@ -69,7 +69,13 @@ impl PathRecorder {
     /// Adds the machine's position after a step or a tool change.
     #[inline]
     pub fn sample(&mut self, p: &Point, tool_on: bool) {
-        let q = [p[self.x], p[self.y]];
+        self.sample_xy([p[self.x], p[self.y]], tool_on);
+    }
+
+    /// [`PathRecorder::sample`] with the drawn axes' values `q` already
+    /// picked out of the point.
+    #[inline]
+    pub fn sample_xy(&mut self, q: [f64; 2], tool_on: bool) {
         // The common case, once per step: the same stroke goes on.
         if self.open_on == Some(tool_on) && self.points.len() < MAX_STROKE_POINTS {
             let (dx, dy) = (self.last[0] - q[0], self.last[1] - q[1]);

@@ -81,8 +81,6 @@ pub struct Plant {
     /// Segments sent to nodes and not yet in the past, followed at step
     /// instants.
     ideal: IdealTrajectory,
-    /// The axes whose path deviation is checked (all but the extruder).
-    checked_axes: Vec<usize>,
     /// The executed path, sampled at every step in the drawing's plane and
     /// every tool change.
     pub recorder: PathRecorder,
@@ -158,8 +156,12 @@ impl Plant {
         // The axes whose deviation is checked: all but the extruder's.
         let extruder = machine.axis("e");
         let axes = machine.axes.len().min(MAX_AXES);
-        let checked_axes = (0..axes).filter(|&i| Some(i) != extruder).collect();
-        let ideal = IdealTrajectory::new(actuators.iter().map(|a| (a.map, a.spu)), extruder);
+        let checked_axes: Vec<usize> = (0..axes).filter(|&i| Some(i) != extruder).collect();
+        let ideal = IdealTrajectory::new(
+            actuators.iter().map(|a| (a.map, a.spu)),
+            extruder,
+            &checked_axes,
+        );
         let mut plant = Plant {
             actuators,
             kinematics: machine.kinematics,
@@ -168,7 +170,6 @@ impl Plant {
             joint_axis,
             tools: vec![0.0; machine.tools.len()],
             ideal,
-            checked_axes,
             recorder,
             max_path_deviation: 0.0,
             joints: [0.0; MAX_JOINTS],
@@ -235,7 +236,9 @@ impl Plant {
         let Some(at) = self.ideal.at(t) else {
             return;
         };
-        let a = &mut self.actuators[index];
+        let Some(a) = self.actuators.get_mut(index) else {
+            return;
+        };
         let before = a.position;
         let positive = forward != a.invert;
         a.position += if positive { 1 } else { -1 };
@@ -286,7 +289,7 @@ impl Plant {
                 }
             }
         }
-        let d2 = self.ideal.distance2(at, &self.executed, &self.checked_axes);
+        let d2 = self.ideal.distance2(at, &self.executed);
         // Compared squared; the root is taken only for a new largest.
         if d2 > self.max_path_deviation * self.max_path_deviation {
             self.max_path_deviation = d2.sqrt();
@@ -295,8 +298,9 @@ impl Plant {
         // unless the tool's state changed with it.
         let on = self.tool_on();
         if moves_xy || self.recorder.tool_on() != Some(on) {
-            let p = self.executed;
-            self.recorder.sample(&p, on);
+            let (x, y) = (self.recorder.x(), self.recorder.y());
+            let q = [self.executed[x], self.executed[y]];
+            self.recorder.sample_xy(q, on);
         }
     }
 

@@ -22,4 +22,8 @@ pub use kinematics::{JointMap, JointPath, KinematicsKind};
 pub use point::{Point, MAX_AXES};
 pub use profile::{Piece, Profile, ProfileKind, ProfileParams, PIECES};
 pub use segment::Segment;
-pub use timing::TimeCursor;
+pub use timing::{PieceForm, PieceInverse, TimeCursor};
+
+/// The square root every layer uses: `libm`'s, or the FPU's instruction
+/// where the target has one (the same bits: both are correctly rounded).
+pub use math::sqrt;

@@ -1,6 +1,8 @@
 //! Float functions through `libm`, so the same results come out on the host and on
 //! a Cortex-M node (the square root in hardware where the FPU has one).
 
+/// The correctly rounded square root: the FPU's instruction where the
+/// target has one (see `build.rs`), `libm`'s otherwise.
 #[inline]
 pub fn sqrt(x: f64) -> f64 {
     #[cfg(hw_sqrt_f64)]

@@ -29,6 +29,50 @@ enum Solve {
     Still,
 }
 
+/// The closed form of a piece's inverse, for callers that solve many
+/// distances in one piece ([`TimeCursor::piece_inverse`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PieceForm {
+    /// Constant speed: `u = x · per_unit` seconds for `x` units into the piece.
+    Cruise {
+        /// Seconds per unit (the speed's inverse).
+        per_unit: f64,
+    },
+    /// Constant acceleration: `u = 2x / (v + √(vv + two_a·x))`.
+    Quadratic {
+        /// Speed at the piece's start.
+        v: f64,
+        /// Its square.
+        vv: f64,
+        /// Twice the acceleration.
+        two_a: f64,
+    },
+    /// Anything else (jerk-limited, standing still): one distance at a time
+    /// through [`TimeCursor::time_in_piece`].
+    Other,
+}
+
+/// The piece a [`TimeCursor`] is in, with what a caller needs to invert it
+/// on its own exactly as [`TimeCursor::time_in_piece`] does: a distance
+/// `d` beyond `d_end` is not in it; `x = d − d0` at or below 0 is its start
+/// `t0`, at or beyond `span` its end `t0 + duration`, and in between its
+/// `form`'s time, at most `duration`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PieceInverse {
+    /// Seconds into the profile where the piece starts.
+    pub t0: f64,
+    /// Seconds it lasts.
+    pub duration: f64,
+    /// Distance into the profile where it starts.
+    pub d0: f64,
+    /// Distance it covers.
+    pub span: f64,
+    /// Where the next non-empty piece starts (infinite in the last).
+    pub d_end: f64,
+    /// Its inverse.
+    pub form: PieceForm,
+}
+
 /// Inverts one profile for distances that never decrease.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeCursor {
@@ -171,6 +215,23 @@ impl TimeCursor {
                 }
                 n
             }
+        }
+    }
+
+    /// The piece the cursor is in (the one its last answer came from).
+    pub fn piece_inverse(&self) -> PieceInverse {
+        let p = &self.piece;
+        PieceInverse {
+            t0: p.t0,
+            duration: p.duration,
+            d0: p.d0,
+            span: self.span,
+            d_end: self.d_end,
+            form: match self.solve {
+                Solve::Cruise { per_unit } => PieceForm::Cruise { per_unit },
+                Solve::Quadratic { vv, two_a } => PieceForm::Quadratic { v: p.v, vv, two_a },
+                _ => PieceForm::Other,
+            },
         }
     }
 

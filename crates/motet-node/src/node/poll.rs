@@ -4,7 +4,6 @@
 
 use super::{Node, MAX_CHANNELS, MAX_OUTPUTS_PER_POLL};
 use crate::board::Board;
-use crate::channel::Step;
 
 impl<const Q: usize, const T: usize> Node<Q, T> {
     pub(super) fn poll_outputs<B: Board>(&mut self, until: f64, board: &mut B) {
@@ -38,75 +37,41 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // only a step changes its channel's next step, and only an event or
         // a refresh changes what is due besides steps, so both are kept and
         // updated where they change instead of asked for on every output.
-        let n = self.channels.len();
         let mut next = [f64::INFINITY; MAX_CHANNELS];
         for (t, ch) in next.iter_mut().zip(self.channels.iter_mut()) {
-            *t = time_of(ch.next_step_within(&self.segments, end));
+            *t = ch.next_time_within(&self.segments, end);
         }
-        let mut others = self.others_due(until);
         // Time of the last output handed out.
         let mut last = None;
         loop {
-            let (bi, bt, second) = earliest(&next[..n], until);
-            let (event_time, refresh, other) = others;
-            if bi != usize::MAX && bt < other {
-                // Only steps are due first: the common case, taken directly.
-                let limit = if second < other { second } else { other };
-                match self.step_run(bi, bt, limit, end, board, budget, &mut last) {
-                    Some(t) => next[bi] = t,
-                    None => {
-                        if let Some(t) = last {
-                            self.pause_at(t);
-                            return false;
-                        }
-                    }
-                }
-                continue;
-            }
-            let best = (bi != usize::MAX).then_some((bi, bt));
-            // Ties: events, then refreshes, then steps.
-            let step_time = best.map(|(_, t)| t);
-            let next_out = [step_time, event_time, refresh.map(|r| r.1)]
-                .into_iter()
-                .flatten()
-                .min_by(f64::total_cmp);
-            match (next_out, last) {
-                (None, _) => break,
-                (Some(_), Some(t)) if *budget == 0 => {
-                    // Everything before `t` is out; what is due at `t` or
-                    // after waits for the next poll.
+            let (event_time, refresh, other) = self.others_due(until);
+            // Every step before the next other output (or the frame's end):
+            // the common case, in a loop of its own.
+            let stop = if other < until { other } else { until };
+            if !self.steps_before(stop, &mut next, end, board, budget, &mut last) {
+                if let Some(t) = last {
                     self.pause_at(t);
                     return false;
                 }
-                _ => {}
+            }
+            if !(other < until) {
+                break;
+            }
+            // An event or a refresh is due at `other`, no later than any
+            // step left. Ties: events, then refreshes, then steps.
+            if let Some(t) = last.filter(|_| *budget == 0) {
+                // Everything before `t` is out; what is due at `t` or
+                // after waits for the next poll.
+                self.pause_at(t);
+                return false;
             }
             *budget = budget.saturating_sub(1);
-            last = next_out;
-            if let Some((i, u)) = refresh {
-                if event_time.is_none_or(|te| u < te) && step_time.is_none_or(|ts| u <= ts) {
-                    self.refresh_tool(i, u, board);
-                    others = self.others_due(until);
-                    continue;
+            last = Some(other);
+            match refresh {
+                Some((i, u)) if event_time.is_none_or(|te| u < te) => {
+                    self.refresh_tool(i, u, board)
                 }
-            }
-            match (best, event_time) {
-                (None, None) => break,
-                (Some((_, ts)), Some(te)) if te <= ts => {
-                    self.fire_event(board);
-                    others = self.others_due(until);
-                }
-                (None, Some(_)) => {
-                    self.fire_event(board);
-                    others = self.others_due(until);
-                }
-                (Some((i, _)), _) => {
-                    let ch = &mut self.channels[i];
-                    let id = ch.config().channel;
-                    if let Some((t, dir)) = ch.take_step() {
-                        board.step(id, dir, t);
-                    }
-                    next[i] = time_of(ch.next_step_within(&self.segments, end));
-                }
+                _ => self.fire_event(board),
             }
         }
         self.now = until;
@@ -114,45 +79,102 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         true
     }
 
-    /// Steps channel `i`, whose next step (at `from`) is the earliest output,
-    /// while its next step is still strictly before `limit`, the next other
-    /// output, without looking at the others again (a tie goes back to the
-    /// full rule of [`Node::poll_trajectory`]). Returns the channel's next
-    /// step time, or `None` when the budget ran out after an output (`last`
-    /// holds its time).
+    /// Hands out every step strictly before `stop`, earliest first (the
+    /// lower channel on a tie), keeping each channel's next step time in
+    /// `next`. False when the budget ran out first (`last` holds the time
+    /// of the last output).
     #[inline]
-    // The loop's state as it stands in `poll_trajectory`: this runs for
-    // nearly every step, where a recomputed `end` or a bundled state costs.
-    #[allow(clippy::too_many_arguments)]
-    fn step_run<B: Board>(
+    fn steps_before<B: Board>(
         &mut self,
-        i: usize,
-        from: f64,
-        limit: f64,
+        stop: f64,
+        next: &mut [f64; MAX_CHANNELS],
         end: usize,
         board: &mut B,
         budget: &mut u32,
         last: &mut Option<f64>,
-    ) -> Option<f64> {
-        let ch = &mut self.channels[i];
-        let id = ch.config().channel;
-        let mut at = from;
-        loop {
-            if *budget == 0 && last.is_some() {
-                return None;
-            }
-            *budget = budget.saturating_sub(1);
-            *last = Some(at);
-            if let Some((t, dir)) = ch.take_step() {
-                board.step(id, dir, t);
-            }
-            let t = time_of(ch.next_step_within(&self.segments, end));
-            if t < limit {
-                at = t;
-            } else {
-                return Some(t);
+    ) -> bool {
+        // Only the channels with a step to come take part (a channel with
+        // none gets none within the poll: the committed segments do not
+        // change), in channel order, their count a constant so that the
+        // search for the earliest is unrolled: a few comparisons a step.
+        let mut act = [0u8; MAX_CHANNELS];
+        let mut m = 0;
+        for (i, t) in next.iter().enumerate().take(self.channels.len()) {
+            if *t < stop {
+                act[m] = i as u8;
+                m += 1;
             }
         }
+        match m {
+            0 => true,
+            1 => self.merge::<1, B>(&act, stop, next, end, board, budget, last),
+            2 => self.merge::<2, B>(&act, stop, next, end, board, budget, last),
+            3 => self.merge::<3, B>(&act, stop, next, end, board, budget, last),
+            4 => self.merge::<4, B>(&act, stop, next, end, board, budget, last),
+            5 => self.merge::<5, B>(&act, stop, next, end, board, budget, last),
+            6 => self.merge::<6, B>(&act, stop, next, end, board, budget, last),
+            7 => self.merge::<7, B>(&act, stop, next, end, board, budget, last),
+            _ => self.merge::<MAX_CHANNELS, B>(&act, stop, next, end, board, budget, last),
+        }
+    }
+
+    /// [`Node::steps_before`] over the `N` channels `act`.
+    #[inline(always)]
+    // The loop's state as it stands in `poll_trajectory`: this runs for
+    // every step, where a bundled state costs.
+    #[allow(clippy::too_many_arguments)]
+    fn merge<const N: usize, B: Board>(
+        &mut self,
+        act: &[u8; MAX_CHANNELS],
+        stop: f64,
+        next: &mut [f64; MAX_CHANNELS],
+        end: usize,
+        board: &mut B,
+        budget: &mut u32,
+        last: &mut Option<f64>,
+    ) -> bool {
+        let mut times = [0.0; N];
+        for (t, &i) in times.iter_mut().zip(act.iter()) {
+            *t = next[i as usize];
+        }
+        let mut left = *budget;
+        // One output at least per poll, so that every poll gets on.
+        let mut free = last.is_none();
+        let mut at = None;
+        loop {
+            // Selects rather than branches: which channel is earliest
+            // changes from step to step.
+            let (mut bk, mut bt) = (0, times[0]);
+            for (k, &t) in times.iter().enumerate().skip(1) {
+                let earlier = t < bt;
+                bk = if earlier { k } else { bk };
+                bt = if earlier { t } else { bt };
+            }
+            if !(bt < stop) {
+                break;
+            }
+            if left == 0 {
+                if !free {
+                    break;
+                }
+            } else {
+                left -= 1;
+            }
+            free = false;
+            at = Some(bt);
+            let ch = &mut self.channels[act[bk] as usize];
+            board.step(ch.config().channel, ch.next_forward(), bt);
+            times[bk] = ch.advance(&self.segments, end);
+        }
+        for (t, &i) in times.iter().zip(act.iter()) {
+            next[i as usize] = *t;
+        }
+        *budget = left;
+        if at.is_some() {
+            *last = at;
+        }
+        // Out of budget with steps still due before `stop`.
+        !(left == 0 && times.iter().any(|&t| t < stop) && last.is_some())
     }
 
     /// Ends a poll that ran out of budget at its last output's time `t`.
@@ -160,27 +182,4 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.now = t;
         self.retire();
     }
-}
-
-/// The earliest of the channels' next step times `next` before `until`: its
-/// channel (the first on a tie; `usize::MAX` for none), its time (`until`
-/// for none), and the time of the next earliest (at most `until`).
-#[inline]
-fn earliest(next: &[f64], until: f64) -> (usize, f64, f64) {
-    let (mut bi, mut bt, mut second) = (usize::MAX, until, until);
-    for (i, &t) in next.iter().enumerate() {
-        if t < bt {
-            second = bt;
-            (bi, bt) = (i, t);
-        } else if t < second {
-            second = t;
-        }
-    }
-    (bi, bt, second)
-}
-
-/// A step's time; infinite for none.
-#[inline]
-fn time_of(step: Option<Step>) -> f64 {
-    step.map_or(f64::INFINITY, |s| s.time)
 }

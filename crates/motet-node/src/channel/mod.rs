@@ -6,19 +6,28 @@
 //! each crossing is solved in closed form from the segment's geometry and speed
 //! profile, so steps are placed exactly inside a frame, not rounded to it.
 //!
-//! On the common stretch (a joint affine in the distance, inside one piece
-//! of the speed profile) the channel solves up to [`AHEAD`] steps at once
-//! and hands them out one by one: each solve is independent of the last, so
-//! the processor overlaps their square roots and divisions instead of
-//! waiting on each, and the checks that pick the stretch are made once per
-//! batch, not once per step. The times are the same as one at a time.
+//! Two ways to a step:
+//! * **the long way** ([`Channel::find_step`]) starts segments and legs (the
+//!   stretches over which the joint is monotone), and solves any joint shape
+//!   in any profile piece, one step at a time;
+//! * **a run** (`run.rs`): once the long way has solved a step on a joint
+//!   affine in the distance, inside a cruise or constant-acceleration piece,
+//!   every later boundary of that leg in that piece follows one closed form
+//!   of its index. The run counts them once and solves up to [`AHEAD`] at a
+//!   time, each a few multiplications (and a square root and a division
+//!   under acceleration), with no per-step checks.
+//!
+//! A step taken is counted and the next one handed out ([`Channel::advance`]);
+//! solving happens only when the solved steps are used up.
+
+mod run;
 
 use heapless::Deque;
 use motet_trajectory::{JointPath, Segment, TimeCursor};
 use motet_wire::ChannelConfig;
+use run::{Ahead, Run, RunStart};
 
-/// Most steps solved ahead of the one being taken.
-pub const AHEAD: usize = 8;
+pub use run::AHEAD;
 
 /// A step found but not yet taken.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,8 +46,9 @@ pub struct Channel {
     /// Steps per joint unit, unsigned; the sign lives in `invert`.
     spu: f64,
     invert: bool,
-    /// Steps taken, counted in the joint's positive direction.
-    position: i64,
+    /// Steps taken before the solved ones, counted in the joint's positive
+    /// direction (the solved ones taken are counted by `ahead`).
+    base: i64,
     /// Index of the segment being followed, relative to the queue's head.
     seg: usize,
     path: Option<JointPath>,
@@ -54,52 +64,15 @@ pub struct Channel {
     t0: f64,
     /// Joint value where the last segment ended, to keep angles continuous.
     joint_ref: f64,
-    /// Steps solved and not yet taken: `times[head..len]`, all in the
-    /// direction `positive`, at distances `dists[head..len]` into the
-    /// segment (kept so that a retime can go back to the first).
+    /// Steps solved and not yet taken.
     ahead: Ahead,
+    /// The steps of the current run not yet solved.
+    run: Run,
+    /// Time of the last step solved, µs: the next is never earlier.
     last_time: f64,
-}
-
-#[derive(Clone, Debug)]
-struct Ahead {
-    times: [f64; AHEAD],
-    dists: [f64; AHEAD],
-    head: usize,
-    len: usize,
-    positive: bool,
-}
-
-impl Ahead {
-    const EMPTY: Ahead = Ahead {
-        times: [0.0; AHEAD],
-        dists: [0.0; AHEAD],
-        head: 0,
-        len: 0,
-        positive: true,
-    };
-
-    #[inline(always)]
-    fn next(&self) -> Option<Step> {
-        (self.head < self.len).then(|| Step {
-            time: self.times[self.head],
-            positive: self.positive,
-        })
-    }
-
-    fn clear(&mut self) {
-        self.head = 0;
-        self.len = 0;
-    }
-
-    /// Just `step`, found the long way.
-    fn one(&mut self, step: Step, s: f64) {
-        self.times[0] = step.time;
-        self.dists[0] = s;
-        self.head = 0;
-        self.len = 1;
-        self.positive = step.positive;
-    }
+    /// Time of the last step before the solved ones, µs (what a retime
+    /// keeps to when none of them is taken).
+    floor: f64,
 }
 
 /// What a leg's steps need, computed once per leg instead of once per step.
@@ -130,7 +103,7 @@ impl Channel {
             config,
             spu: config.steps_per_unit.abs(),
             invert: config.steps_per_unit < 0.0,
-            position: 0,
+            base: 0,
             seg: 0,
             path: None,
             s: 0.0,
@@ -139,7 +112,9 @@ impl Channel {
             t0: 0.0,
             joint_ref: 0.0,
             ahead: Ahead::EMPTY,
+            run: Run::NONE,
             last_time: f64::NEG_INFINITY,
+            floor: f64::NEG_INFINITY,
         }
     }
 
@@ -150,7 +125,7 @@ impl Channel {
 
     /// Steps taken so far, in the joint's positive direction.
     pub fn position(&self) -> i64 {
-        self.position
+        self.base + self.ahead.taken()
     }
 
     /// Sets the step count from the machine at rest at `p`, without stepping.
@@ -164,11 +139,12 @@ impl Channel {
         };
         let value = self.config.map.value(p, reference);
         self.joint_ref = value;
-        self.position = libm_round(value * self.spu);
+        self.base = libm_round(value * self.spu);
         self.seg = 0;
         self.path = None;
         self.leg = Leg::NONE;
-        self.ahead.clear();
+        self.ahead = Ahead::EMPTY;
+        self.run = Run::NONE;
     }
 
     /// The next step on the queued segments, if they hold one.
@@ -178,90 +154,105 @@ impl Channel {
 
     /// The next step on the first `end` queued segments (the committed ones;
     /// the rest are not to be run yet).
-    #[inline(always)]
     pub fn next_step_within<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
         end: usize,
     ) -> Option<Step> {
+        let time = self.next_time_within(segments, end);
+        (time != f64::INFINITY).then_some(Step {
+            time,
+            positive: self.ahead.positive,
+        })
+    }
+
+    /// The next step's time on the first `end` queued segments; infinite
+    /// when they hold none (yet).
+    #[inline(always)]
+    pub fn next_time_within<const Q: usize>(
+        &mut self,
+        segments: &Deque<Segment, Q>,
+        end: usize,
+    ) -> f64 {
         // Most calls end here: the step was solved with others before it.
-        if let Some(step) = self.ahead.next() {
-            return Some(step);
+        let t = self.ahead.next_time();
+        if t != f64::INFINITY {
+            return t;
         }
         self.solve_ahead(segments, end)
     }
 
-    /// Solves the next steps: a batch on a line leg, or one the long way.
-    #[inline(never)]
-    fn solve_ahead<const Q: usize>(
-        &mut self,
-        segments: &Deque<Segment, Q>,
-        end: usize,
-    ) -> Option<Step> {
-        if self.seg < end {
-            if let Some(step) = self.steps_on_line() {
-                return Some(step);
-            }
-        }
-        self.find_step(segments, end)
+    /// The direction output of the next step (the driver's line: the
+    /// joint's direction, inverted if the actuator's steps per unit are
+    /// negative); meaningful once a step is solved.
+    #[inline(always)]
+    pub fn next_forward(&self) -> bool {
+        self.ahead.forward
     }
 
-    /// The common case, kept short: the next steps lie in the current leg
-    /// of a joint affine in the distance, and in the profile piece the
-    /// timer is in. Solves up to [`AHEAD`] of them; `None` (nothing
-    /// changed) sends the caller the long way.
+    /// Takes the step [`Channel::next_time_within`] gave (there must be
+    /// one) and returns the time of the one after it on the first `end`
+    /// segments (infinite: none yet). The poll's hot path.
     #[inline(always)]
-    fn steps_on_line(&mut self) -> Option<Step> {
-        let (a0, per_step) = self.leg.line?;
-        let pos = self.position as f64;
-        let at_hi = self.leg.at_hi;
-        let (mut boundary, positive) = if at_hi > pos + 0.5 {
-            (pos + 0.5, true)
-        } else if at_hi < pos - 0.5 {
-            (pos - 0.5, false)
-        } else {
-            return None;
-        };
-        let dir = if positive { 1.0 } else { -1.0 };
-        // The distances of the leg's next boundaries, each never short of
-        // the one before, then their times in the current profile piece.
+    pub fn advance<const Q: usize>(&mut self, segments: &Deque<Segment, Q>, end: usize) -> f64 {
         let a = &mut self.ahead;
-        let (mut prev, hi) = (self.s, self.leg.hi);
-        let mut n = 0;
-        while n < AHEAD {
-            // Past the leg's last boundary: the rest is the long way's.
-            if (at_hi - boundary) * dir <= 0.0 {
-                break;
+        a.head += 1;
+        if a.head < a.len {
+            return a.times[a.head];
+        }
+        self.solve_ahead(segments, end)
+    }
+
+    /// Solves the next steps: a batch from the current run, or one the
+    /// long way (and the run that follows it).
+    #[inline(never)]
+    fn solve_ahead<const Q: usize>(&mut self, segments: &Deque<Segment, Q>, end: usize) -> f64 {
+        // Every solved step is taken: they count from here on.
+        self.base += self.ahead.taken();
+        self.ahead.head = 0;
+        self.ahead.len = 0;
+        self.floor = self.last_time;
+        if self.run.is_live() && self.seg < end {
+            self.last_time = self.run.fill(&mut self.ahead, 0, self.last_time);
+            self.s = self.run.last_dist();
+            return self.ahead.times[0];
+        }
+        match self.find_step(segments, end) {
+            Some((time, boundary, positive)) => {
+                self.start_run(boundary, positive);
+                time
             }
-            let s = (boundary - a0) * per_step;
-            let s = if s > prev { s } else { prev };
-            let s = if s < hi { s } else { hi };
-            a.dists[n] = s;
-            prev = s;
-            n += 1;
-            boundary += dir;
+            None => f64::INFINITY,
         }
-        let n = self.timer.times_in_piece(&a.dists[..n], &mut a.times[..n]);
-        if n == 0 {
-            return None;
+    }
+
+    /// After a step found the long way at `boundary`: the run of the steps
+    /// that follow it in its leg and profile piece, if they have a closed
+    /// form; its first batch joins the step in the solved ones.
+    fn start_run(&mut self, boundary: f64, positive: bool) {
+        let Some((a0, per_step)) = self.leg.line else {
+            return;
+        };
+        let from = RunStart {
+            a0,
+            per_step,
+            boundary,
+            dir: if positive { 1.0 } else { -1.0 },
+            at_hi: self.leg.at_hi,
+            seg_t0: self.t0,
+        };
+        self.run = Run::after(&from, &self.timer.piece_inverse());
+        if !self.run.is_live() {
+            return;
         }
-        let mut last = self.last_time;
-        for t in a.times[..n].iter_mut() {
-            let time = self.t0 + *t * 1e6;
-            // Never earlier than the step before, whatever the rounding.
-            last = if time > last { time } else { last };
-            *t = last;
-        }
-        self.s = a.dists[n - 1];
-        a.head = 0;
-        a.len = n;
-        a.positive = positive;
-        a.next()
+        // The batch goes after the step already solved.
+        self.last_time = self.run.fill(&mut self.ahead, 1, self.last_time);
+        self.s = self.run.last_dist();
     }
 
     /// Where a joint affine in the distance crosses `boundary`, inside the
-    /// leg. Plain comparisons (not `f64::max`, which costs NaN checks per
-    /// step); a NaN stays where the leg is.
+    /// leg. Plain comparisons (not `f64::max`, which costs NaN checks); a
+    /// NaN stays where the leg is.
     #[inline(always)]
     fn line_crossing(&self, a0: f64, per_step: f64, boundary: f64) -> f64 {
         let s = (boundary - a0) * per_step;
@@ -286,12 +277,14 @@ impl Channel {
     }
 
     /// The long way: starts segments and legs as needed, and solves any
-    /// joint shape and any profile piece.
+    /// joint shape and any profile piece. Puts the step in the solved ones
+    /// and returns its time, its half-step boundary and its direction.
     fn find_step<const Q: usize>(
         &mut self,
         segments: &Deque<Segment, Q>,
         end: usize,
-    ) -> Option<Step> {
+    ) -> Option<(f64, f64, bool)> {
+        self.run = Run::NONE;
         loop {
             if self.seg >= end {
                 return None;
@@ -301,7 +294,7 @@ impl Channel {
                 self.seg += 1;
                 continue;
             }
-            let pos = self.position as f64;
+            let pos = self.base as f64;
             let at_hi = self.leg.at_hi;
             let (boundary, positive) = if at_hi > pos + 0.5 {
                 (pos + 0.5, true)
@@ -318,12 +311,10 @@ impl Channel {
             };
             self.s = s;
             let t = self.timer.time_at(&seg.profile, s);
-            let step = Step {
-                time: self.step_time(t),
-                positive,
-            };
-            self.ahead.one(step, s);
-            return Some(step);
+            let time = self.step_time(t);
+            self.last_time = time;
+            self.ahead.one(time, s, positive, self.invert);
+            return Some((time, boundary, positive));
         }
     }
 
@@ -394,25 +385,35 @@ impl Channel {
         }
         // The first step solved keeps its place on the path and takes that
         // place's new time; the ones after it are solved again.
-        let a = &mut self.ahead;
+        let a = &self.ahead;
+        self.last_time = if a.head > 0 {
+            a.times[a.head - 1]
+        } else {
+            self.floor
+        };
         if a.head < a.len {
-            self.s = a.dists[a.head];
+            self.s = a.dist(a.head, &self.run);
             let t = self.timer.time_at(&seg.profile, self.s);
             let time = self.step_time(t);
+            self.last_time = time;
             let a = &mut self.ahead;
             a.times[a.head] = time;
             a.len = a.head + 1;
         }
+        // The run followed the old profile; the long way starts a new one.
+        self.run = Run::NONE;
     }
 
-    /// Takes the pending step; returns the direction output.
+    /// Takes the pending step; returns its time and the direction output.
     #[inline]
     pub fn take_step(&mut self) -> Option<(f64, bool)> {
-        let step = self.ahead.next()?;
-        self.ahead.head += 1;
-        self.position += if step.positive { 1 } else { -1 };
-        self.last_time = step.time;
-        Some((step.time, step.positive != self.invert))
+        let a = &mut self.ahead;
+        if a.head >= a.len {
+            return None;
+        }
+        let time = a.times[a.head];
+        a.head += 1;
+        Some((time, a.forward))
     }
 
     /// How many queued segments the channel is completely done with.
