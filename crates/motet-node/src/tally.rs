@@ -4,20 +4,26 @@
 //! an emulated one) can be checked against the simulator without sending
 //! every step back.
 //!
-//! The hash takes each output as two 64-bit words (what and the time's
-//! bits), each mixed in by an xor, a multiply by a large odd constant and an
-//! xor-shift: a few instructions a step even on a 32-bit core, where a
-//! byte-wise CRC would cost as much as the step's solve.
+//! The hash takes each output as one 64-bit word, the time's bits with what
+//! happened folded in (multiplied by a large odd constant, so that no
+//! change of channel, direction or value cancels a change of time), mixed
+//! in by an xor, a multiply by a large odd constant and an xor-shift: one
+//! such step per output, a few instructions even on a 32-bit core, where a
+//! byte-wise CRC would cost as much as the step's solve. Each step is a
+//! one-to-one function of the word for a given hash so far, so any single
+//! difference changes the hash.
 
 use crate::board::Board;
 use crate::node::MAX_CHANNELS;
 use motet_wire::NodeMessage;
 
-/// Where the hash starts, and the constant it multiplies by (both odd, with
-/// bits spread across the word).
+/// Where the hash starts, the constant it multiplies by, and the one what
+/// happened is spread with (all odd, with bits spread across the word).
 const SEED: u64 = 0x6d6f_7465_745f_7461;
 const MUL: u64 = 0x9e37_79b9_7f4a_7c15;
+const WHAT: u64 = 0xc2b2_ae3d_27d4_eb4f;
 
+#[inline(always)]
 fn mix(h: u64, w: u64) -> u64 {
     let h = (h ^ w).wrapping_mul(MUL);
     h ^ (h >> 29)
@@ -48,21 +54,22 @@ impl Default for StepTally {
 }
 
 impl StepTally {
-    /// A step: the word `channel | forward << 8`, then the time's bits.
+    /// A step: the time's bits and `channel | forward << 8`.
+    #[inline]
     pub fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
         if let Some(c) = self.steps.get_mut(channel as usize) {
             *c = c.wrapping_add(1);
         }
         let what = channel as u64 | (forward as u64) << 8;
-        self.hash = mix(mix(self.hash, what), at_us.to_bits());
+        self.hash = mix(self.hash, at_us.to_bits() ^ what.wrapping_mul(WHAT));
     }
 
-    /// A tool change: the word `output | 1 << 16 | value's bits << 32` (the
-    /// bit 16 sets it apart from any step), then the time's bits.
+    /// A tool change: the time's bits and `output | 1 << 16 | value's
+    /// bits << 32` (the bit 16 sets it apart from any step).
     pub fn tool(&mut self, output: u8, value: f32, at_us: f64) {
         self.tool_changes = self.tool_changes.wrapping_add(1);
         let what = output as u64 | 1 << 16 | (value.to_bits() as u64) << 32;
-        self.hash = mix(mix(self.hash, what), at_us.to_bits());
+        self.hash = mix(self.hash, at_us.to_bits() ^ what.wrapping_mul(WHAT));
     }
 
     /// As the node reports it.

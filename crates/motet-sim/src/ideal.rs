@@ -188,7 +188,11 @@ impl IdealTrajectory {
         };
         let n = self.checked.min(MAX_AXES);
         let mut d2 = 0.0;
-        for ((&k, &a), &w) in self.axes[..n].iter().zip(&f.c_start[..n]).zip(&f.c_unit[..n]) {
+        for ((&k, &a), &w) in self.axes[..n]
+            .iter()
+            .zip(&f.c_start[..n])
+            .zip(&f.c_unit[..n])
+        {
             let d = p[k] - (a + w * i.s);
             d2 += d * d;
         }

@@ -181,43 +181,6 @@ impl TimeCursor {
         Some(p.t0 + if u < p.duration { u } else { p.duration })
     }
 
-    /// [`TimeCursor::time_in_piece`] for several increasing distances at
-    /// once: writes the times of the leading ones that lie in the current
-    /// piece to `out` and returns how many. The piece's constants are read
-    /// once, so each time costs only its own arithmetic, and the times do
-    /// not depend on each other, so their roots and divisions overlap.
-    #[inline]
-    pub fn times_in_piece(&mut self, ds: &[f64], out: &mut [f64]) -> usize {
-        let n = ds.len().min(out.len());
-        let p = self.piece;
-        let (d_end, span) = (self.d_end, self.span);
-        match self.solve {
-            Solve::Quadratic { vv, two_a } => fill_piece(&p, d_end, span, &ds[..n], out, |x| {
-                let disc = vv + two_a * x;
-                let root = sqrt(if disc > 0.0 { disc } else { 0.0 });
-                let denom = p.v + root;
-                if denom > 0.0 {
-                    2.0 * x / denom
-                } else {
-                    p.duration
-                }
-            }),
-            Solve::Cruise { per_unit } => {
-                fill_piece(&p, d_end, span, &ds[..n], out, |x| x * per_unit)
-            }
-            // Newton carries its last answer from one distance to the next.
-            _ => {
-                for k in 0..n {
-                    match self.time_in_piece(ds[k]) {
-                        Some(t) => out[k] = t,
-                        None => return k,
-                    }
-                }
-                n
-            }
-        }
-    }
-
     /// The piece the cursor is in (the one its last answer came from).
     pub fn piece_inverse(&self) -> PieceInverse {
         let p = &self.piece;
@@ -323,37 +286,6 @@ fn newton(p: &Piece, half_a: f64, sixth_j: f64, half_j: f64, x: f64, start: f64)
         };
     }
     u
-}
-
-/// [`TimeCursor::times_in_piece`]'s loop for a closed form `inside` (the
-/// time after the piece's start for a distance `x` into it): one loop per
-/// form, the form chosen once outside it. Where a distance is outside the
-/// piece's inside, the single-step rule gives the answer (the piece's start
-/// or end).
-#[inline(always)]
-fn fill_piece(
-    p: &Piece,
-    d_end: f64,
-    span: f64,
-    ds: &[f64],
-    out: &mut [f64],
-    inside: impl Fn(f64) -> f64,
-) -> usize {
-    for (k, (&d, t)) in ds.iter().zip(out.iter_mut()).enumerate() {
-        if d > d_end {
-            return k;
-        }
-        let x = d - p.d0;
-        *t = if x <= 0.0 {
-            p.t0
-        } else if x >= span {
-            p.t0 + p.duration
-        } else {
-            let u = inside(x);
-            p.t0 + if u < p.duration { u } else { p.duration }
-        };
-    }
-    ds.len()
 }
 
 #[cfg(test)]

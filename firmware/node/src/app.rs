@@ -223,7 +223,7 @@ struct RunAhead {
     slice_us: u64,
     /// Room the step queue must have before a slice runs.
     reserve: usize,
-    ticks_per_us: f64,
+    ticks_per_us: u32,
 }
 
 impl RunAhead {
@@ -236,7 +236,7 @@ impl RunAhead {
             reserve: (B::CHANNELS as u64 * B::MAX_STEP_HZ as u64 * cfg.slice_us as u64 * 3
                 / 1_000_000) as usize
                 + 16,
-            ticks_per_us: B::TICKS_PER_US as f64,
+            ticks_per_us: B::TICKS_PER_US,
         }
     }
 
@@ -257,10 +257,7 @@ impl RunAhead {
         F: motet_node::Flash,
     {
         if let Some(model) = ep.services().clock_model() {
-            let conv = HostToTicks {
-                model,
-                ticks_per_us: self.ticks_per_us,
-            };
+            let conv = HostToTicks::new(model, self.ticks_per_us);
             let target = now + self.lookahead_us;
             // Behind (a long frame, a slow flash write): what is due now is
             // queued at once and leaves late, nothing is skipped.
@@ -272,13 +269,13 @@ impl RunAhead {
             }
             polled
         } else {
-            let none = HostToTicks {
-                model: ClockModel {
+            let none = HostToTicks::new(
+                ClockModel {
                     offset: 0.0,
                     skew: 0.0,
                 },
-                ticks_per_us: self.ticks_per_us,
-            };
+                self.ticks_per_us,
+            );
             // Not synchronised: the node does not run (the endpoint knows).
             ep.poll(now, &mut sched.outputs(none));
             now

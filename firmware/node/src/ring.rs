@@ -134,6 +134,40 @@ impl Producer<'_> {
     }
 }
 
+impl Producer<'_> {
+    /// Room for how many more operations (the consumer may free more
+    /// meanwhile).
+    #[inline]
+    pub fn room(&mut self) -> usize {
+        let n = self.slots.len() as u32;
+        if self.put.wrapping_sub(self.seen_head) == n {
+            self.seen_head = self.head.load(Ordering::Acquire);
+        }
+        (n - self.put.wrapping_sub(self.seen_head)) as usize
+    }
+
+    /// Puts `op` at the back without publishing it: the consumer sees it
+    /// at the next [`Producer::publish`] (or [`Producer::push`]). There
+    /// must be room ([`Producer::room`]).
+    #[inline]
+    pub fn put_unpublished(&mut self, op: Op) {
+        let n = self.slots.len() as u32;
+        debug_assert!(self.put.wrapping_sub(self.seen_head) < n);
+        let slot = &self.slots[(self.put & (n - 1)) as usize];
+        // SAFETY: the caller made sure of room, so the slot is free
+        // (outside head..tail): the consumer does not read it until the
+        // tail is published.
+        unsafe { *slot.get() = op };
+        self.put = self.put.wrapping_add(1);
+    }
+
+    /// Publishes every operation put: one release store for a batch.
+    #[inline]
+    pub fn publish(&mut self) {
+        self.tail.store(self.put, Ordering::Release);
+    }
+}
+
 /// The interrupt's half.
 pub struct Consumer<'r> {
     slots: &'r [UnsafeCell<Op>],

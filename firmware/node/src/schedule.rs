@@ -15,12 +15,12 @@ use crate::board::Ticks;
 use crate::clock::HostToTicks;
 use crate::op::{before, later, Op, OpKind};
 use crate::ring::Producer;
-use heapless::Vec;
 use motet_node::MAX_CHANNELS;
 
-/// Operations held back for ordering. Each channel has at most three in
-/// flight (direction, rising and falling edge) within its set-up time.
-const HELD: usize = 48;
+/// Operations held back for ordering (a power of two: the hold buffer is a
+/// ring). Each channel has at most three in flight (direction, rising and
+/// falling edge) within its set-up time; a poll's slice adds the rest.
+const HELD: usize = 64;
 
 /// A channel's pulse timing in ticks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,10 +56,11 @@ pub const DEFAULT_DIR_SETUP_US: f32 = 1.0;
 #[derive(Clone, Copy, Debug)]
 struct Chan {
     timing: Timing,
-    /// Direction output as last queued; None before the first step.
-    forward: Option<bool>,
-    /// Falling edge of the last pulse.
-    last_low: Option<Ticks>,
+    /// Direction output as last queued: 1 forward, 0 backward, 2 before
+    /// the first step (a plain byte: this is read on every step).
+    forward: u8,
+    /// Falling edge of the last pulse, valid once `forward` is set.
+    last_low: Ticks,
 }
 
 /// What the background did, for diagnostics.
@@ -80,7 +81,7 @@ pub struct ScheduleStats {
 pub struct Scheduler<'q> {
     queue: Producer<'q>,
     chans: [Chan; MAX_CHANNELS],
-    held: Vec<Op, HELD>,
+    held: Held,
     /// The longest set-up time of any channel: how far back an operation
     /// can land before the output that caused it.
     max_setup: Ticks,
@@ -95,10 +96,10 @@ impl<'q> Scheduler<'q> {
             queue,
             chans: [Chan {
                 timing: t,
-                forward: None,
-                last_low: None,
+                forward: 2,
+                last_low: 0,
             }; MAX_CHANNELS],
-            held: Vec::new(),
+            held: Held::new(),
             max_setup: t.dir_setup,
             ticks_per_us,
             stats: ScheduleStats::default(),
@@ -139,7 +140,7 @@ impl<'q> Scheduler<'q> {
 
     /// Operations waiting here for their turn.
     pub fn held(&self) -> usize {
-        self.held.len()
+        self.held.len
     }
 
     /// The node's outputs converted with `clock`, as a `motet_node::Board`.
@@ -156,53 +157,53 @@ impl<'q> Scheduler<'q> {
     }
 
     fn release_before(&mut self, horizon: Ticks) {
-        let mut n = 0;
-        for op in self.held.iter() {
-            if !before(op.at, horizon) || self.queue.push(*op).is_err() {
+        // A batch under one release store: the interrupt sees them together.
+        let mut room = self.queue.room();
+        while room > 0 {
+            let Some(op) = self.held.first() else {
+                break;
+            };
+            if !before(op.at, horizon) {
                 break;
             }
-            n += 1;
+            self.queue.put_unpublished(op);
+            self.held.pop();
+            room -= 1;
         }
-        if n > 0 {
-            // Shift the rest down (a few dozen at most).
-            let len = self.held.len();
-            self.held.as_mut_slice().copy_within(n..len, 0);
-            self.held.truncate(len - n);
-        }
+        self.queue.publish();
     }
 
     /// Holds `op` in tick order.
+    #[inline]
     fn hold(&mut self, op: Op) {
-        if self.held.is_full() {
+        if self.held.len == HELD {
             // Out of room: the earliest goes to the queue now.
-            let first = self.held[0];
-            if self.queue.push(first).is_err() {
-                self.stats.lost += 1;
+            if let Some(first) = self.held.first() {
+                if self.queue.push(first).is_err() {
+                    self.stats.lost += 1;
+                }
             }
-            self.held.remove(0);
+            self.held.pop();
         }
-        let mut i = self.held.len();
-        while i > 0 && before(op.at, self.held[i - 1].at) {
-            i -= 1;
-        }
-        // Room was made above.
-        let _ = self.held.insert(i, op);
+        self.held.insert(op);
     }
 
     /// A step on `channel` at tick `t`.
+    #[inline]
     pub fn step(&mut self, channel: u8, forward: bool, t: Ticks) {
         let Some(c) = self.chans.get(channel as usize).copied() else {
             return;
         };
+        let started = c.forward != 2;
         let mut rise = t;
-        if let Some(low) = c.last_low {
-            rise = later(rise, low.wrapping_add(c.timing.pulse));
+        if started {
+            rise = later(rise, c.last_low.wrapping_add(c.timing.pulse));
         }
         let mut dir = None;
-        if c.forward != Some(forward) {
+        if c.forward != forward as u8 {
             let mut at = t.wrapping_sub(c.timing.dir_setup);
-            if let Some(low) = c.last_low {
-                at = later(at, low);
+            if started {
+                at = later(at, c.last_low);
             }
             rise = later(rise, at.wrapping_add(c.timing.dir_setup));
             dir = Some(at);
@@ -223,8 +224,8 @@ impl<'q> Scheduler<'q> {
         self.hold(Op::new(rise, OpKind::StepHigh, channel));
         self.hold(Op::new(low, OpKind::StepLow, channel));
         let ch = &mut self.chans[channel as usize];
-        ch.forward = Some(forward);
-        ch.last_low = Some(low);
+        ch.forward = forward as u8;
+        ch.last_low = low;
         self.stats.steps += 1;
     }
 
@@ -242,6 +243,62 @@ impl<'q> Scheduler<'q> {
         self.stats.tool_changes += 1;
     }
 }
+
+/// Operations held back, in tick order, in a ring: the earliest leaves
+/// from the front at no cost, and an operation comes in from the back,
+/// shifting only those due after it (few: outputs come nearly in order).
+struct Held {
+    ops: [Op; HELD],
+    head: usize,
+    len: usize,
+}
+
+impl Held {
+    const fn new() -> Held {
+        Held {
+            ops: [Op::new(0, OpKind::StepLow, 0); HELD],
+            head: 0,
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn slot(&self, i: usize) -> usize {
+        (self.head + i) & (HELD - 1)
+    }
+
+    fn first(&self) -> Option<Op> {
+        (self.len > 0).then(|| self.ops[self.head])
+    }
+
+    fn pop(&mut self) {
+        if self.len > 0 {
+            self.head = (self.head + 1) & (HELD - 1);
+            self.len -= 1;
+        }
+    }
+
+    /// Puts `op` after every operation not later than it; there must be
+    /// room.
+    #[inline]
+    fn insert(&mut self, op: Op) {
+        let mut i = self.len;
+        while i > 0 {
+            let prev = self.ops[self.slot(i - 1)];
+            if !before(op.at, prev.at) {
+                break;
+            }
+            let to = self.slot(i);
+            self.ops[to] = prev;
+            i -= 1;
+        }
+        let at = self.slot(i);
+        self.ops[at] = op;
+        self.len += 1;
+    }
+}
+
+const _: () = assert!(HELD.is_power_of_two());
 
 /// The node's `Board` while the background polls it: every output goes to
 /// the scheduler at its tick.

@@ -7,7 +7,7 @@
 //! profile, so steps are placed exactly inside a frame, not rounded to it.
 //!
 //! Two ways to a step:
-//! * **the long way** ([`Channel::find_step`]) starts segments and legs (the
+//! * **the long way** (`Channel::find_step`) starts segments and legs (the
 //!   stretches over which the joint is monotone), and solves any joint shape
 //!   in any profile piece, one step at a time;
 //! * **a run** (`run.rs`): once the long way has solved a step on a joint

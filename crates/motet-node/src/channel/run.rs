@@ -251,13 +251,8 @@ impl Run {
 
     #[inline(always)]
     fn fill_with(&mut self, times: &mut [f64], mut last: f64, u_of: impl Fn(f64) -> f64) -> f64 {
-        let (x0, dx, span, dur, t_start) = (
-            self.x0,
-            self.dx,
-            self.span,
-            self.duration_us,
-            self.t_start,
-        );
+        let (x0, dx, span, dur, t_start) =
+            (self.x0, self.dx, self.span, self.duration_us, self.t_start);
         let mut k = self.k;
         for t in times.iter_mut() {
             let x = x0 + k * dx;
@@ -283,7 +278,7 @@ impl Run {
 fn steps_before(boundary: f64, dir: f64, at_hi: f64) -> u32 {
     let inside = |k: f64| (at_hi - (boundary + k * dir)) * dir > 0.0;
     let room = (at_hi - boundary) * dir;
-    if !(room > 1.0) {
+    if room.is_nan() || room <= 1.0 {
         return 0;
     }
     // `room` is off by a rounding at most: the first k outside is its

@@ -54,7 +54,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                     return false;
                 }
             }
-            if !(other < until) {
+            if other >= until {
                 break;
             }
             // An event or a refresh is due at `other`, no later than any
@@ -150,7 +150,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 bk = if earlier { k } else { bk };
                 bt = if earlier { t } else { bt };
             }
-            if !(bt < stop) {
+            if bt >= stop {
                 break;
             }
             if left == 0 {
