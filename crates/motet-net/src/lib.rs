@@ -29,4 +29,5 @@ pub(crate) mod source;
 pub mod spawn;
 pub(crate) mod tail;
 
+pub use plan_feed::CommandSource;
 pub use run::{LostNode, NetConfig, NetError, NetRun, Phase, RunIdentity, StopInfo, Tally};

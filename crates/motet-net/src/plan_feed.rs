@@ -21,15 +21,56 @@ pub fn run_limits(machine: &Machine, min_move_s: f64) -> Limits {
     l
 }
 
-/// Commands fed to the planner as its output is taken.
+/// Where a run's commands come from when they are read as the run goes
+/// (a job file read a second time, once it was checked and planned through
+/// in full), so that a job of any length runs in the same memory.
+pub trait CommandSource: Send {
+    /// The next command, `None` at the end. An error (saying where) ends
+    /// the run as a planning error would: nothing already sealed is lost.
+    fn next_command(&mut self) -> Option<Result<Located<Command>, String>>;
+}
+
+/// Why a feed could not give its next item.
+#[derive(Debug)]
+pub enum FeedError {
+    /// The planner refused the command at `loc`.
+    Plan(SourceLoc, PlanError),
+    /// The command source failed (see [`CommandSource`]).
+    Source(String),
+}
+
+impl PlanFeed {
+    /// [`PlanFeed::next`] for a feed given all its commands (no source):
+    /// only the planner can refuse.
+    pub fn next_given(
+        &mut self,
+        dist: &mut Distributor,
+    ) -> Result<Option<Sourced>, (SourceLoc, PlanError)> {
+        match self.next(dist) {
+            Ok(item) => Ok(item),
+            Err(FeedError::Plan(loc, e)) => Err((loc, e)),
+            // A feed without a source never reads.
+            Err(FeedError::Source(_)) => Ok(None),
+        }
+    }
+}
+
+/// Commands fed to the planner as its output is taken; a command is let go
+/// once the planner has it.
 ///
 /// An open feed ([`PlanFeed::keep_open`]) takes more commands while it runs
 /// ([`PlanFeed::push`]): when it has planned every command it has, it
 /// gives nothing more (the planner keeps its lookahead) until more come or
-/// it is closed ([`PlanFeed::close`]), which plans what is held to rest.
+/// it is closed ([`PlanFeed::close`]), which plans what is held to rest. A
+/// feed with a source ([`PlanFeed::reading`]) takes each command from it
+/// when the planner needs one, after those it was given.
 pub struct PlanFeed {
-    commands: Vec<Located<Command>>,
+    /// Commands not yet given to the planner; the first is `next_command`.
+    commands: VecDeque<Located<Command>>,
     next_command: usize,
+    source: Option<Box<dyn CommandSource>>,
+    /// The job's length, when the commands come from a source.
+    total: Option<usize>,
     planner: SourcedPlanner,
     finished: bool,
     exhausted: bool,
@@ -43,14 +84,24 @@ impl PlanFeed {
     /// A trajectory from rest at `start` at host time `t0` (µs).
     pub fn new(limits: Limits, start: Point, t0: f64, commands: Vec<Located<Command>>) -> PlanFeed {
         PlanFeed {
-            commands,
+            commands: commands.into(),
             next_command: 0,
+            source: None,
+            total: None,
             planner: SourcedPlanner::new(Planner::new(limits, start, t0)),
             finished: false,
             exhausted: false,
             open: false,
             paces: VecDeque::new(),
         }
+    }
+
+    /// Takes the commands after those it has from `source`, `total` in all
+    /// (for progress), as the planner needs them.
+    pub fn reading(mut self, source: Box<dyn CommandSource>, total: usize) -> PlanFeed {
+        self.source = Some(source);
+        self.total = Some(total);
+        self
     }
 
     /// The slowdowns a run's journal recorded ([`PlanFeed::slow`]), applied
@@ -96,19 +147,27 @@ impl PlanFeed {
     /// Open, with every command given to the planner: what it holds waits
     /// for more commands or the close.
     pub fn starved(&self) -> bool {
-        self.open && self.next_command >= self.commands.len()
+        self.open && self.commands.is_empty() && self.source.is_none()
     }
 
-    /// The commands not yet given to the planner, to adjust before they
-    /// are planned (an override changing their feed).
+    /// The commands not yet given to the planner (of those read), to
+    /// adjust before they are planned (an override changing their feed).
     pub fn pending_mut(&mut self) -> &mut [Located<Command>] {
-        let from = self.next_command.min(self.commands.len());
-        &mut self.commands[from..]
+        self.commands.make_contiguous()
     }
 
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
-        (self.next_command, self.commands.len())
+        let known = self.next_command + self.commands.len();
+        (
+            self.next_command,
+            self.total.map_or(known, |t| t.max(known)),
+        )
+    }
+
+    /// Commands held (given, read, not yet planned).
+    pub fn held(&self) -> usize {
+        self.commands.len()
     }
 
     /// The planner has given everything.
@@ -117,10 +176,7 @@ impl PlanFeed {
     }
 
     /// The next item, quantized by `dist` as the nodes will run it.
-    pub fn next(
-        &mut self,
-        dist: &mut Distributor,
-    ) -> Result<Option<Sourced>, (SourceLoc, PlanError)> {
+    pub fn next(&mut self, dist: &mut Distributor) -> Result<Option<Sourced>, FeedError> {
         loop {
             if let Some(mut s) = self.planner.pop() {
                 // The nodes run the quantized trajectory: it is the record.
@@ -134,11 +190,20 @@ impl PlanFeed {
                 self.planner.set_min_move_s(s);
                 self.paces.pop_front();
             }
-            if let Some(c) = self.commands.get(self.next_command) {
+            if let Some(c) = self.commands.pop_front() {
                 self.planner
                     .push(self.next_command, &c.item)
-                    .map_err(|e| (c.loc, e))?;
+                    .map_err(|e| FeedError::Plan(c.loc, e))?;
                 self.next_command += 1;
+            } else if let Some(source) = self.source.as_mut() {
+                match source.next_command() {
+                    Some(Ok(c)) => self.commands.push_back(c),
+                    Some(Err(message)) => {
+                        self.source = None;
+                        return Err(FeedError::Source(message));
+                    }
+                    None => self.source = None,
+                }
             } else if self.open {
                 return Ok(None);
             } else if !self.finished {
@@ -169,7 +234,7 @@ pub fn replan(
     let mut feed = PlanFeed::new(limits, header.start, header.t0, commands).with_paces(paces);
     let mut out = Vec::new();
     while out.len() < count {
-        match feed.next(&mut dist)? {
+        match feed.next_given(&mut dist)? {
             Some(Sourced {
                 item: Planned::Segment(s),
                 command,

@@ -88,7 +88,7 @@ pub fn replay(
         header.t0,
         commands,
     );
-    while let Some(item) = feed.next(&mut dist)? {
+    while let Some(item) = feed.next_given(&mut dist)? {
         for (k, n) in nodes.iter_mut().enumerate() {
             // A node that refuses a message is what the tally would show.
             if let Ok(out) = dist.route_batched(k, &item.item) {

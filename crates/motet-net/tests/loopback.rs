@@ -191,7 +191,8 @@ fn the_host_knows_where_the_machine_was_in_the_last_second_and_will_be() {
 /// The host's record of the trajectory holds the segments of the last
 /// second and those queued, whatever the job's length: `moves` chords of
 /// `chord` mm round a circle at `feed` mm/s, each a segment no shorter than
-/// `chord / feed`.
+/// `chord / feed`. A job read as the run goes (`NetRun::reading`) is held
+/// a command at a time, and runs the same steps as the job given whole.
 #[test]
 fn the_host_keeps_a_window_of_the_trajectory_not_the_job() {
     // (machine, centre, radius, moves, chord mm, feed mm/s)
@@ -215,35 +216,29 @@ fn the_host_keeps_a_window_of_the_trajectory_not_the_job() {
     ];
     for (machine, centre, radius, moves, chord, feed) in cases {
         let m = Machine::load(&root().join(machine)).unwrap();
-        let step = chord / radius;
-        let mut cmds = Vec::new();
-        for k in 0..moves {
-            let a = k as f64 * step;
-            let mut target = m.start;
-            target[0] = centre[0] + radius * a.cos();
-            target[1] = centre[1] + radius * a.sin();
-            cmds.push(Located {
-                loc: motet_planner::SourceLoc {
-                    line: k + 1,
-                    column: 0,
-                },
-                item: Command::Move(motet_planner::Move {
-                    target,
-                    feed,
-                    kind: motet_planner::MoveKind::Feed,
-                }),
-            });
-        }
-        let mut lb = clean_loopback(&m, cmds);
-        let mut most = 0;
+        let cmds = circle(&m, centre, radius, moves, chord, feed);
+        // The same job given whole, and read as the run goes: the same
+        // steps, and only the second holds a bounded part of the job.
+        let mut given = clean_loopback(&m, cmds.clone());
+        given.run_until_settled(3_600_000_000).unwrap();
+        let mut lb = clean_loopback(&m, Vec::new());
+        lb.run.reading(Box::new(Listed(cmds.into_iter())), moves);
+        let (mut most, mut most_commands) = (0, 0);
         while lb.now < 3_600_000_000 {
             lb.step().unwrap();
             most = most.max(lb.run.history_len());
+            most_commands = most_commands.max(lb.run.commands_held());
             if matches!(lb.run.phase(), Phase::Done | Phase::Stopped(_)) {
                 break;
             }
         }
         assert_eq!(lb.run.phase(), &Phase::Done, "{machine}");
+        assert_eq!(executed(&m, &lb), executed(&m, &given), "{machine}");
+        assert_eq!(lb.run.progress(), (moves, moves), "{machine}");
+        assert!(
+            most_commands <= 1,
+            "{machine}: {most_commands} commands held"
+        );
         // A second's segments, a queue's, and one more of each for the
         // polls between.
         let queue = m.nodes.iter().map(|n| n.queue).max().unwrap();
@@ -254,6 +249,46 @@ fn the_host_keeps_a_window_of_the_trajectory_not_the_job() {
             lb.run.segments_sent
         );
         assert!(lb.run.segments_sent >= moves as u64, "{machine}");
+    }
+}
+
+/// `moves` chords of `chord` mm around a circle at `feed` mm/s.
+fn circle(
+    m: &Machine,
+    centre: [f64; 2],
+    radius: f64,
+    moves: usize,
+    chord: f64,
+    feed: f64,
+) -> Vec<Located<Command>> {
+    let step = chord / radius;
+    (0..moves)
+        .map(|k| {
+            let a = k as f64 * step;
+            let mut target = m.start;
+            target[0] = centre[0] + radius * a.cos();
+            target[1] = centre[1] + radius * a.sin();
+            Located {
+                loc: motet_planner::SourceLoc {
+                    line: k as u32 + 1,
+                    column: 0,
+                },
+                item: Command::Move(motet_planner::Move {
+                    target,
+                    feed,
+                    kind: motet_planner::MoveKind::Feed,
+                }),
+            }
+        })
+        .collect()
+}
+
+/// Commands handed to a run one at a time, as a job file read again is.
+struct Listed(std::vec::IntoIter<Located<Command>>);
+
+impl motet_net::CommandSource for Listed {
+    fn next_command(&mut self) -> Option<Result<Located<Command>, String>> {
+        self.0.next().map(Ok)
     }
 }
 
@@ -323,4 +358,39 @@ fn each_node_tallies_what_the_replay_computes() {
         assert_eq!(got, want, "{machine} {job}");
         assert!(got.iter().any(|t| t.steps.iter().sum::<u32>() > 1000));
     }
+}
+
+/// A job that cannot be read further while it runs (its file changed or
+/// went between the check and the run): the machine stops on the path, as
+/// for a node's trouble, the reason naming where the reading failed.
+#[test]
+fn a_job_that_fails_to_read_mid_run_stops_the_machine_on_the_path() {
+    let m = Machine::load(&root().join("examples/printer.toml")).unwrap();
+    let cmds = circle(&m, [110.0, 110.0], 80.0, 2000, 2.0, 150.0);
+    let mut lb = clean_loopback(&m, Vec::new());
+    struct Failing(std::vec::IntoIter<Located<Command>>);
+    impl motet_net::CommandSource for Failing {
+        fn next_command(&mut self) -> Option<Result<Located<Command>, String>> {
+            Some(
+                self.0
+                    .next()
+                    .ok_or_else(|| "job.gcode:801: gone".to_string()),
+            )
+        }
+    }
+    let first: Vec<_> = cmds.into_iter().take(800).collect();
+    lb.run.reading(Box::new(Failing(first.into_iter())), 2000);
+    let Phase::Stopped(info) = lb.run_until_settled(3_600_000_000).unwrap() else {
+        panic!("the run must stop: {:?}", lb.run.phase())
+    };
+    assert!(
+        info.reason.contains("job.gcode:801: gone"),
+        "{}",
+        info.reason
+    );
+    assert!(info.next_command <= 800, "{info:?}");
+    lb.host_alive = false;
+    lb.run_until_settled(30_000_000).unwrap();
+    let got: Vec<i64> = executed(&m, &lb).iter().map(|&(_, p)| p).collect();
+    assert_eq!(got, steps_at(&m, &info.point), "{info:?}");
 }

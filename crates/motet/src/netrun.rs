@@ -4,7 +4,7 @@
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use motet_api::job::{parse_job, read_bytes, Job, JobKind};
-use motet_api::{job_name, JobOptions};
+use motet_api::{job_name, scan_job, JobOptions, JobReader};
 use motet_host::Machine;
 use motet_net::admin::AdminError;
 use motet_net::clock::{Clock, WallClock};
@@ -14,7 +14,7 @@ use motet_net::pairing_file::{format_uid, pairing_path};
 use motet_net::resume::{parse_assumed, prove, Evidence, NodeSeen, ResumeError};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
 use motet_net::session::{locate, NodeAddr, Session, SessionError};
-use motet_net::{NetConfig, NetRun, Phase, RunIdentity, StopInfo};
+use motet_net::{CommandSource, NetConfig, NetRun, Phase, RunIdentity, StopInfo};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
 use motet_wire::NodeMessage;
@@ -101,6 +101,80 @@ fn read_files(machine_path: &Path, job_path: &Path, allow_unknown: bool) -> Resu
     })
 }
 
+/// A job for a run, checked and planned through once but not kept: its
+/// commands are read again as the run goes ([`stream_job`]).
+struct Scanned {
+    machine_path: PathBuf,
+    machine: Machine,
+    machine_sha256: Digest,
+    job_path: PathBuf,
+    job_sha256: Digest,
+    commands: usize,
+    warnings: Vec<String>,
+}
+
+fn scan_files(machine_path: &Path, job_path: &Path, opts: &JobOptions) -> Result<Scanned> {
+    let machine_path = absolute(machine_path)?;
+    let text = std::fs::read_to_string(&machine_path)
+        .with_context(|| format!("cannot read machine file {}", machine_path.display()))?;
+    let machine = Machine::parse(&text, &machine_path)?;
+    let job_path = absolute(job_path)?;
+    let job_sha256 = Digest::of_file(&job_path)
+        .with_context(|| format!("cannot read job {}", job_path.display()))?;
+    let scan = scan_job(JobReader::open(&machine, &job_path, opts)?, &mut |_, _| {})?;
+    Ok(Scanned {
+        machine_sha256: Digest::of(text.as_bytes()),
+        machine_path,
+        machine,
+        job_path,
+        job_sha256,
+        commands: scan.commands,
+        warnings: scan.warnings,
+    })
+}
+
+/// The job's commands as a run reads them: sent by a reader thread through
+/// a bounded channel, so the run holds a few thousand of them at most.
+struct Streamed(std::sync::mpsc::Receiver<Result<Located<Command>, String>>);
+
+impl CommandSource for Streamed {
+    fn next_command(&mut self) -> Option<Result<Located<Command>, String>> {
+        // The reader ends (and the channel with it) at the job's end.
+        self.0.recv().ok()
+    }
+}
+
+/// Commands read ahead of the run at most.
+const READ_AHEAD: usize = 4096;
+
+/// Reads the job again on a thread of `scope`, for the run to take as it
+/// plans; the thread ends at the job's end, or when the run lets go.
+fn stream_job<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    machine: &'scope Machine,
+    path: &'scope Path,
+    opts: JobOptions,
+) -> Streamed {
+    let (tx, rx) = std::sync::mpsc::sync_channel(READ_AHEAD);
+    scope.spawn(move || {
+        let reader = match JobReader::open(machine, path, &opts) {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = tx.send(Err(format!("reading the job again: {e}")));
+                return;
+            }
+        };
+        for c in reader {
+            let c = c.map_err(|e| format!("reading the job again: {e}"));
+            let failed = c.is_err();
+            if tx.send(c).is_err() || failed {
+                break;
+            }
+        }
+    });
+    Streamed(rx)
+}
+
 fn record_nodes(session: &Session) -> Vec<RunNode> {
     session
         .nodes
@@ -121,10 +195,16 @@ pub fn run(a: NetArgs) -> Result<()> {
     ranges::TIME_SCALE.check("--time-scale", a.time_scale)?;
     ranges::SYNC_MS.check("--sync-ms", a.sync_ms)?;
     ranges::LEAD_MS.check("--lead-ms", a.lead_ms)?;
-    let files = read_files(a.machine_path, a.job_path, a.allow_unknown)?;
+    let opts = JobOptions {
+        allow_unknown: a.allow_unknown,
+        ..Default::default()
+    };
+    // Every error is found before anything moves; the commands are read
+    // again as the run goes, so a job of any length runs in the same memory.
+    let files = scan_files(a.machine_path, a.job_path, &opts)?;
     let machine = &files.machine;
     if !a.quiet {
-        for w in &files.job.warnings {
+        for w in &files.warnings {
             eprintln!("warning: {w}");
         }
     }
@@ -166,22 +246,32 @@ pub fn run(a: NetArgs) -> Result<()> {
         continues: None,
         nodes: record_nodes(&session),
     };
-    drive(
-        machine,
-        files.job.commands,
-        machine.start,
-        session,
-        record,
-        identity,
-        &out,
-        a.quiet,
-    )
+    std::thread::scope(|scope| {
+        let source = stream_job(scope, machine, &files.job_path, opts);
+        drive(
+            machine,
+            RunJob::Streamed(Box::new(source), files.commands),
+            machine.start,
+            session,
+            record,
+            identity,
+            &out,
+            a.quiet,
+        )
+    })
+}
+
+/// What a run runs: commands in hand (a resume's), or a job read as the
+/// run goes, with its length.
+enum RunJob {
+    Given(Vec<Located<Command>>),
+    Streamed(Box<dyn CommandSource>, usize),
 }
 
 #[allow(clippy::too_many_arguments)]
 fn drive(
     machine: &Machine,
-    commands: Vec<Located<Command>>,
+    job: RunJob,
     start: Point,
     mut session: Session,
     record: RunRecord,
@@ -193,9 +283,26 @@ fn drive(
     let journal = JournalWriter::create(&out.join("journal"))?;
     let clock = WallClock::with(record.time_scale, 0.0, 0);
     let peers = std::mem::take(&mut session.peers);
-    let total = commands.len();
-    let mut run = NetRun::new(machine, commands, peers, start, cfg(&record), Some(journal))
-        .with_identity(identity);
+    let (run, total) = match job {
+        RunJob::Given(commands) => {
+            let total = commands.len();
+            let run = NetRun::new(machine, commands, peers, start, cfg(&record), Some(journal));
+            (run, total)
+        }
+        RunJob::Streamed(source, total) => {
+            let mut run = NetRun::new(
+                machine,
+                Vec::new(),
+                peers,
+                start,
+                cfg(&record),
+                Some(journal),
+            );
+            run.reading(source, total);
+            (run, total)
+        }
+    };
+    let mut run = run.with_identity(identity);
     let bar = progress_bar(total, quiet);
     let started = std::time::Instant::now();
     let phase = loop {
@@ -541,6 +648,13 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
         }
     }
     drive(
-        machine, r.commands, r.from, session, next, identity, out, a.quiet,
+        machine,
+        RunJob::Given(r.commands),
+        r.from,
+        session,
+        next,
+        identity,
+        out,
+        a.quiet,
     )
 }

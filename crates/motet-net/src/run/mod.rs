@@ -26,7 +26,7 @@ use crate::digest::Digest;
 use crate::journal::{JournalHeader, JournalWriter};
 use crate::node_clock::MAX_CRYSTAL;
 use crate::peer::{Incoming, Peer};
-use crate::plan_feed::{run_limits, PlanFeed};
+use crate::plan_feed::{run_limits, CommandSource, PlanFeed};
 use clocks::clock_target;
 use motet_host::{Distributor, Machine};
 use motet_planner::{Command, Located, PlanError, SourceLoc};
@@ -141,6 +141,11 @@ pub enum NetError {
         /// What it refused.
         error: PlanError,
     },
+    /// The job could not be read further as the run went (its source
+    /// failed, saying where). Only between a feed and its run: the run
+    /// stops on the path instead ([`Phase::Stopping`]).
+    #[error("{0}")]
+    Source(String),
     /// A node refused, failed its link, or its clock could not be trusted
     /// while the run started; or a segment could not be routed to it.
     #[error("node {node}: {message}")]
@@ -197,6 +202,9 @@ pub struct NetRun {
     identity: RunIdentity,
     peers: Vec<Peer>,
     dist: Distributor,
+    /// The rest of the job, read as the run goes, and its length; until
+    /// streaming starts and the feed takes it.
+    source: Option<(Box<dyn CommandSource>, usize)>,
     /// The job, until streaming starts and the feed takes it.
     commands: Vec<Located<Command>>,
     feed: Option<PlanFeed>,
@@ -279,6 +287,7 @@ impl NetRun {
             peers,
             dist: Distributor::new(machine),
             commands,
+            source: None,
             feed: None,
             feed_open: false,
             feed_t0: f64::NEG_INFINITY,
@@ -353,6 +362,14 @@ impl NetRun {
         std::mem::take(&mut self.peers)
     }
 
+    /// Reads the job's commands after those it was given from `source`,
+    /// `total` in all (for progress), as the run plans them: the run then
+    /// holds a bounded window of the job, however long it is.
+    /// Before the first poll.
+    pub fn reading(&mut self, source: Box<dyn CommandSource>, total: usize) {
+        self.source = Some((source, total));
+    }
+
     /// Keeps the run open for more commands ([`NetRun::push_commands`]),
     /// as a sender streams them: before the first poll. While no command is
     /// waiting to be planned when the committed window needs more, the run
@@ -406,9 +423,17 @@ impl NetRun {
 
     /// Commands planned so far and in all.
     pub fn progress(&self) -> (usize, usize) {
-        self.feed
-            .as_ref()
-            .map_or((0, self.commands.len()), |f| f.progress())
+        let before = match &self.source {
+            Some((_, total)) => *total,
+            None => self.commands.len(),
+        };
+        self.feed.as_ref().map_or((0, before), |f| f.progress())
+    }
+
+    /// Commands the run holds (given or read, not yet planned): what a
+    /// job costs it in memory.
+    pub fn commands_held(&self) -> usize {
+        self.feed.as_ref().map_or(self.commands.len(), |f| f.held())
     }
 
     /// When the committed trajectory ends, µs.
@@ -644,6 +669,9 @@ impl NetRun {
             let mut limits = run_limits(&self.machine, min_move_s);
             limits.max_move_s = self.cfg.max_move_us as f64 * 1e-6;
             let mut feed = PlanFeed::new(limits, self.start_point, t0, commands);
+            if let Some((source, total)) = self.source.take() {
+                feed = feed.reading(source, total);
+            }
             if self.feed_open {
                 feed.keep_open();
             }

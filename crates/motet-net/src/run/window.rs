@@ -4,6 +4,7 @@
 
 use super::{NetError, NetRun, Phase};
 use crate::journal::{JournalSeal, JournalSegment};
+use crate::plan_feed::FeedError;
 use crate::source::Sourced;
 use motet_planner::Planned;
 use motet_trajectory::Segment;
@@ -172,8 +173,17 @@ impl NetRun {
                 self.ask_room(now);
                 break;
             }
-            let Some(item) = self.next_item()? else {
-                break;
+            let item = match self.next_item() {
+                Ok(Some(item)) => item,
+                Ok(None) => break,
+                // The job could not be read further (its file changed or
+                // went): the machine stops on the path, as for a node's
+                // trouble, and what was sealed is the record to resume from.
+                Err(NetError::Source(message)) => {
+                    self.stop(&format!("reading the job: {message}"), now);
+                    break;
+                }
+                Err(e) => return Err(e),
             };
             grew = true;
             match item.item {
@@ -235,8 +245,10 @@ impl NetRun {
         let Some(feed) = self.feed.as_mut() else {
             return Ok(None);
         };
-        feed.next(&mut self.dist)
-            .map_err(|(loc, error)| NetError::Plan { loc, error })
+        feed.next(&mut self.dist).map_err(|e| match e {
+            FeedError::Plan(loc, error) => NetError::Plan { loc, error },
+            FeedError::Source(message) => NetError::Source(message),
+        })
     }
 
     /// Commits the pending window on every node.
