@@ -160,6 +160,12 @@ pub struct NodeSpec {
     /// Its frame period, µs (default 40): how often it polls for the steps
     /// and tool changes due (each still carries its own exact time).
     pub frame_us: f64,
+    /// Its steps solved in fixed-point time, each within this many µs of
+    /// its exact time, as a board without a floating-point unit solves
+    /// them (`motet_node::Node::use_fixed_time`; the Pico: 0.05); 0 (the
+    /// default): exactly. What the simulator runs the node with: a board
+    /// sets its own.
+    pub fixed_time_us: f64,
 }
 
 /// A machine file, validated: everything the planner, the job checks and

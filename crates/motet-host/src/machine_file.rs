@@ -197,4 +197,8 @@ pub struct NodeFile {
     /// Frame period, µs.
     #[serde(default)]
     pub frame_us: Option<Spanned<f64>>,
+    /// Fixed-point time's tolerance, µs: the node solves steps as a board
+    /// without a floating-point unit does.
+    #[serde(default)]
+    pub fixed_time_us: Option<Spanned<f64>>,
 }

@@ -181,6 +181,7 @@ mod tests {
             tools: vec![0],
             queue: 64,
             frame_us: 40.0,
+            fixed_time_us: 0.0,
         };
         // (node, expected error part; None: accepted)
         let cases = [

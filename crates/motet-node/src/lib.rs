@@ -19,6 +19,7 @@ pub mod node;
 pub mod service;
 pub mod storage;
 pub mod tally;
+pub mod time;
 pub mod tool;
 
 pub use board::Board;

@@ -177,6 +177,8 @@ pub const STOP_HORIZON: ValueRange = ValueRange::new(0.0, 64.0, "moves");
 pub const NODE_QUEUE: ValueRange = ValueRange::new(2.0, 64.0, "segments");
 /// A node's frame period, µs.
 pub const FRAME_US: ValueRange = ValueRange::new(1.0, 100_000.0, "µs");
+/// A node's fixed-point time tolerance, µs (0: exact).
+pub const FIXED_TIME_US: ValueRange = ValueRange::new(0.0, 10.0, "µs");
 /// How deep an SVG document's elements may nest.
 pub const SVG_DEPTH: ValueRange = ValueRange::new(0.0, 256.0, "levels");
 

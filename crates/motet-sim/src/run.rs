@@ -166,7 +166,16 @@ impl<P: PlantSink> SimMachine<P> {
             .fold(f64::INFINITY, f64::min);
         let mut sim = SimMachine {
             machine: machine.clone(),
-            nodes: machine.nodes.iter().map(|_| Node::new()).collect(),
+            nodes: machine
+                .nodes
+                .iter()
+                .map(|spec| {
+                    let mut n = Node::new();
+                    // A board without an FPU, as its machine file says.
+                    n.use_fixed_time(spec.fixed_time_us);
+                    n
+                })
+                .collect(),
             dist,
             plant,
             frame,

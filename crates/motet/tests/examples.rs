@@ -223,3 +223,51 @@ fn delta_prints_the_spiral_on_its_path() {
     let z = r.report.axes.iter().find(|a| a.name == "z").unwrap();
     assert!(z.peak_velocity > 0.0, "z never moved");
 }
+
+/// A node run as a board without a floating-point unit runs it
+/// (`[nodes.NAME] fixed_time_us`, the Pico's 0.05 µs): the same steps, to
+/// the same places, each within the tolerance of its exact time.
+#[test]
+fn a_node_in_fixed_point_time_takes_the_same_steps_within_its_tolerance() {
+    for (machine, job, node) in [
+        ("plotter.toml", "drawing.svg", "[nodes.ebb]"),
+        (
+            "printer.toml",
+            "printer-vase-layers.gcode",
+            "[nodes.mainboard]",
+        ),
+    ] {
+        let (m, cmds, exact) = run(machine, job);
+        let text = std::fs::read_to_string(root().join("examples").join(machine)).unwrap();
+        assert!(text.contains(node), "{machine} has no {node}");
+        let fixed_text = text.replace(node, &format!("{node}\nfixed_time_us = 0.05"));
+        let fixed_m = Machine::parse(&fixed_text, &root().join("examples").join(machine)).unwrap();
+        assert!(fixed_m.nodes.iter().all(|n| n.fixed_time_us == 0.05));
+        let fixed = simulate(&fixed_m, job, &cmds, &mut |_, _| {}).unwrap();
+        let (e, f) = (&exact.report, &fixed.report);
+        for (a, b) in e.actuators.iter().zip(&f.actuators) {
+            assert_eq!(
+                (a.steps, a.position),
+                (b.steps, b.position),
+                "{machine}: {}",
+                a.name
+            );
+        }
+        // Within the tolerance, and not exact: fixed-point time is in use.
+        assert!(
+            f.max_step_time_error_us <= 0.05 + 1e-3 && f.max_step_time_error_us > 1e-4,
+            "{machine}: {} µs",
+            f.max_step_time_error_us
+        );
+        let fastest = m
+            .actuators
+            .iter()
+            .filter_map(|a| a.max_step_hz)
+            .fold(0.0, f64::max);
+        assert!(
+            f.max_deviation_steps <= 0.5 + fastest * 0.051e-6,
+            "{machine}: {} steps",
+            f.max_deviation_steps
+        );
+    }
+}

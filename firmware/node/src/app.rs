@@ -76,6 +76,8 @@ pub fn run<B: Board>(
     let staging = Staging::new(board.flash(), layout.staging);
     let mut ep: Endpoint<_, _, DEFAULT_QUEUE> =
         Endpoint::new(node_config(&board, &cfg), store, staging, now);
+    // Without a floating-point unit, steps in fixed-point time.
+    ep.node_mut().use_fixed_time(B::FIXED_TIME_US);
     board.console(format_args!(
         "motet: {} node on {}, firmware {}, uid {:016x}, address {} (endpoint {} bytes)",
         cfg.kind,
@@ -257,7 +259,8 @@ impl RunAhead {
         F: motet_node::Flash,
     {
         if let Some(model) = ep.services().clock_model() {
-            let conv = HostToTicks::new(model, self.ticks_per_us);
+            // (Without an FPU, outputs near now turn into ticks in integers.)
+            let conv = HostToTicks::new(model, self.ticks_per_us).near(model.host(now as f64));
             let target = now + self.lookahead_us;
             // Behind (a long frame, a slow flash write): what is due now is
             // queued at once and leaves late, nothing is skipped.

@@ -23,6 +23,9 @@ use motet_wire::{encode, AxisSpan, ChannelConfig, HostMessage, SegmentMsg};
 
 /// What the measurements need of a board.
 pub trait BenchBoard {
+    /// The node's fixed-point time tolerance, µs, as the board's
+    /// [`crate::board::Board::FIXED_TIME_US`] (0: exact).
+    const FIXED_TIME_US: f64 = 0.0;
     /// The free-running timer the measurements read, ticks.
     fn now(&self) -> Ticks;
     /// Instructions executed in `ticks` of that timer (under QEMU's
@@ -143,8 +146,11 @@ impl<'q> Background<'q> {
         while self.node.queued() > 0 {
             t += 250.0;
             let start = b.now();
-            self.node.poll(t, &mut self.sched.outputs(self.conv));
-            self.sched.release(self.conv.ticks(t));
+            // As the main loop does: outputs near now (in integers
+            // without an FPU).
+            let conv = self.conv.near(t);
+            self.node.poll(t, &mut self.sched.outputs(conv));
+            self.sched.release(conv.ticks(t));
             let end = b.now();
             measured += end.wrapping_sub(start) as u64;
             while ops.front().is_some() {
@@ -194,8 +200,10 @@ fn node_alone<B: BenchBoard>(b: &mut B) -> (u64, u64) {
 fn bench_node<B: BenchBoard>(b: &mut B) -> Node<8> {
     {
         let mut node: Node<8> = Node::new();
-        // As on a board: an endpoint keeps the tally of every output.
+        // As on a board: an endpoint keeps the tally of every output, and
+        // a board without an FPU runs in fixed-point time.
         node.keep_tally();
+        node.use_fixed_time(B::FIXED_TIME_US);
         for ch in 0..4u8 {
             let mut coeffs = [0.0; 6];
             coeffs[ch as usize] = 1.0;

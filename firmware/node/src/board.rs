@@ -43,6 +43,11 @@ pub trait Board {
     const MAX_STEP_HZ: u32;
     /// Where the identity, the boot request and the firmware slots are.
     const LAYOUT: Layout;
+    /// A board without a floating-point unit solves its steps in
+    /// fixed-point time, each within this many µs of its exact time
+    /// (`motet_node::Node::use_fixed_time`); 0 (the default): exactly, in
+    /// `f64`.
+    const FIXED_TIME_US: f64 = 0.0;
 
     type Flash: FlashPages;
 

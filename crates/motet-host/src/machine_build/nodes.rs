@@ -35,12 +35,22 @@ pub(super) fn nodes(
             )?,
             None => 40.0,
         };
+        let fixed_time_us = match &n.fixed_time_us {
+            Some(f) => src.in_range(
+                f.span(),
+                ranges::FIXED_TIME_US,
+                format_args!("node {name}: fixed_time_us"),
+                *f.get_ref(),
+            )?,
+            None => 0.0,
+        };
         let mut spec = NodeSpec {
             name: name.clone(),
             actuators: vec![],
             tools: vec![],
             queue,
             frame_us,
+            fixed_time_us,
         };
         for a in &n.actuators {
             let i = actuators
@@ -96,6 +106,7 @@ pub(super) fn nodes(
             tools: (0..tools.len()).collect(),
             queue: 64,
             frame_us: 40.0,
+            fixed_time_us: 0.0,
         });
         if actuators.len() > 8 || tools.len() > 4 {
             // Point at the first actuator or tool that does not fit.

@@ -20,6 +20,7 @@
 //! A step taken is counted and the next one handed out ([`Channel::advance`]);
 //! solving happens only when the solved steps are used up.
 
+mod chunk;
 mod run;
 
 use heapless::Deque;
@@ -73,6 +74,9 @@ pub struct Channel {
     /// Time of the last step before the solved ones, µs (what a retime
     /// keeps to when none of them is taken).
     floor: f64,
+    /// Fixed-point time's tolerance, µs; 0: every step solved in `f64`
+    /// ([`Channel::use_fixed_time`]).
+    tolerance: f64,
 }
 
 /// What a leg's steps need, computed once per leg instead of once per step.
@@ -115,7 +119,20 @@ impl Channel {
             run: Run::NONE,
             last_time: f64::NEG_INFINITY,
             floor: f64::NEG_INFINITY,
+            tolerance: 0.0,
         }
+    }
+
+    /// Solves the steps of its runs in fixed-point time, each within
+    /// `tolerance_us` of its exact time (0: exactly, in `f64`): for a
+    /// core without a floating-point unit, where a step solved in `f64`
+    /// costs thousands of instructions (see `chunk.rs`).
+    pub fn use_fixed_time(&mut self, tolerance_us: f64) {
+        self.tolerance = if tolerance_us > 0.0 {
+            tolerance_us
+        } else {
+            0.0
+        };
     }
 
     /// What the host configured: board channel id, joint map, steps per unit and step timing.
@@ -240,6 +257,7 @@ impl Channel {
             dir: if positive { 1.0 } else { -1.0 },
             at_hi: self.leg.at_hi,
             seg_t0: self.t0,
+            tolerance: self.tolerance,
         };
         self.run = Run::after(&from, &self.timer.piece_inverse());
         if !self.run.is_live() {

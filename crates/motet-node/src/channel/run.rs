@@ -12,6 +12,8 @@
 //! checks, and each step's time independent of the last, so the
 //! processor overlaps their roots and divisions.
 
+use super::chunk::{Chunk, ChunkBound};
+use crate::time::{fine_to_us, us_to_fine};
 use motet_trajectory::{PieceForm, PieceInverse};
 
 /// Most steps solved ahead of the one being taken.
@@ -117,6 +119,20 @@ pub(super) struct Run {
     t_start: f64,
     duration_us: f64,
     form: Form,
+    /// The error a step's time may have, µs: 0 for every step solved in
+    /// `f64`; above 0 for fixed-point time, the steps between exact anchors
+    /// interpolated in integers (`chunk.rs`), and `k` then the index of
+    /// the chunk's first step.
+    tolerance: f64,
+    chunk: Chunk,
+    /// How long a chunk may be (constant acceleration).
+    bound: ChunkBound,
+    /// The fine time of the step after the chunk (its last anchor), the
+    /// next chunk's first (`u64::MAX`: none), its time's rate per step,
+    /// superfine, and the speed squared there.
+    next_base: u64,
+    next_rate: i64,
+    next_w2: f64,
 }
 
 /// Where a run starts: the step the long way just solved.
@@ -134,6 +150,8 @@ pub(super) struct RunStart {
     pub at_hi: f64,
     /// The host time the segment starts, µs.
     pub seg_t0: f64,
+    /// Fixed-point time's tolerance, µs (0: exact).
+    pub tolerance: f64,
 }
 
 impl Run {
@@ -147,6 +165,12 @@ impl Run {
         t_start: 0.0,
         duration_us: 0.0,
         form: Form::Cruise { us_per_unit: 0.0 },
+        tolerance: 0.0,
+        chunk: Chunk::NONE,
+        bound: ChunkBound { k2: 0 },
+        next_base: u64::MAX,
+        next_rate: 0,
+        next_w2: 0.0,
     };
 
     /// Whether steps are left to solve.
@@ -187,6 +211,17 @@ impl Run {
             t_start: from.seg_t0 + piece.t0 * 1e6,
             duration_us: piece.duration * 1e6,
             form,
+            tolerance: from.tolerance,
+            chunk: Chunk::NONE,
+            bound: match form {
+                Form::Quadratic { two_a, .. } if from.tolerance > 0.0 => {
+                    ChunkBound::new(0.5 * two_a, dx, from.tolerance)
+                }
+                _ => ChunkBound { k2: 0 },
+            },
+            next_base: u64::MAX,
+            next_rate: 0,
+            next_w2: 0.0,
         }
     }
 
@@ -195,24 +230,27 @@ impl Run {
         self.d0 + (self.x0 + k * self.dx)
     }
 
-    /// Where the last step solved lies in the segment.
-    pub fn last_dist(&self) -> f64 {
-        self.dist(self.k - 1.0)
+    /// The index of the next step to solve.
+    fn next_k(&self) -> f64 {
+        if self.tolerance > 0.0 {
+            self.k + self.chunk.taken() as f64
+        } else {
+            self.k
+        }
     }
 
-    /// Solves the next steps into `ahead` from place `at` on (the places
-    /// before it solved already), none earlier than `last` (µs, the step
-    /// before) or than the one before it; returns the time of the last one
-    /// solved. The form is picked once for the batch.
+    /// Where the last step solved lies in the segment.
+    pub fn last_dist(&self) -> f64 {
+        self.dist(self.next_k() - 1.0)
+    }
+
+    /// The time into the piece of step `k`'s crossing at `x`, µs, before
+    /// the piece's bounds: the form's closed form.
     #[inline(always)]
-    pub fn fill(&mut self, ahead: &mut Ahead, at: usize, last: f64) -> f64 {
-        let n = (self.left as usize).min(AHEAD - at);
-        ahead.first_k = self.k;
-        ahead.from_run = at;
-        let times = &mut ahead.times[at..at + n];
-        let last = match self.form {
-            Form::Cruise { us_per_unit } => self.fill_cruise(times, last, us_per_unit),
-            Form::Quadratic { v, vv, two_a } => self.fill_with(times, last, |x| {
+    fn u_of(&self, x: f64) -> f64 {
+        match self.form {
+            Form::Cruise { us_per_unit } => x * us_per_unit,
+            Form::Quadratic { v, vv, two_a } => {
                 let disc = vv + two_a * x;
                 let root = motet_trajectory::sqrt(if disc > 0.0 { disc } else { 0.0 });
                 let denom = v + root;
@@ -223,7 +261,80 @@ impl Run {
                 } else {
                     f64::INFINITY
                 }
-            }),
+            }
+        }
+    }
+
+    /// Step `k`'s fine time, exactly, and (under constant acceleration)
+    /// its time's rate per step, superfine (`dx / w`; negative where the
+    /// speed is 0: no rate to interpolate with), and the speed squared
+    /// there: one square root for all three.
+    fn anchor(&self, k: f64) -> (u64, i64, f64) {
+        let Form::Quadratic { v, vv, two_a } = self.form else {
+            return (us_to_fine(self.time_at(k)), 0, 0.0);
+        };
+        let x = self.x0 + k * self.dx;
+        let w2 = vv + two_a * x;
+        let w = motet_trajectory::sqrt(if w2 > 0.0 { w2 } else { 0.0 });
+        // As `time_at` (the same operations, the same bits).
+        let u = if x < self.span {
+            let denom = v + w;
+            if denom > 0.0 {
+                x * 2e6 / denom
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            self.duration_us
+        };
+        let t = us_to_fine(
+            self.t_start
+                + if u < self.duration_us {
+                    u
+                } else {
+                    self.duration_us
+                },
+        );
+        if w > 0.0 {
+            // µs a step, in 2⁻³² µs.
+            let rate = self.dx * 1e6 * 4_294_967_296.0 / w;
+            if rate < 9.0e18 {
+                return (t, rate as i64, w2);
+            }
+        }
+        (t, -1, w2)
+    }
+
+    /// Step `k`'s host time, µs, exactly as the `f64` fill solves it.
+    fn time_at(&self, k: f64) -> f64 {
+        let x = self.x0 + k * self.dx;
+        let u = if x < self.span {
+            self.u_of(x)
+        } else {
+            self.duration_us
+        };
+        self.t_start
+            + if u < self.duration_us {
+                u
+            } else {
+                self.duration_us
+            }
+    }
+
+    /// Solves the next steps into `ahead` from place `at` on (the places
+    /// before it solved already), none earlier than `last` (µs, the step
+    /// before) or than the one before it; returns the time of the last one
+    /// solved. The form is picked once for the batch.
+    #[inline(always)]
+    pub fn fill(&mut self, ahead: &mut Ahead, at: usize, last: f64) -> f64 {
+        let n = (self.left as usize).min(AHEAD - at);
+        ahead.first_k = self.next_k();
+        ahead.from_run = at;
+        let times = &mut ahead.times[at..at + n];
+        let last = if self.tolerance > 0.0 {
+            self.fill_fixed(times, last)
+        } else {
+            self.fill_exact(times, last)
         };
         self.left -= n as u32;
         ahead.head = 0;
@@ -231,8 +342,99 @@ impl Run {
         last
     }
 
-    /// A cruise's steps: the time is affine in the distance, and reaches
-    /// the piece's end exactly at its span, so only the duration bounds it.
+    /// The steps in `f64`, each solved in closed form.
+    #[inline(always)]
+    fn fill_exact(&mut self, times: &mut [f64], last: f64) -> f64 {
+        match self.form {
+            Form::Cruise { us_per_unit } => self.fill_cruise(times, last, us_per_unit),
+            Form::Quadratic { v, vv, two_a } => self.fill_with(times, last, |x| {
+                let disc = vv + two_a * x;
+                let root = motet_trajectory::sqrt(if disc > 0.0 { disc } else { 0.0 });
+                let denom = v + root;
+                if denom > 0.0 {
+                    x * 2e6 / denom
+                } else {
+                    f64::INFINITY
+                }
+            }),
+        }
+    }
+
+    /// The steps in fixed-point time: chunks between exact anchors, each
+    /// step an integer recurrence and an integer-built `f64` (no
+    /// floating-point instruction per step; see `chunk.rs`).
+    fn fill_fixed(&mut self, times: &mut [f64], last: f64) -> f64 {
+        let mut last_fine = us_to_fine(last);
+        let mut remaining = self.left;
+        for t in times.iter_mut() {
+            if self.chunk.is_done() {
+                self.next_chunk(remaining);
+            }
+            let fine = self.chunk.step();
+            last_fine = if fine > last_fine { fine } else { last_fine };
+            *t = fine_to_us(last_fine);
+            remaining -= 1;
+        }
+        fine_to_us(last_fine)
+    }
+
+    /// Starts the chunk after the one done, `remaining` steps being left
+    /// in the run: as long as the interpolation stays within the
+    /// tolerance, its ends exact, its first the last one's end.
+    #[cold]
+    fn next_chunk(&mut self, remaining: u32) {
+        self.k += self.chunk.len() as f64;
+        let k = self.k;
+        let (t0, s0, w2) = if self.next_base != u64::MAX {
+            (self.next_base, self.next_rate, self.next_w2)
+        } else {
+            self.anchor(k)
+        };
+        self.next_base = u64::MAX;
+        // The chunk's end anchor is a step of the run too.
+        let most = remaining.saturating_sub(1);
+        match self.form {
+            Form::Cruise { .. } => {
+                let n = most.min(Chunk::CRUISE_MOST);
+                if n == 0 {
+                    self.chunk = Chunk::one(t0);
+                    return;
+                }
+                let (tn, _, _) = self.anchor(k + n as f64);
+                self.chunk = Chunk::line(t0, tn, n);
+                self.next_base = tn;
+            }
+            Form::Quadratic { vv, two_a, .. } => {
+                let mut n = self.bound.steps(w2).min(Chunk::CUBIC_MOST).min(most);
+                if two_a < 0.0 {
+                    // Slowing: the chunk's slowest speed is at its end.
+                    for _ in 0..4 {
+                        if n < 2 {
+                            break;
+                        }
+                        let end = vv + two_a * (self.x0 + (k + n as f64) * self.dx);
+                        let shorter = self.bound.steps(end);
+                        if shorter >= n {
+                            break;
+                        }
+                        n = shorter;
+                    }
+                }
+                if n >= 2 && s0 >= 0 {
+                    let (tn, s1, w2n) = self.anchor(k + n as f64);
+                    if s1 >= 0 {
+                        self.chunk = Chunk::cubic(t0, tn, s0, s1, n);
+                        self.next_base = tn;
+                        self.next_rate = s1;
+                        self.next_w2 = w2n;
+                        return;
+                    }
+                }
+                self.chunk = Chunk::one(t0);
+            }
+        }
+    }
+
     #[inline(always)]
     fn fill_cruise(&mut self, times: &mut [f64], mut last: f64, us_per_unit: f64) -> f64 {
         let (x0, dx, dur, t_start) = (self.x0, self.dx, self.duration_us, self.t_start);

@@ -17,8 +17,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             return Err(Refusal::NotAtRest);
         }
         let tally = self.tally.map(|_| StepTally::default());
+        let fixed_time = self.fixed_time;
         *self = Self::new();
         self.tally = tally;
+        self.fixed_time = fixed_time;
         Ok(())
     }
 
@@ -37,6 +39,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         // At rest where the node is: a new or changed channel takes its step
         // count from the current point instead of stepping there.
         let mut ch = Channel::new(c);
+        ch.use_fixed_time(self.fixed_time);
         ch.set_position(&self.queue_end);
         match self
             .channels

@@ -119,6 +119,9 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     stream: StreamConfig,
     /// Context the next batched segment is decoded against.
     stream_state: StreamState,
+    /// Fixed-point time's tolerance, µs (0: exact; see
+    /// [`Node::use_fixed_time`]).
+    fixed_time: f64,
 }
 
 impl<const Q: usize, const T: usize> Default for Node<Q, T> {
@@ -172,6 +175,23 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 path_mask: 0,
             },
             stream_state: StreamState::at([0.0; MAX_AXES]),
+            fixed_time: 0.0,
+        }
+    }
+
+    /// Solves its channels' steps in fixed-point time, each within
+    /// `tolerance_us` of its exact time (0: exactly, in `f64`, the
+    /// default): what a board without a floating-point unit sets at start
+    /// (the Raspberry Pi Pico), and what a simulation of one runs. Kept
+    /// across resets.
+    pub fn use_fixed_time(&mut self, tolerance_us: f64) {
+        self.fixed_time = if tolerance_us > 0.0 {
+            tolerance_us
+        } else {
+            0.0
+        };
+        for ch in self.channels.iter_mut() {
+            ch.use_fixed_time(self.fixed_time);
         }
     }
 

@@ -133,10 +133,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         budget: &mut u32,
         last: &mut Option<f64>,
     ) -> bool {
-        let mut times = [0.0; N];
+        use crate::time::{key, of_key};
+        // Keys, not times: integers on a core without an FPU.
+        let mut times = [key(0.0); N];
         for (t, &i) in times.iter_mut().zip(act.iter()) {
-            *t = next[i as usize];
+            *t = key(next[i as usize]);
         }
+        let stop_key = key(stop);
         let mut left = *budget;
         // One output at least per poll, so that every poll gets on.
         let mut free = last.is_none();
@@ -150,9 +153,11 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 bk = if earlier { k } else { bk };
                 bt = if earlier { t } else { bt };
             }
-            if bt >= stop {
+            // (Keys are never NaN.)
+            if bt >= stop_key {
                 break;
             }
+            let bt = of_key(bt);
             if left == 0 {
                 if !free {
                     break;
@@ -164,17 +169,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             at = Some(bt);
             let ch = &mut self.channels[act[bk] as usize];
             board.step(ch.config().channel, ch.next_forward(), bt);
-            times[bk] = ch.advance(&self.segments, end);
+            times[bk] = key(ch.advance(&self.segments, end));
         }
         for (t, &i) in times.iter().zip(act.iter()) {
-            next[i as usize] = *t;
+            next[i as usize] = of_key(*t);
         }
         *budget = left;
         if at.is_some() {
             *last = at;
         }
         // Out of budget with steps still due before `stop`.
-        !(left == 0 && times.iter().any(|&t| t < stop) && last.is_some())
+        !(left == 0 && times.iter().any(|&t| t < stop_key) && last.is_some())
     }
 
     /// Ends a poll that ran out of budget at its last output's time `t`.

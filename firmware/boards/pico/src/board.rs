@@ -51,10 +51,13 @@ impl Board for Pico {
     const CHANNELS: u8 = pin_table::CHANNELS as u8;
     const TOOLS: u8 = pin_table::TOOLS as u8;
     /// Four channels at once within one M0+ core with room for the link
-    /// (about 7,000 steps/s in all, docs/firmware.md): the background's
-    /// soft-float solve bounds the node, not the pins.
-    const MAX_STEP_HZ: u32 = 1_500;
+    /// (about 54,000 steps/s in all in fixed-point time, docs/firmware.md):
+    /// the background bounds the node, not the pins.
+    const MAX_STEP_HZ: u32 = 10_000;
     const LAYOUT: Layout = LAYOUT;
+    // An M0+ has no FPU: fixed-point time, each step within a twentieth
+    // of the 1 µs timer tick of its exact time (docs/firmware.md).
+    const FIXED_TIME_US: f64 = 0.05;
     type Flash = QspiFlash;
 
     fn uid(&self) -> u64 {

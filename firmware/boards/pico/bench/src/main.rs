@@ -147,6 +147,9 @@ static __INTERRUPTS: [unsafe extern "C" fn(); 32] = {
 struct PicoBench;
 
 impl BenchBoard for PicoBench {
+    // As the Pico's board (`motet_board_pico::Pico`).
+    const FIXED_TIME_US: f64 = 0.05;
+
     fn now(&self) -> Ticks {
         nrf51::now()
     }
