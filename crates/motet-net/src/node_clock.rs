@@ -127,6 +127,17 @@ impl NodeClock {
         self.est.points()
     }
 
+    /// Exchanges taken and those dropped as too slow.
+    pub fn counts(&self) -> (u64, u64) {
+        self.est.counts()
+    }
+
+    /// Changes of the node's rate the estimate found (each a fit started
+    /// again).
+    pub fn changes(&self) -> u32 {
+        self.est.changes()
+    }
+
     /// A bound on the node's own error at host time `host`: how far the
     /// model it runs is from the estimate, plus the estimate's bound, µs;
     /// infinite while it runs none or the host knows too little.

@@ -55,6 +55,31 @@ pub fn clean_links(n: usize) -> Links {
         .collect()
 }
 
+/// `n` links with up to `jitter_us` of delay on every frame, uniform and
+/// independent, each way, on the simulated `clock`, for nodes whose
+/// crystals [`clocks`] gives: clocks learnt slowly, each exchange telling
+/// little.
+pub fn jittered_links(n: usize, clock: &SimClock, jitter_us: u64) -> Links {
+    (0..n)
+        .map(|k| {
+            let (a, b) = pair(&format!("host{k}"), &format!("node{k}"));
+            let side = |t, seed: u64| {
+                Faulty::with_clock(
+                    t,
+                    FaultConfig::jitter(seed, jitter_us),
+                    FaultClock::Simulated(clock.clone()),
+                )
+            };
+            (
+                Box::new(side(a, 2 * k as u64).stamping(Crystal::default()))
+                    as Box<dyn Transport + Send>,
+                Box::new(side(b, 2 * k as u64 + 1).stamping(clocks(n)[k]))
+                    as Box<dyn Transport + Send>,
+            )
+        })
+        .collect()
+}
+
 /// `n` links with `p` of every fault, on the simulated `clock`, for nodes
 /// whose crystals [`clocks`] gives.
 pub fn faulty_links(n: usize, clock: &SimClock, p: f64, seed: u64) -> Links {
