@@ -305,6 +305,9 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
     assert!(board.console().contains("boot: installed firmware 0.2.0"));
 
     // The job, on the board, against the simulator's replay of the run.
+    // A lead of 400 ms rides out the stalls of a test machine busy with
+    // builds (QEMU and the host share its cores); the replay follows the
+    // journal whatever the lead.
     let out = dir.join("out");
     let (ok, _, stderr) = motet(&[
         "run",
@@ -313,6 +316,8 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
         "--nodes",
         "paired",
         "-q",
+        "--lead-ms",
+        "400",
         "--out",
         out.to_str().unwrap(),
     ]);

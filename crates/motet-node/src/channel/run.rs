@@ -250,18 +250,7 @@ impl Run {
     fn u_of(&self, x: f64) -> f64 {
         match self.form {
             Form::Cruise { us_per_unit } => x * us_per_unit,
-            Form::Quadratic { v, vv, two_a } => {
-                let disc = vv + two_a * x;
-                let root = motet_trajectory::sqrt(if disc > 0.0 { disc } else { 0.0 });
-                let denom = v + root;
-                // Only at a stop (v and the root both 0) is the denominator
-                // 0; the piece's end is then the time.
-                if denom > 0.0 {
-                    x * 2e6 / denom
-                } else {
-                    f64::INFINITY
-                }
-            }
+            Form::Quadratic { v, vv, two_a } => accelerating_us(v, x, speed(vv, two_a, x)),
         }
     }
 
@@ -275,15 +264,10 @@ impl Run {
         };
         let x = self.x0 + k * self.dx;
         let w2 = vv + two_a * x;
-        let w = motet_trajectory::sqrt(if w2 > 0.0 { w2 } else { 0.0 });
+        let w = speed(vv, two_a, x);
         // As `time_at` (the same operations, the same bits).
         let u = if x < self.span {
-            let denom = v + w;
-            if denom > 0.0 {
-                x * 2e6 / denom
-            } else {
-                f64::INFINITY
-            }
+            accelerating_us(v, x, w)
         } else {
             self.duration_us
         };
@@ -347,16 +331,9 @@ impl Run {
     fn fill_exact(&mut self, times: &mut [f64], last: f64) -> f64 {
         match self.form {
             Form::Cruise { us_per_unit } => self.fill_cruise(times, last, us_per_unit),
-            Form::Quadratic { v, vv, two_a } => self.fill_with(times, last, |x| {
-                let disc = vv + two_a * x;
-                let root = motet_trajectory::sqrt(if disc > 0.0 { disc } else { 0.0 });
-                let denom = v + root;
-                if denom > 0.0 {
-                    x * 2e6 / denom
-                } else {
-                    f64::INFINITY
-                }
-            }),
+            Form::Quadratic { v, vv, two_a } => {
+                self.fill_with(times, last, |x| accelerating_us(v, x, speed(vv, two_a, x)))
+            }
         }
     }
 
@@ -470,6 +447,29 @@ impl Run {
         }
         self.k = k;
         last
+    }
+}
+
+/// The speed `x` units into a constant-acceleration piece: `√(vv +
+/// two_a·x)` (0 where rounding would make it imaginary).
+#[inline(always)]
+fn speed(vv: f64, two_a: f64, x: f64) -> f64 {
+    let disc = vv + two_a * x;
+    motet_trajectory::sqrt(if disc > 0.0 { disc } else { 0.0 })
+}
+
+/// µs into a constant-acceleration piece from speed `v` to `x` units on,
+/// where the speed is `w`: `2x / (v + w)`, without cancellation whatever
+/// the acceleration's sign.
+#[inline(always)]
+fn accelerating_us(v: f64, x: f64, w: f64) -> f64 {
+    let denom = v + w;
+    // Only at a stop (v and w both 0) is the denominator 0; the piece's
+    // end is then the time.
+    if denom > 0.0 {
+        x * 2e6 / denom
+    } else {
+        f64::INFINITY
     }
 }
 
