@@ -268,6 +268,31 @@ enum RunJob {
     Streamed(Box<dyn CommandSource>, usize),
 }
 
+impl RunJob {
+    /// The run of this job through `peers`, and its length in commands.
+    fn run(
+        self,
+        machine: &Machine,
+        peers: Vec<motet_net::peer::Peer>,
+        start: Point,
+        cfg: NetConfig,
+        journal: JournalWriter,
+    ) -> (NetRun, usize) {
+        match self {
+            RunJob::Given(commands) => {
+                let total = commands.len();
+                let run = NetRun::new(machine, commands, peers, start, cfg, Some(journal));
+                (run, total)
+            }
+            RunJob::Streamed(source, total) => {
+                let mut run = NetRun::new(machine, Vec::new(), peers, start, cfg, Some(journal));
+                run.reading(source, total);
+                (run, total)
+            }
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn drive(
     machine: &Machine,
@@ -283,25 +308,7 @@ fn drive(
     let journal = JournalWriter::create(&out.join("journal"))?;
     let clock = WallClock::with(record.time_scale, 0.0, 0);
     let peers = std::mem::take(&mut session.peers);
-    let (run, total) = match job {
-        RunJob::Given(commands) => {
-            let total = commands.len();
-            let run = NetRun::new(machine, commands, peers, start, cfg(&record), Some(journal));
-            (run, total)
-        }
-        RunJob::Streamed(source, total) => {
-            let mut run = NetRun::new(
-                machine,
-                Vec::new(),
-                peers,
-                start,
-                cfg(&record),
-                Some(journal),
-            );
-            run.reading(source, total);
-            (run, total)
-        }
-    };
+    let (run, total) = job.run(machine, peers, start, cfg(&record), journal);
     let mut run = run.with_identity(identity);
     let bar = progress_bar(total, quiet);
     let started = std::time::Instant::now();

@@ -3,8 +3,45 @@
 
 use super::Source;
 use crate::machine::{Actuator, MachineError, NodeSpec, Tool};
-use crate::machine_file::MachineFile;
+use crate::machine_file::{MachineFile, NodeFile};
 use motet_planner::ranges;
+
+/// A node's own settings (queue, frame period, fixed-point time), each in
+/// its range, with no actuators or tools yet.
+fn settings(src: &Source, name: &str, n: &NodeFile) -> Result<NodeSpec, MachineError> {
+    let queue = match &n.queue {
+        Some(q) => ranges::NODE_QUEUE
+            .check_count(format_args!("node {name}: queue"), *q.get_ref())
+            .map_err(|e| src.err(q.span(), e.to_string()))?,
+        None => 64,
+    };
+    let frame_us = match &n.frame_us {
+        Some(f) => src.in_range(
+            f.span(),
+            ranges::FRAME_US,
+            format_args!("node {name}: frame_us"),
+            *f.get_ref(),
+        )?,
+        None => 40.0,
+    };
+    let fixed_time_us = match &n.fixed_time_us {
+        Some(f) => src.in_range(
+            f.span(),
+            ranges::FIXED_TIME_US,
+            format_args!("node {name}: fixed_time_us"),
+            *f.get_ref(),
+        )?,
+        None => 0.0,
+    };
+    Ok(NodeSpec {
+        name: name.to_string(),
+        actuators: vec![],
+        tools: vec![],
+        queue,
+        frame_us,
+        fixed_time_us,
+    })
+}
 
 /// The machine's nodes: each actuator on exactly one, each tool on at most
 /// one.
@@ -20,38 +57,7 @@ pub(super) fn nodes(
     for (name, n) in &raw.nodes {
         let node_span = n.span();
         let n = n.get_ref();
-        let queue = match &n.queue {
-            Some(q) => ranges::NODE_QUEUE
-                .check_count(format_args!("node {name}: queue"), *q.get_ref())
-                .map_err(|e| src.err(q.span(), e.to_string()))?,
-            None => 64,
-        };
-        let frame_us = match &n.frame_us {
-            Some(f) => src.in_range(
-                f.span(),
-                ranges::FRAME_US,
-                format_args!("node {name}: frame_us"),
-                *f.get_ref(),
-            )?,
-            None => 40.0,
-        };
-        let fixed_time_us = match &n.fixed_time_us {
-            Some(f) => src.in_range(
-                f.span(),
-                ranges::FIXED_TIME_US,
-                format_args!("node {name}: fixed_time_us"),
-                *f.get_ref(),
-            )?,
-            None => 0.0,
-        };
-        let mut spec = NodeSpec {
-            name: name.clone(),
-            actuators: vec![],
-            tools: vec![],
-            queue,
-            frame_us,
-            fixed_time_us,
-        };
+        let mut spec = settings(src, name, n)?;
         for a in &n.actuators {
             let i = actuators
                 .iter()

@@ -24,7 +24,6 @@ pub use stop::{LostNode, StopInfo};
 
 use crate::digest::Digest;
 use crate::journal::{JournalHeader, JournalWriter};
-use crate::node_clock::MAX_CRYSTAL;
 use crate::peer::{Incoming, Peer};
 use crate::plan_feed::{run_limits, CommandSource, PlanFeed};
 use clocks::clock_target;
@@ -32,7 +31,6 @@ use motet_host::{Distributor, Machine};
 use motet_planner::{Command, Located, PlanError, SourceLoc};
 use motet_trajectory::{Point, Segment};
 use motet_wire::link::State;
-use motet_wire::service::MAX_SKEW;
 use motet_wire::{HostMessage, NodeMessage, Refusal};
 use std::collections::VecDeque;
 use window::Committed;
@@ -698,100 +696,6 @@ impl NetRun {
             self.fill(now)?;
         }
         Ok(())
-    }
-
-    /// Why the run could not start in time: the first node without a link,
-    /// or whose clock is not yet known well enough.
-    fn not_ready(&self, now: u64) -> NetError {
-        let secs = now.saturating_sub(self.started_at.unwrap_or(0)) as f64 * 1e-6;
-        for p in &self.peers {
-            let node = p.name.clone();
-            if !matches!(p.link_state(), State::Established { .. }) {
-                let message = format!("no connection after {secs:.1} s");
-                return NetError::Node { node, message };
-            }
-            let bound = p.sync.error_bound(now as f64);
-            let target = clock_target(&self.cfg, p);
-            let skew = p.sync.model().skew;
-            if p.sync.synced() && skew.abs() - p.sync.skew_bound() > MAX_CRYSTAL {
-                let message = format!(
-                    "its clock seems to run {:+.0} ppm off the host's, beyond a crystal's ±{:.0} ppm, but its exchanges after {secs:.1} s do not make that sure ({} kept, least round trip {:.0} µs); nothing moves on it",
-                    skew * 1e6,
-                    MAX_CRYSTAL * 1e6,
-                    p.sync.points(),
-                    p.sync.min_rtt(),
-                );
-                return NetError::Node { node, message };
-            }
-            if bound > target {
-                let (taken, dropped) = p.sync.counts();
-                let message = format!(
-                    "its clock is known to ±{bound:.1} µs after {secs:.1} s ({} exchanges kept of {taken}, {dropped} too slow, least round trip {:.0} µs, {} rate changes); nothing moves before it is within ±{:.0} µs",
-                    p.sync.points(),
-                    p.sync.min_rtt(),
-                    p.sync.changes(),
-                    target
-                );
-                return NetError::Node { node, message };
-            }
-        }
-        NetError::Node {
-            node: "?".into(),
-            message: format!("not configured after {secs:.1} s"),
-        }
-    }
-
-    /// Refuses a node whose clock runs at a rate no crystal has: started
-    /// with another --time-scale, or broken. The estimate points at such a
-    /// node (its rate beyond the range by more than its slope's bound), but
-    /// that bound is a statistic a busy host's bursts of late exchanges can
-    /// fool; a node is refused only when every rate its exchanges allow is
-    /// out of range ([`ClockSync::feasible_skew`]: hard limits, which
-    /// delays only widen). `Ok(false)`: some node looks out of range but is
-    /// not surely so yet (a start waits for more exchanges).
-    ///
-    /// [`ClockSync::feasible_skew`]: motet_wire::sync::ClockSync::feasible_skew
-    fn check_rates(&self) -> Result<bool, NetError> {
-        let mut clear = true;
-        for p in &self.peers {
-            if !p.sync.synced() {
-                continue;
-            }
-            let skew = p.sync.model().skew;
-            if skew.abs() - p.sync.skew_bound() <= MAX_CRYSTAL {
-                continue;
-            }
-            // The least |rate| the exchanges allow.
-            let surely = match p.sync.feasible_skew() {
-                Some((lo, _)) if lo > 0.0 => lo,
-                Some((_, hi)) if hi < 0.0 => -hi,
-                _ => 0.0,
-            };
-            let node = p.name.clone();
-            if surely >= MAX_SKEW {
-                return Err(NetError::Node {
-                    node,
-                    message: format!(
-                        "its clock runs {:.2}× as fast as the host's ({:+.0} ppm): were the host and the node started with the same --time-scale?",
-                        1.0 + skew,
-                        skew * 1e6,
-                    ),
-                });
-            }
-            if surely > MAX_CRYSTAL {
-                return Err(NetError::Node {
-                    node,
-                    message: format!(
-                        "its clock runs {:+.0} ppm off the host's (at least {:.0} ppm, by every exchange); a crystal is within ±{:.0} ppm, so nothing moves on it",
-                        skew * 1e6,
-                        surely * 1e6,
-                        MAX_CRYSTAL * 1e6
-                    ),
-                });
-            }
-            clear = false;
-        }
-        Ok(clear)
     }
 
     fn ask_status(&mut self, now: u64) {
