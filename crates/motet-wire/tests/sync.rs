@@ -46,6 +46,18 @@ impl Crystal {
         }
         l + (h - t) * (1.0 + skew)
     }
+
+    /// The exchange whose request leaves at host time `t1`, takes `d1` µs
+    /// to arrive, is answered `turn` µs later and takes `d2` µs back; each
+    /// clock reads whole µs.
+    fn exchange(&self, t1: f64, d1: f64, turn: f64, d2: f64) -> Exchange {
+        Exchange {
+            t1: t1 as u64,
+            t2: self.local(t1 + d1).floor() as u64,
+            t3: self.local(t1 + d1 + turn).floor() as u64,
+            t4: (t1 + d1 + turn + d2).floor() as u64,
+        }
+    }
 }
 
 /// The delays of one world.
@@ -78,13 +90,7 @@ fn run(
         let d1 = path.base + path.jitter * rng.unit();
         let turn = 20.0 + 10.0 * rng.unit();
         let d2 = path.base + path.jitter * rng.unit();
-        let e = Exchange {
-            t1: t1 as u64,
-            t2: clock.local(t1 + d1).floor() as u64,
-            t3: clock.local(t1 + d1 + turn).floor() as u64,
-            t4: (t1 + d1 + turn + d2).floor() as u64,
-        };
-        sync.add(e).unwrap();
+        sync.add(clock.exchange(t1, d1, turn, d2)).unwrap();
         if h >= measure_from && sync.synced() {
             let err = sync.host_to_local(h) - clock.local(h);
             errors.push((h, err, sync.error_bound(h)));
@@ -285,13 +291,7 @@ fn stalls_are_gated_out() {
         let stall = if i % 50 == 0 { 30_000.0 } else { 0.0 };
         let d1 = 50.0 + 1_000.0 * rng.unit() + stall;
         let d2 = 50.0 + 1_000.0 * rng.unit();
-        let e = Exchange {
-            t1: t1 as u64,
-            t2: clock.local(t1 + d1).floor() as u64,
-            t3: clock.local(t1 + d1 + 20.0).floor() as u64,
-            t4: (t1 + d1 + 20.0 + d2).floor() as u64,
-        };
-        sync.add(e).unwrap();
+        sync.add(clock.exchange(t1, d1, 20.0, d2)).unwrap();
         if t1 > 30.0 * S {
             worst = worst.max((sync.host_to_local(t1) - clock.local(t1)).abs());
         }
@@ -341,13 +341,7 @@ fn feasible_skews_always_hold_a_steady_rate() {
             let d1 = 30.0 + jitter * rng.unit() + held(&mut rng);
             let turn = 20.0 + 0.1 * held(&mut rng);
             let d2 = 30.0 + jitter * rng.unit() + held(&mut rng);
-            let e = Exchange {
-                t1: t1 as u64,
-                t2: clock.local(t1 + d1).floor() as u64,
-                t3: clock.local(t1 + d1 + turn).floor() as u64,
-                t4: (t1 + d1 + turn + d2).floor() as u64,
-            };
-            sync.add(e).unwrap();
+            sync.add(clock.exchange(t1, d1, turn, d2)).unwrap();
             if let Some((lo, hi)) = sync.feasible_skew() {
                 assert!(
                     lo <= skew && skew <= hi,
