@@ -10,7 +10,10 @@
 //! channel's long way, which also solves its first step; after that a step
 //! costs its own arithmetic and nothing else: no boundary, leg or piece
 //! checks, and each step's time independent of the last, so the
-//! processor overlaps their roots and divisions.
+//! processor overlaps their roots and divisions. In fixed-point time (a
+//! board without an FPU, `Channel::use_fixed_time`) the same run gives its
+//! steps through chunks instead (`chunk.rs`): exact anchors, integers
+//! between.
 
 use super::chunk::{Chunk, ChunkBound};
 use crate::time::{fine_to_us, us_to_fine};
