@@ -3,8 +3,8 @@
 //!
 //! A Cortex-M0+ (the Raspberry Pi Pico) has no FPU: every `f64` comparison
 //! or addition is a library call of dozens to hundreds of instructions. So
-//! the poll compares step times through [`earlier`] (an integer comparison
-//! of their bits when the `soft-float` feature is on; the same answer), and
+//! the poll compares step times as [`Key`]s (with the `soft-float` feature
+//! their bits as ordered integers, an integer comparison; the same answer), and
 //! a run in fixed-point time ([`crate::Node::use_fixed_time`]) makes its
 //! times as integers of [`FINE`]-th microseconds and turns each into an
 //! `f64` with integer instructions ([`fine_to_us`]).
@@ -12,21 +12,6 @@
 /// Fine time units per µs: a fine time is host µs × 2¹⁶ as an integer
 /// (15 ps; 2⁶⁴ of them are 8.9 years).
 pub const FINE: f64 = 65536.0;
-
-/// Whether time `a` comes before `b` (`a < b`), for host µs that are not
-/// NaN. With the `soft-float` feature, by the bits: an `f64`'s bits, the
-/// negative ones flipped, order as unsigned integers as the values do.
-#[inline(always)]
-pub fn earlier(a: f64, b: f64) -> bool {
-    #[cfg(feature = "soft-float")]
-    {
-        ordered(a) < ordered(b)
-    }
-    #[cfg(not(feature = "soft-float"))]
-    {
-        a < b
-    }
-}
 
 /// A step time as the poll's search for the earliest compares it: the
 /// time itself, or with the `soft-float` feature its bits as an ordered

@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use motet_node::Node;
-use motet_trajectory::{JointMap, KinematicsKind, ProfileKind};
+use motet_trajectory::ProfileKind;
 use proptest::prelude::*;
 
 /// The tolerance the Pico runs with, µs.
@@ -20,18 +20,12 @@ fn compare(
     moves: &[(f64, f64, f64)],
     feed_rate: f64,
     profile: ProfileKind,
-    spu: [f64; 4],
+    spu: [f64; 7],
     drive: Drive,
 ) -> (usize, f64) {
-    let k = KinematicsKind::COREXY;
     let machine = Machine {
         name: "fixed",
-        channels: vec![
-            channel(0, JointMap::axis(0), spu[0]),
-            channel(1, JointMap::axis(1), spu[1]),
-            channel(2, k.joint_map(0, [0, 1, 2]), spu[2]),
-            channel(3, JointMap::polar_angle(0, 1), spu[3]),
-        ],
+        channels: all_kinds(spu),
         tools: default_tools(),
         start: START,
     };
@@ -81,10 +75,26 @@ fn compare(
 #[test]
 fn fixed_time_keeps_every_step_within_its_tolerance() {
     for (spu, feed_rate, profile) in [
-        ([80.0, 80.0, 80.0, 10.0], 150.0, ProfileKind::Trapezoid),
-        ([640.0, -640.0, 400.0, 40.0], 150.0, ProfileKind::Trapezoid),
-        ([40.0, 40.0, 25.0, -8.0], 20.0, ProfileKind::Trapezoid),
-        ([80.0, 80.0, 80.0, 10.0], 120.0, ProfileKind::SCurve),
+        (
+            [80.0, 80.0, 80.0, 80.0, 80.0, 10.0, 400.0],
+            150.0,
+            ProfileKind::Trapezoid,
+        ),
+        (
+            [640.0, -640.0, 400.0, -400.0, 640.0, 40.0, 3200.0],
+            150.0,
+            ProfileKind::Trapezoid,
+        ),
+        (
+            [40.0, 40.0, 25.0, 25.0, 40.0, -8.0, 200.0],
+            20.0,
+            ProfileKind::Trapezoid,
+        ),
+        (
+            [80.0, 80.0, 80.0, 80.0, 80.0, 10.0, 400.0],
+            120.0,
+            ProfileKind::SCurve,
+        ),
     ] {
         let moves = [
             (0.0, 100.0, 1.0),
@@ -116,7 +126,7 @@ proptest! {
         moves in moves(),
         feed_rate in 20.0..150.0f64,
         scurve in any::<bool>(),
-        spu in prop::array::uniform4(1.0..700.0f64),
+        spu in prop::array::uniform7(1.0..700.0f64),
         frames in prop_oneof![Just(None), (5.0..500.0f64).prop_map(Some)],
     ) {
         let profile = if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid };

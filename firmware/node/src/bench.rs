@@ -135,7 +135,7 @@ impl<'q> Background<'q> {
         Background { node, sched, conv }
     }
 
-    /// Polls the node every 250 µs until its segment is done, timing only
+    /// Polls the node every [`POLL_US`] until its segment is done, timing only
     /// the polls and the scheduler (the operations are drained from `ops`
     /// untimed: the interrupt's share is [`step_interrupt`]'s); prints the
     /// instructions per step, and of them the node's own (the same polls
@@ -144,7 +144,7 @@ impl<'q> Background<'q> {
         let mut measured = 0u64;
         let mut t = 0.0;
         while self.node.queued() > 0 {
-            t += 250.0;
+            t += POLL_US;
             let start = b.now();
             // As the main loop does: outputs near now (in integers
             // without an FPU).
@@ -169,6 +169,9 @@ impl<'q> Background<'q> {
     }
 }
 
+/// How often the background measurements poll the node, µs.
+const POLL_US: f64 = 250.0;
+
 /// Steps counted, nothing else: the node's own share of the background.
 struct Dropped(u64);
 
@@ -187,7 +190,7 @@ fn node_alone<B: BenchBoard>(b: &mut B) -> (u64, u64) {
     let mut t = 0.0;
     let start = b.now();
     while node.queued() > 0 {
-        t += 250.0;
+        t += POLL_US;
         node.poll(t, &mut out);
     }
     let end = b.now();

@@ -24,6 +24,11 @@ pub use motet_node::storage::StorageError;
 /// Ticks of the board's free-running counter; wraps at 2³².
 pub type Ticks = u32;
 
+/// The fixed-point time tolerance of a board without a floating-point
+/// unit, µs ([`Board::FIXED_TIME_US`]): a twentieth of a 1 µs timer tick
+/// (docs/firmware.md), the Pico's and its benchmark's.
+pub const NO_FPU_FIXED_TIME_US: f64 = 0.05;
+
 /// The background side of a board. Every method is called from the main
 /// loop only.
 pub trait Board {

@@ -52,12 +52,7 @@ pub(super) fn actuators(
             ),
         ] {
             if let Some(v) = v {
-                src.in_range(
-                    v.span(),
-                    range,
-                    format_args!("actuator {name}: {what}"),
-                    *v.get_ref(),
-                )?;
+                src.value(v, range, format_args!("actuator {name}: {what}"))?;
             }
         }
         if let Some(v) = a.max_velocity.as_ref().map(|v| *v.get_ref()) {

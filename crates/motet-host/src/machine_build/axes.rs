@@ -77,12 +77,7 @@ pub(super) fn axes(
             (a.max_jerk.as_ref(), ranges::JERK, "max_jerk"),
         ] {
             if let Some(v) = v {
-                src.in_range(
-                    v.span(),
-                    range,
-                    format_args!("axis {name}: {what}"),
-                    *v.get_ref(),
-                )?;
+                src.value(v, range, format_args!("axis {name}: {what}"))?;
             }
         }
         axes.push(Axis {

@@ -53,17 +53,11 @@ pub(super) fn heaters(
                 format!("heater {name}: {} already has this channel", twin.name),
             ));
         }
-        let max_c = src.in_range(
-            h.max.span(),
-            MAX_C,
-            format_args!("heater {name}: max"),
-            *h.max.get_ref(),
-        )?;
-        let tau_s = src.in_range(
-            h.time_constant.span(),
+        let max_c = src.value(&h.max, MAX_C, format_args!("heater {name}: max"))?;
+        let tau_s = src.value(
+            &h.time_constant,
             TAU_S,
             format_args!("heater {name}: time_constant"),
-            *h.time_constant.get_ref(),
         )?;
         out.push(Heater {
             name: name.clone(),

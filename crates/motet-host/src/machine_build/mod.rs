@@ -18,6 +18,7 @@ use crate::machine_file::MachineFile;
 use motet_planner::ranges::ValueRange;
 use std::ops::Range;
 use std::path::Path;
+use toml::Spanned;
 
 /// Turns byte offsets into line and column for error messages.
 pub(crate) struct Source<'a> {
@@ -54,6 +55,28 @@ impl Source<'_> {
         range
             .check(what, v)
             .map_err(|e| self.err(span, e.to_string()))
+    }
+
+    /// The file's value `v` if it is in `range`, else an error at its place
+    /// that names `what`.
+    pub(super) fn value(
+        &self,
+        v: &Spanned<f64>,
+        range: ValueRange,
+        what: impl std::fmt::Display,
+    ) -> Result<f64, MachineError> {
+        self.in_range(v.span(), range, what, *v.get_ref())
+    }
+
+    /// As [`Source::value`], or `default` where the file leaves it out.
+    pub(super) fn value_or(
+        &self,
+        v: Option<&Spanned<f64>>,
+        range: ValueRange,
+        what: impl std::fmt::Display,
+        default: f64,
+    ) -> Result<f64, MachineError> {
+        v.map_or(Ok(default), |v| self.value(v, range, what))
     }
 }
 

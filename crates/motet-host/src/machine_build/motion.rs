@@ -37,12 +37,7 @@ pub(super) fn settings(src: &Source, m: &MotionFile) -> Result<Settings, Machine
         (&m.tolerance, ranges::TOLERANCE_MM, "tolerance"),
         (&m.min_radius, ranges::MIN_RADIUS_MM, "min_radius"),
     ] {
-        src.in_range(
-            v.span(),
-            range,
-            format_args!("[motion] {what}"),
-            *v.get_ref(),
-        )?;
+        src.value(v, range, format_args!("[motion] {what}"))?;
     }
     let lookahead = ranges::LOOKAHEAD
         .check_count("[motion] lookahead", *m.lookahead.get_ref())

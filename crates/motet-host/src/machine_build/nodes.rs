@@ -15,24 +15,18 @@ fn settings(src: &Source, name: &str, n: &NodeFile) -> Result<NodeSpec, MachineE
             .map_err(|e| src.err(q.span(), e.to_string()))?,
         None => 64,
     };
-    let frame_us = match &n.frame_us {
-        Some(f) => src.in_range(
-            f.span(),
-            ranges::FRAME_US,
-            format_args!("node {name}: frame_us"),
-            *f.get_ref(),
-        )?,
-        None => 40.0,
-    };
-    let fixed_time_us = match &n.fixed_time_us {
-        Some(f) => src.in_range(
-            f.span(),
-            ranges::FIXED_TIME_US,
-            format_args!("node {name}: fixed_time_us"),
-            *f.get_ref(),
-        )?,
-        None => 0.0,
-    };
+    let frame_us = src.value_or(
+        n.frame_us.as_ref(),
+        ranges::FRAME_US,
+        format_args!("node {name}: frame_us"),
+        40.0,
+    )?;
+    let fixed_time_us = src.value_or(
+        n.fixed_time_us.as_ref(),
+        ranges::FIXED_TIME_US,
+        format_args!("node {name}: fixed_time_us"),
+        0.0,
+    )?;
     Ok(NodeSpec {
         name: name.to_string(),
         actuators: vec![],

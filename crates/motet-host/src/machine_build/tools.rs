@@ -27,15 +27,12 @@ pub(super) fn tools(src: &Source, raw: &MachineFile) -> Result<Vec<Tool>, Machin
             ToolKind::Spindle => 1.0,
             ToolKind::Laser => 0.0,
         };
-        let settle = match &t.settle {
-            Some(s) => src.in_range(
-                s.span(),
-                ranges::SETTLE_S,
-                format_args!("tool {name}: settle"),
-                *s.get_ref(),
-            )?,
-            None => default_settle,
-        };
+        let settle = src.value_or(
+            t.settle.as_ref(),
+            ranges::SETTLE_S,
+            format_args!("tool {name}: settle"),
+            default_settle,
+        )?;
         let on_value = t.on_value.as_ref().map_or(1.0, |v| *v.get_ref());
         if on_value.is_nan() {
             let span = t.on_value.as_ref().map_or(t.kind.span(), |v| v.span());

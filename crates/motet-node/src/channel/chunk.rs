@@ -162,10 +162,13 @@ fn pow2_128(q: i32) -> u32 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct ChunkBound {
     /// `log₂ K²` in sixteenths, rounded up.
-    pub k2: i32,
+    k2: i32,
 }
 
 impl ChunkBound {
+    /// No bound: for runs whose steps are not chunked.
+    pub const NONE: ChunkBound = ChunkBound { k2: i32::MAX / 16 };
+
     /// For acceleration `a` (units/s²), `dx` units a step and a tolerance
     /// of `tolerance` µs, nine tenths of it for the interpolation (the
     /// rounding takes the rest): `K = 15a³dx⁴ · 10⁶ / (384 · 0.9 · tol)`,
@@ -176,12 +179,12 @@ impl ChunkBound {
         let a3 = a * a * a;
         let k = 15.0 * a3 * dx * dx * dx * dx * 1e6 / (384.0 * 0.9 * tolerance);
         let k2 = k * k;
-        ChunkBound {
-            k2: if k2 > 0.0 && k2.is_finite() {
-                log2_16(k2, true)
-            } else {
-                i32::MAX / 16
-            },
+        if k2 > 0.0 && k2.is_finite() {
+            ChunkBound {
+                k2: log2_16(k2, true),
+            }
+        } else {
+            ChunkBound::NONE
         }
     }
 

@@ -170,7 +170,7 @@ impl Run {
         form: Form::Cruise { us_per_unit: 0.0 },
         tolerance: 0.0,
         chunk: Chunk::NONE,
-        bound: ChunkBound { k2: 0 },
+        bound: ChunkBound::NONE,
         next_base: u64::MAX,
         next_rate: 0,
         next_w2: 0.0,
@@ -220,7 +220,7 @@ impl Run {
                 Form::Quadratic { two_a, .. } if from.tolerance > 0.0 => {
                     ChunkBound::new(0.5 * two_a, dx, from.tolerance)
                 }
-                _ => ChunkBound { k2: 0 },
+                _ => ChunkBound::NONE,
             },
             next_base: u64::MAX,
             next_rate: 0,
@@ -269,19 +269,7 @@ impl Run {
         let w2 = vv + two_a * x;
         let w = speed(vv, two_a, x);
         // As `time_at` (the same operations, the same bits).
-        let u = if x < self.span {
-            accelerating_us(v, x, w)
-        } else {
-            self.duration_us
-        };
-        let t = us_to_fine(
-            self.t_start
-                + if u < self.duration_us {
-                    u
-                } else {
-                    self.duration_us
-                },
-        );
+        let t = us_to_fine(self.piece_time(x, accelerating_us(v, x, w)));
         if w > 0.0 {
             // µs a step, in 2⁻³² µs.
             let rate = self.dx * 1e6 * 4_294_967_296.0 / w;
@@ -295,17 +283,14 @@ impl Run {
     /// Step `k`'s host time, µs, exactly as the `f64` fill solves it.
     fn time_at(&self, k: f64) -> f64 {
         let x = self.x0 + k * self.dx;
-        let u = if x < self.span {
-            self.u_of(x)
-        } else {
-            self.duration_us
-        };
-        self.t_start
-            + if u < self.duration_us {
-                u
-            } else {
-                self.duration_us
-            }
+        self.piece_time(x, self.u_of(x))
+    }
+
+    /// The host time, µs, of the crossing `x` units into the piece that
+    /// its closed form puts `u` µs in, within the piece's bounds.
+    #[inline(always)]
+    fn piece_time(&self, x: f64, u: f64) -> f64 {
+        within_piece::<true>(x, u, self.span, self.duration_us, self.t_start)
     }
 
     /// Solves the next steps into `ahead` from place `at` on (the places
@@ -333,9 +318,15 @@ impl Run {
     #[inline(always)]
     fn fill_exact(&mut self, times: &mut [f64], last: f64) -> f64 {
         match self.form {
-            Form::Cruise { us_per_unit } => self.fill_cruise(times, last, us_per_unit),
+            // A cruise's time is affine in the distance and reaches the
+            // piece's end exactly at its span: only the duration bounds it,
+            // so its loop skips the span's check (a few instructions a
+            // step).
+            Form::Cruise { us_per_unit } => {
+                self.fill_with::<false>(times, last, |x| x * us_per_unit)
+            }
             Form::Quadratic { v, vv, two_a } => {
-                self.fill_with(times, last, |x| accelerating_us(v, x, speed(vv, two_a, x)))
+                self.fill_with::<true>(times, last, |x| accelerating_us(v, x, speed(vv, two_a, x)))
             }
         }
     }
@@ -415,34 +406,21 @@ impl Run {
         }
     }
 
+    /// The loop of [`Run::fill_exact`] for a closed form `u_of`, the
+    /// span checked or not (`SPAN`).
     #[inline(always)]
-    fn fill_cruise(&mut self, times: &mut [f64], mut last: f64, us_per_unit: f64) -> f64 {
-        let (x0, dx, dur, t_start) = (self.x0, self.dx, self.duration_us, self.t_start);
-        let mut k = self.k;
-        for t in times.iter_mut() {
-            let u = (x0 + k * dx) * us_per_unit;
-            let u = if u < dur { u } else { dur };
-            let time = t_start + u;
-            last = if time > last { time } else { last };
-            *t = last;
-            k += 1.0;
-        }
-        self.k = k;
-        last
-    }
-
-    #[inline(always)]
-    fn fill_with(&mut self, times: &mut [f64], mut last: f64, u_of: impl Fn(f64) -> f64) -> f64 {
+    fn fill_with<const SPAN: bool>(
+        &mut self,
+        times: &mut [f64],
+        mut last: f64,
+        u_of: impl Fn(f64) -> f64,
+    ) -> f64 {
         let (x0, dx, span, dur, t_start) =
             (self.x0, self.dx, self.span, self.duration_us, self.t_start);
         let mut k = self.k;
         for t in times.iter_mut() {
             let x = x0 + k * dx;
-            // At or past the piece's end, its end exactly: near a stop the
-            // distance is flat in time and a solve lands anywhere on it.
-            let u = if x < span { u_of(x) } else { dur };
-            let u = if u < dur { u } else { dur };
-            let time = t_start + u;
+            let time = within_piece::<SPAN>(x, u_of(x), span, dur, t_start);
             // Never earlier than the step before, whatever the rounding.
             last = if time > last { time } else { last };
             *t = last;
@@ -451,6 +429,22 @@ impl Run {
         self.k = k;
         last
     }
+}
+
+/// `t_start + u`, bounded to the piece: at or past its span `x`, its end
+/// exactly (near a stop the distance is flat in time and a solve lands
+/// anywhere on it; checked only if `SPAN`), and never past its duration.
+/// Plain comparisons: this runs once per step.
+#[inline(always)]
+fn within_piece<const SPAN: bool>(
+    x: f64,
+    u: f64,
+    span: f64,
+    duration_us: f64,
+    t_start: f64,
+) -> f64 {
+    let u = if !SPAN || x < span { u } else { duration_us };
+    t_start + if u < duration_us { u } else { duration_us }
 }
 
 /// The speed `x` units into a constant-acceleration piece: `√(vv +

@@ -185,11 +185,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// (the Raspberry Pi Pico), and what a simulation of one runs. Kept
     /// across resets.
     pub fn use_fixed_time(&mut self, tolerance_us: f64) {
-        self.fixed_time = if tolerance_us > 0.0 {
-            tolerance_us
-        } else {
-            0.0
-        };
+        // Each channel takes it as its own (0 for anything not above 0).
+        self.fixed_time = tolerance_us;
         for ch in self.channels.iter_mut() {
             ch.use_fixed_time(self.fixed_time);
         }

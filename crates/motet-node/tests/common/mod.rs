@@ -196,6 +196,21 @@ pub fn channel(channel: u8, map: JointMap, steps_per_unit: f64) -> ChannelConfig
     }
 }
 
+/// One channel of every joint kind: x, y, both CoreXY belts, polar radius
+/// and angle, z; `spu` their steps per unit.
+pub fn all_kinds(spu: [f64; 7]) -> Vec<ChannelConfig> {
+    let k = KinematicsKind::COREXY;
+    vec![
+        channel(0, JointMap::axis(0), spu[0]),
+        channel(1, JointMap::axis(1), spu[1]),
+        channel(2, k.joint_map(0, [0, 1, 2]), spu[2]),
+        channel(3, k.joint_map(1, [0, 1, 2]), spu[3]),
+        channel(4, JointMap::polar_radius(0, 1), spu[4]),
+        channel(5, JointMap::polar_angle(0, 1), spu[5]),
+        channel(6, JointMap::axis(2), spu[6]),
+    ]
+}
+
 pub const START: [f64; MAX_AXES] = [60.0, 0.0, 1.0, 0.0, 0.0, 0.0];
 
 pub fn default_tools() -> Vec<ToolConfig> {

@@ -55,9 +55,8 @@ impl Board for Pico {
     /// the background bounds the node, not the pins.
     const MAX_STEP_HZ: u32 = 10_000;
     const LAYOUT: Layout = LAYOUT;
-    // An M0+ has no FPU: fixed-point time, each step within a twentieth
-    // of the 1 µs timer tick of its exact time (docs/firmware.md).
-    const FIXED_TIME_US: f64 = 0.05;
+    // An M0+ has no FPU: fixed-point time.
+    const FIXED_TIME_US: f64 = motet_firmware::board::NO_FPU_FIXED_TIME_US;
     type Flash = QspiFlash;
 
     fn uid(&self) -> u64 {

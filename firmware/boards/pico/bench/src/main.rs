@@ -148,7 +148,7 @@ struct PicoBench;
 
 impl BenchBoard for PicoBench {
     // As the Pico's board (`motet_board_pico::Pico`).
-    const FIXED_TIME_US: f64 = 0.05;
+    const FIXED_TIME_US: f64 = motet_firmware::board::NO_FPU_FIXED_TIME_US;
 
     fn now(&self) -> Ticks {
         nrf51::now()
