@@ -14,6 +14,7 @@
 mod clocks;
 mod figures;
 mod group;
+mod loops;
 mod pace;
 mod stop;
 mod window;
@@ -602,6 +603,9 @@ impl NetRun {
                                 info.confirmed.push((k, committed));
                             }
                         }
+                    }
+                    Incoming::Motion(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
+                        self.on_loop_message(k, m, now)
                     }
                     Incoming::Service(_) => {}
                 }
