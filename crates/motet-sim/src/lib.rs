@@ -4,11 +4,14 @@
 
 pub mod dance;
 mod ideal;
+pub mod loops;
 pub mod path;
 pub mod plant;
 pub mod plant_thread;
+pub mod plots;
 pub mod report;
 pub mod run;
+pub mod servo;
 
 pub use report::{format_duration, Report};
 pub use run::{

@@ -150,9 +150,14 @@ impl Servo {
         &mut self.sampler
     }
 
-    /// Segments from the queue's head it is done with.
+    /// Segments from the queue's head it is done with (all, once it
+    /// faulted: it follows none any more).
     pub fn segments_done(&self) -> usize {
-        self.setpoint.segments_done()
+        if self.fault.is_some() {
+            usize::MAX
+        } else {
+            self.setpoint.segments_done()
+        }
     }
 
     /// The queue dropped `n` segments from its head.

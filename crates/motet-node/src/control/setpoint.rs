@@ -81,10 +81,6 @@ impl SetPoint {
         segments: &Deque<Segment, Q>,
         end: usize,
     ) -> JointState {
-        let rest = JointState {
-            value: self.hold,
-            ..JointState::default()
-        };
         while self.seg < end {
             let Some(s) = segments.get(self.seg) else {
                 break;
@@ -105,8 +101,8 @@ impl SetPoint {
                 return along(&path, s, t);
             }
             if t < s.t1() {
-                // A dwell: standing still.
-                return rest;
+                // A dwell: standing still where the segment before ended.
+                return rest_at(self.hold);
             }
             if length > 0.0 {
                 let path = self
@@ -181,9 +177,13 @@ mod tests {
     fn follows_segments_and_holds_between() {
         let mut q: Deque<Segment, 4> = Deque::new();
         let a = seg(1000.0, 0.0, 30.0);
+        // A dwell right after it, then a gap.
+        let mut dwell = seg(a.t1(), 30.0, 30.0);
+        dwell.profile = motet_trajectory::Profile::dwell(0.002);
         let gap = a.t1() + 5000.0;
         let b = seg(gap, 30.0, 4.0);
         q.push_back(a).unwrap();
+        q.push_back(dwell).unwrap();
         q.push_back(b).unwrap();
         let map = JointMap::axis(0);
         let mut sp = SetPoint::at_rest(map, &[0.0; 6]);
@@ -195,11 +195,12 @@ mod tests {
             (1100.0, 5e-6, 0.1, 1000.0),
             (mid, dm, vm, 0.0),
             (a.t1() + 10.0, 30.0, 0.0, 0.0),
+            (a.t1() + 3000.0, 30.0, 0.0, 0.0),
             (gap + 100.0, 30.0 - 5e-6, -0.1, -1000.0),
             (b.t1() + 1.0, 4.0, 0.0, 0.0),
         ];
         for (t, v, s, acc) in cases {
-            let st = sp.state(t, &q, 2);
+            let st = sp.state(t, &q, 3);
             assert!(
                 (st.value - v).abs() < 1e-9
                     && (st.speed - s).abs() < 1e-9
@@ -207,7 +208,7 @@ mod tests {
                 "{t}: {st:?}"
             );
         }
-        assert_eq!(sp.segments_done(), 2);
+        assert_eq!(sp.segments_done(), 3);
     }
 
     #[test]
