@@ -12,6 +12,7 @@ pub mod plots;
 pub mod report;
 pub mod run;
 pub mod servo;
+pub mod tune;
 
 pub use report::{format_duration, Report};
 pub use run::{

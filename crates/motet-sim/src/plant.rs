@@ -144,7 +144,10 @@ impl Plant {
                     spu_signed: a.steps_per_unit,
                     invert: a.steps_per_unit < 0.0,
                     servo_joint: None,
-                    following: FollowingStats::default(),
+                    following: FollowingStats {
+                        last_rate: f64::NAN,
+                        ..FollowingStats::default()
+                    },
                     servo: a.servo.is_some(),
                     position,
                     moves_xy: false,

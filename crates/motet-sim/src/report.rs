@@ -66,6 +66,9 @@ pub struct FollowingReport {
     pub ticks: u64,
     /// Largest |error| while the trajectory cruises.
     pub max_cruise_counts: f64,
+    /// Largest once a cruise has held its speed for 5 ms (the loop settled
+    /// after a corner's jump in speed or a ramp).
+    pub max_settled_cruise_counts: f64,
     /// Largest while it accelerates or decelerates.
     pub max_accel_counts: f64,
     /// Largest at rest.
@@ -191,11 +194,12 @@ impl Report {
             match &a.following {
                 Some(f) => {
                     s += &format!(
-                        "  actuator {:<10} on {:<8} servo at {} Hz: following error {} counts max cruising, {} accelerating, {} at rest, {} rms\n",
+                        "  actuator {:<10} on {:<8} servo at {} Hz: following error {} counts max cruising ({} settled), {} accelerating, {} at rest, {} rms\n",
                         a.name,
                         a.node,
                         finite(f.loop_hz, 0),
                         finite(f.max_cruise_counts, 2),
+                        finite(f.max_settled_cruise_counts, 2),
                         finite(f.max_accel_counts, 2),
                         finite(f.max_rest_counts, 2),
                         finite(f.rms_counts, 2)

@@ -404,6 +404,7 @@ impl<P: PlantSink> SimMachine<P> {
             loop_hz: servo.rate_hz,
             ticks: f.ticks,
             max_cruise_counts: f.max_cruise,
+            max_settled_cruise_counts: f.max_settled,
             max_accel_counts: f.max_accel,
             max_rest_counts: f.max_rest,
             rms_counts: f.rms(),
@@ -508,6 +509,36 @@ impl<P: PlantSink> SimMachine<P> {
             let until = self.frame_after(target.max(self.now));
             self.poll_all(until);
         }
+    }
+
+    /// New gains for servo actuator `name`, sent to its node now, moving or
+    /// not (as `HostMessage::ServoGains`); the node takes them at its next
+    /// tick. An error when there is no such servo or the node refuses them.
+    pub fn set_servo_gains(
+        &mut self,
+        name: &str,
+        gains: motet_wire::control::ServoGains,
+    ) -> Result<(), SimError> {
+        let Some(a) = self.machine.actuators.iter().position(|x| x.name == name) else {
+            return Err(SimError::Fault(format!("no actuator `{name}`")));
+        };
+        let Some((k, ch)) = self
+            .machine
+            .nodes
+            .iter()
+            .enumerate()
+            .find_map(|(k, n)| n.actuators.iter().position(|&x| x == a).map(|c| (k, c)))
+        else {
+            return Err(SimError::Fault(format!("actuator {name} is on no node")));
+        };
+        self.flush_all();
+        self.send(
+            k,
+            &HostMessage::ServoGains {
+                channel: ch as u8,
+                gains,
+            },
+        )
     }
 
     /// The first fault of a node's loop (or a source that stopped

@@ -17,6 +17,7 @@ mod peak;
 mod run;
 mod s3g;
 mod serve;
+mod tune;
 
 use clap::{Parser, Subcommand};
 use motet_api::{JobOptions, Placement};
@@ -203,6 +204,28 @@ enum Cmd {
         #[command(subcommand)]
         command: NodesCmd,
     },
+    /// Tune a servo actuator: its node runs drive steps (and a relay) on
+    /// the simulated plant, the gains follow (Ziegler–Nichols, or from the
+    /// identified model), a move checks them, a plot shows it all.
+    Tune {
+        /// Machine file (TOML).
+        machine: PathBuf,
+        /// The servo actuator's name.
+        actuator: String,
+        /// `step` (drive steps: the reaction curve) or `relay`
+        /// (Åström–Hägglund: the ultimate gain and period).
+        #[arg(long, default_value = "step")]
+        method: String,
+        /// `model` (from the identified motor) or `zn` (Ziegler–Nichols).
+        #[arg(long, default_value = "model")]
+        rule: String,
+        /// Write the gains into the machine file (its comments kept).
+        #[arg(long)]
+        write: bool,
+        /// Where the plot goes [default: out/tune].
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Check a machine file and a job without running it.
     Check {
         machine: PathBuf,
@@ -365,6 +388,21 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         }),
         cmd @ Cmd::Node { .. } => node_cmd(cmd),
         Cmd::Nodes { command } => nodes_cmd(command),
+        Cmd::Tune {
+            machine,
+            actuator,
+            method,
+            rule,
+            write,
+            out,
+        } => tune::tune_cmd(tune::TuneArgs {
+            machine,
+            actuator,
+            method,
+            rule,
+            write,
+            out,
+        }),
         Cmd::Check {
             machine,
             job,

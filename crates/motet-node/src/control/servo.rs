@@ -135,8 +135,10 @@ impl Servo {
         self.pid.reset();
     }
 
-    /// Starts a tuning test at its next tick.
+    /// Starts a tuning test at its next tick, its error measured from
+    /// where the motor is then.
     pub fn start_test(&mut self, test: ServoTest) {
+        self.offset = None;
         self.test = Some(Running {
             test,
             until: None,

@@ -13,6 +13,13 @@ pub struct FollowingStats {
     pub ticks: u64,
     /// Largest |ideal − count| while the trajectory cruises.
     pub max_cruise: f64,
+    /// Largest while it has cruised at one speed and direction for at
+    /// least [`SETTLE_US`] (the loop settled after a corner or a ramp).
+    pub max_settled: f64,
+    /// When the joint's planned speed last changed, µs.
+    pub changed_at: f64,
+    /// Its planned speed at the last tick (NaN: none yet).
+    pub last_rate: f64,
     /// Largest while it accelerates or decelerates.
     pub max_accel: f64,
     /// Largest while it is at rest.
@@ -22,6 +29,10 @@ pub struct FollowingStats {
     /// Ticks while moving.
     pub moving: u64,
 }
+
+/// How long a cruise lasts before it counts as settled, µs: a few of the
+/// loop's time constants after the last change of the joint's speed.
+pub const SETTLE_US: f64 = 5_000.0;
 
 impl FollowingStats {
     /// Root mean square following error while moving, counts.
@@ -55,9 +66,20 @@ impl Plant {
             }
         };
         let error = (ideal * spu - count as f64).abs();
+        let rate = at
+            .and_then(|m| self.ideal.joint_rate(index, m))
+            .unwrap_or(0.0);
         let a = &mut self.actuators[index];
         let st = &mut a.following;
         st.ticks += 1;
+        // A change of the joint's planned speed, a corner's jump included.
+        if !(rate - st.last_rate).abs().le(&1e-9) || accel.abs() > 1e-12 {
+            st.changed_at = t;
+        }
+        st.last_rate = rate;
+        if accel.abs() <= 1e-12 && speed.abs() > 1e-12 && t - st.changed_at >= SETTLE_US {
+            st.max_settled = st.max_settled.max(error);
+        }
         let slot = if accel.abs() > 1e-12 {
             &mut st.max_accel
         } else if speed.abs() > 1e-12 {

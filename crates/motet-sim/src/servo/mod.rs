@@ -180,6 +180,15 @@ impl ServoPlants {
         }
     }
 
+    /// One servo on channel 0 and no sensor.
+    pub fn single(plant: Option<ServoPlant>) -> ServoPlants {
+        ServoPlants {
+            servos: vec![plant],
+            sensors: Vec::new(),
+            seed: 1,
+        }
+    }
+
     /// Whether the node has any servo.
     pub fn any(&self) -> bool {
         self.servos.iter().any(|s| s.is_some())
