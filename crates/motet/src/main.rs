@@ -196,6 +196,14 @@ enum Cmd {
         /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
         #[arg(long)]
         record: Option<PathBuf>,
+        /// Run the servo and sensor channels of this machine file's node
+        /// (`--plant-node`) on its simulated plant (motors, encoders,
+        /// switches, sensors).
+        #[arg(long, requires = "plant_node")]
+        plant: Option<PathBuf>,
+        /// The node of `--plant`'s machine file.
+        #[arg(long, requires = "plant")]
+        plant_node: Option<String>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -482,6 +490,8 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         idle_exit,
         faults,
         record,
+        plant,
+        plant_node,
         quiet,
     } = cmd
     else {
@@ -512,6 +522,7 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         auto_press,
         idle_exit,
         quiet,
+        plant: plant.zip(plant_node),
     })
 }
 

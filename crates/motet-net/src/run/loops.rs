@@ -16,11 +16,25 @@ impl NetRun {
             value,
         } = m
         {
-            let node = self.peers[k].name.clone();
-            self.stop(
-                &format!("node {node}: {source:?} stopped driving ({kind:?}, {value}) at {at} µs"),
-                now,
+            let text = motet_host::loops::fault_text(
+                &self.machine,
+                k,
+                source,
+                kind,
+                at,
+                value,
+                self.feed_t0,
             );
+            self.stop(&text, now);
+        } else if let NodeMessage::Samples(b) = &m {
+            let mut buf = [0u8; motet_wire::MAX_MESSAGE];
+            let n = motet_wire::encode(&m, &mut buf).map_or(0, |b| b.len());
+            self.samples.take(&self.machine, k, b, n, now as f64);
         }
+    }
+
+    /// What the nodes' loops sent: samples per source.
+    pub fn samples(&self) -> &motet_host::samples::SampleStore {
+        &self.samples
     }
 }

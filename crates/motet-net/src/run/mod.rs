@@ -266,6 +266,8 @@ pub struct NetRun {
     group: Option<group::Group>,
     /// How late the host runs, and the lead that covers it.
     pace: pace::Pace,
+    /// Samples the nodes' loops sent, per source.
+    samples: motet_host::samples::SampleStore,
 }
 
 impl NetRun {
@@ -325,6 +327,7 @@ impl NetRun {
             status: vec![None; n],
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
+            samples: motet_host::samples::SampleStore::new(),
         }
     }
 
