@@ -326,7 +326,7 @@ const EXAMPLES: &[Expect] = &[
         joint_limits: &[],
         draw_feed: 25.0,
         tolerance: 0.005,
-        junction_deviation: 0.02,
+        junction_deviation: 0.002,
         min_radius: 1.0,
     },
     Expect {

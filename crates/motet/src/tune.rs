@@ -152,3 +152,40 @@ pub fn write_gains(path: &Path, actuator: &str, g: &ServoGains) -> Result<()> {
     motet_host::Machine::load(path)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The gains replace the old ones in place: comments, spacing and the
+    /// other keys stay, a missing gain is added, and the file still loads.
+    #[test]
+    fn written_gains_keep_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.toml");
+        let text = "# my mill\nname = \"m\"\n[axes.x]\ntravel = [0, 100]\nmax_velocity = 100\nmax_acceleration = 1000\n\n[actuators.xm]\njoint = \"x\"\nchain = [{ leadscrew = { lead = 5.0 } }, { encoder = { lines = 1000 } }]\n[actuators.xm.servo]\nrate_hz = 10000\nkp = 0.1   # too high\nfollowing_limit = 40\n";
+        std::fs::write(&path, text).unwrap();
+        let g = ServoGains {
+            kp: 0.00173,
+            ki: 0.0907,
+            kd: 1.15e-5,
+            kv: 3.29e-6,
+            ka: 2.18e-8,
+            kf: 0.004,
+            integral_limit: 0.2,
+            output_limit: 1.0,
+            derivative_hz: 500.0,
+        };
+        write_gains(&path, "xm", &g).unwrap();
+        let out = std::fs::read_to_string(&path).unwrap();
+        assert!(out.starts_with("# my mill\n"), "{out}");
+        assert!(out.contains("kp = 0.00173   # too high"), "{out}");
+        let m = motet_host::Machine::load(&path).unwrap();
+        let s = m.actuators[0].servo.as_ref().unwrap();
+        assert_eq!(
+            (s.gains.kp, s.gains.kf, s.following_limit),
+            (0.00173, 0.004, 40.0)
+        );
+        assert!(write_gains(&path, "ym", &g).is_err(), "no such actuator");
+    }
+}
