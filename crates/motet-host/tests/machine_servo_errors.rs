@@ -18,8 +18,11 @@ const BASE: &[&str] = &[
     r#"kp = 0.002"#,
 ];
 
-/// (what, lines replaced or added: (line, text), expected line, message part)
-const CASES: &[(&str, &[(usize, &str)], usize, &str)] = &[
+/// Lines replaced or added: (line, text).
+type Edits = &'static [(usize, &'static str)];
+
+/// (what, edits, expected line, message part)
+const CASES: &[(&str, Edits, usize, &str)] = &[
     (
         "a gain out of range",
         &[(10, "kp = -1")],

@@ -150,6 +150,9 @@ pub fn tune(
     })
 }
 
+/// An experiment's trace: (time s, counts from its start).
+type Trace = Vec<(f64, f64)>;
+
 /// A node with one servo on its plant, for experiments.
 struct Bench {
     node: Node,
@@ -279,7 +282,7 @@ impl Bench {
 
     /// A drive step of `duty` for 200 ms from rest: the trace (from the
     /// step, counts from where it started) and the speed at every tick.
-    fn step(&mut self, duty: f32) -> Result<(Vec<(f64, f64)>, Vec<f64>), TuneError> {
+    fn step(&mut self, duty: f32) -> Result<(Trace, Vec<f64>), TuneError> {
         self.settle();
         let test = ServoTest::Step {
             duty,
@@ -310,7 +313,7 @@ impl Bench {
         &mut self,
         amplitude: f32,
         hysteresis: f32,
-    ) -> Result<(Vec<(f64, f64)>, (f64, f64)), TuneError> {
+    ) -> Result<(Trace, (f64, f64)), TuneError> {
         self.settle();
         let test = ServoTest::Relay {
             amplitude,

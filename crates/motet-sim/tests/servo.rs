@@ -31,7 +31,8 @@ chain = [{{ leadscrew = {{ lead = 5.0 }} }}, {{ encoder = {{ lines = 1000 }} }}]
     Machine::parse(&text, Path::new("servo.toml")).unwrap()
 }
 
-pub const GAINS: &str = "rate_hz = 10000
+/// Gains `motet tune` found for this axis, rounded.
+const GAINS: &str = "rate_hz = 10000
 kp = 0.002
 ki = 0.25
 kd = 1.5e-5

@@ -14,7 +14,7 @@ pub struct FollowingStats {
     /// Largest |ideal − count| while the trajectory cruises.
     pub max_cruise: f64,
     /// Largest while it has cruised at one speed and direction for at
-    /// least [`SETTLE_US`] (the loop settled after a corner or a ramp).
+    /// least 5 ms (the loop settled after a corner or a ramp).
     pub max_settled: f64,
     /// When the joint's planned speed last changed, µs.
     pub changed_at: f64,
