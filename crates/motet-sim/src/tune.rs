@@ -309,11 +309,7 @@ impl Bench {
 
     /// A relay of ±`amplitude` with a band of ±`hysteresis` counts for
     /// 400 ms: the trace and (Ku, Tu) from its last half.
-    fn relay(
-        &mut self,
-        amplitude: f32,
-        hysteresis: f32,
-    ) -> Result<(Trace, (f64, f64)), TuneError> {
+    fn relay(&mut self, amplitude: f32, hysteresis: f32) -> Result<(Trace, (f64, f64)), TuneError> {
         self.settle();
         let test = ServoTest::Relay {
             amplitude,

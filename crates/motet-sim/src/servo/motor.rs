@@ -157,7 +157,7 @@ impl DcMotor {
         let v = self.volts();
         let [theta, w, i] = self.x;
         let drive = m.k * i - m.load;
-        if w == 0.0 && drive.abs() <= m.coulomb {
+        if w == 0.0 && m.coulomb > 0.0 && drive.abs() <= m.coulomb {
             // Held by friction: only the current moves, exactly; the
             // shaft breaks free at a later sub-step if the torque grows.
             let i1 = v / m.r + (i - v / m.r) * (-s.h * m.r / m.l).exp();
