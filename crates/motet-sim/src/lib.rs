@@ -2,6 +2,7 @@
 //! firmware, against a simulated plant; reports how the machine moved and draws
 //! what it did.
 
+mod collector;
 pub mod dance;
 mod ideal;
 pub mod loops;
