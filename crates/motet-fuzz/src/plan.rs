@@ -150,6 +150,12 @@ fn run(machine: &Machine, items: &[Planned], end: f64) {
             Err(SimError::Plan { .. } | SimError::Source(_)) => {
                 unreachable!("submit neither plans nor reads a job")
             }
+            // A servo's gains are the file's: a loop that cannot follow
+            // stops the run, named, which is what it must do.
+            Err(SimError::Fault(e)) => {
+                assert!(e.contains("node "), "a fault names its node: {e}");
+                return;
+            }
         }
     }
     sim.run_until(end);

@@ -333,6 +333,10 @@ impl Rig {
                 | NodeMessage::Tally { .. },
             )
             | None => {}
+            // Sent unasked, never as a reply.
+            Some(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
+                panic!("a reply that is never one: {m:?}")
+            }
         }
     }
 

@@ -182,6 +182,15 @@ impl Distributor {
         let mut out = vec![HostMessage::Reset];
         for (ch, &a) in spec.actuators.iter().enumerate() {
             let act = &machine.actuators[a];
+            if let Some(servo) = &act.servo {
+                let map = machine.joints[act.joint].map;
+                out.push(HostMessage::ConfigureServo(servo.config(
+                    ch as u8,
+                    map,
+                    act.steps_per_unit,
+                )));
+                continue;
+            }
             out.push(HostMessage::ConfigureChannel(ChannelConfig {
                 channel: ch as u8,
                 map: machine.joints[act.joint].map,
@@ -196,6 +205,7 @@ impl Distributor {
                 track: t as u8,
             }));
         }
+        out.extend(crate::loops::setup(machine, node));
         out.push(HostMessage::SetPosition { position: *start });
         out
     }

@@ -4,11 +4,16 @@
 pub mod distribute;
 pub mod heater;
 pub mod job;
+pub mod loops;
 pub mod machine;
 mod machine_build;
 mod machine_file;
+mod machine_file_loops;
 mod machine_kinematics;
+pub mod samples;
+pub mod servo;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};
 pub use machine::{Actuator, Axis, Heater, Joint, Machine, MachineError, NodeSpec, Tool};
+pub use servo::{MotorSpec, SensorKind, SensorSpec, ServoSpec};

@@ -89,6 +89,9 @@ pub struct Actuator {
     /// The fastest it steps, steps/s, when the joint's speed is bounded
     /// (every joint but a polar angle with no `max_velocity`).
     pub max_step_hz: Option<f64>,
+    /// A servo (its chain ends in an encoder): `steps_per_unit` are then
+    /// encoder counts, and this is its loop.
+    pub servo: Option<crate::servo::ServoSpec>,
 }
 
 /// One tool output (`[tools.NAME]`): a pen servo, a laser, a spindle.
@@ -166,6 +169,11 @@ pub struct NodeSpec {
     /// default): exactly. What the simulator runs the node with: a board
     /// sets its own.
     pub fixed_time_us: f64,
+    /// Indices into [`Machine::sensors`]; the position is the node's
+    /// sensor index.
+    pub sensors: Vec<usize>,
+    /// Bytes a second its samples may take upstream (frames included).
+    pub sample_budget: f64,
 }
 
 /// A machine file, validated: everything the planner, the job checks and
@@ -221,6 +229,8 @@ pub struct Machine {
     pub stop_horizon: usize,
     /// Simulated heaters (`[heaters.NAME]`; see [`Heater`]).
     pub heaters: Vec<Heater>,
+    /// Sensors (`[sensors.NAME]`), by name.
+    pub sensors: Vec<crate::servo::SensorSpec>,
 }
 
 impl Machine {

@@ -26,7 +26,11 @@ pub struct MachineFile {
     pub nodes: BTreeMap<String, Spanned<NodeFile>>,
     #[serde(default)]
     pub heaters: BTreeMap<String, Spanned<HeaterFile>>,
+    #[serde(default)]
+    pub sensors: BTreeMap<String, Spanned<SensorFile>>,
 }
+
+pub use crate::machine_file_loops::{MotorFile, SensorFile, ServoFile};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -130,6 +134,12 @@ pub struct ActuatorFile {
     /// Direction set-up time for the driver, µs.
     #[serde(default)]
     pub dir_setup_us: Option<Spanned<f64>>,
+    /// A servo's loop (its chain ends in an encoder).
+    #[serde(default)]
+    pub servo: Option<Spanned<ServoFile>>,
+    /// A servo's simulated motor and load.
+    #[serde(default)]
+    pub motor: Option<Spanned<MotorFile>>,
 }
 
 /// One element of a chain, e.g. `{ pulley = { teeth = 20, belt_pitch = 2 } }`,
@@ -143,6 +153,7 @@ pub enum ElementFile {
     Stepper { step_angle: f64 },
     Microstep(u32),
     Invert,
+    Encoder { lines: u32 },
 }
 
 #[derive(Debug, Deserialize)]
@@ -201,4 +212,10 @@ pub struct NodeFile {
     /// without a floating-point unit does.
     #[serde(default)]
     pub fixed_time_us: Option<Spanned<f64>>,
+    /// Sensors it reads.
+    #[serde(default)]
+    pub sensors: Vec<Spanned<String>>,
+    /// Bytes a second its samples may take upstream.
+    #[serde(default)]
+    pub sample_budget: Option<Spanned<f64>>,
 }

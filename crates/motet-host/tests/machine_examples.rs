@@ -301,7 +301,98 @@ const EXAMPLES: &[Expect] = &[
         junction_deviation: 0.02,
         min_radius: 1.0,
     },
+    Expect {
+        file: "servo-mill.toml",
+        kinematics: KinematicsKind::CARTESIAN,
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [0.0, 200.0], true, None),
+            ("y", [0.0, 150.0], true, None),
+            ("z", [-60.0, 0.0], true, None),
+        ],
+        joints: &["x", "y", "z"],
+        // Encoder counts: 1000 lines ×4 a turn of a 5 mm screw.
+        actuators: &[
+            ("x_servo", "x", 800.0),
+            ("y_servo", "y", 800.0),
+            ("z_servo", "z", 800.0),
+        ],
+        tools: &[("spindle", ToolKind::Spindle, 0.5, true)],
+        nodes: &[
+            ("xy", &["x_servo", "y_servo"], &[]),
+            ("z", &["z_servo"], &["spindle"]),
+        ],
+        start: &[0.0, 0.0, 0.0],
+        joint_limits: &[],
+        draw_feed: 25.0,
+        tolerance: 0.005,
+        junction_deviation: 0.002,
+        min_radius: 1.0,
+    },
+    Expect {
+        file: "servo-printer.toml",
+        kinematics: KinematicsKind::CARTESIAN,
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [0.0, 220.0], true, None),
+            ("y", [0.0, 220.0], true, None),
+            ("z", [0.0, 250.0], true, None),
+            ("e", [-INF, INF], false, None),
+        ],
+        joints: &["x", "y", "z", "e"],
+        actuators: &[
+            ("e_motor", "e", -3200.0 / (PI * 11.0)),
+            ("x_motor", "x", 100.0),
+            ("y_motor", "y", 100.0),
+            ("z_motor", "z", 400.0),
+        ],
+        tools: &[],
+        nodes: &[(
+            "mainboard",
+            &["x_motor", "y_motor", "z_motor", "e_motor"],
+            &[],
+        )],
+        start: &[0.0, 0.0, 0.0, 0.0],
+        joint_limits: &[],
+        draw_feed: 7.5,
+        tolerance: 0.01,
+        junction_deviation: 0.05,
+        min_radius: 1.0,
+    },
 ];
+
+/// The servo examples' loops and sensors as their files give them.
+#[test]
+fn servo_examples_have_their_loops() {
+    let m = load("servo-mill.toml");
+    for a in &m.actuators {
+        let s = a.servo.as_ref().unwrap_or_else(|| panic!("{}", a.name));
+        assert_eq!(
+            (s.lines, s.rate_hz, s.following_limit),
+            (1000, 10_000.0, 40.0)
+        );
+        assert!(
+            s.gains.kp > 0.0 && s.gains.kv > 0.0,
+            "{}: {:?}",
+            a.name,
+            s.gains
+        );
+    }
+    let z = &m.actuators[2].servo.as_ref().unwrap().motor;
+    assert_eq!((z.load, z.load_force), (1.5, 14.7));
+    assert_eq!(m.sensors.len(), 1);
+    assert_eq!(m.sensors[0].actuator, 0);
+    assert_eq!(m.nodes[0].sensors, vec![0]);
+    assert_eq!(m.nodes[0].sample_budget, 400.0);
+    let p = load("servo-printer.toml");
+    let servos: Vec<_> = p
+        .actuators
+        .iter()
+        .filter(|a| a.servo.is_some())
+        .map(|a| a.name.as_str())
+        .collect();
+    assert_eq!(servos, ["x_motor", "y_motor"]);
+}
 
 fn close(a: f64, b: f64) -> bool {
     a == b || (a - b).abs() <= 1e-12 * a.abs().max(b.abs())

@@ -182,6 +182,8 @@ mod tests {
             queue: 64,
             frame_us: 40.0,
             fixed_time_us: 0.0,
+            sensors: vec![],
+            sample_budget: 400.0,
         };
         // (node, expected error part; None: accepted)
         let cases = [

@@ -125,8 +125,22 @@ impl Session {
             spawned: Vec::new(),
         };
         for (k, spec) in machine.nodes.iter().enumerate() {
+            // A node with closed loops runs its machine's simulated plant.
+            let mut extra = extra.to_vec();
+            if spec
+                .actuators
+                .iter()
+                .any(|&a| machine.actuators[a].servo.is_some())
+            {
+                extra.extend([
+                    "--plant".to_string(),
+                    machine.file.display().to_string(),
+                    "--plant-node".to_string(),
+                    spec.name.clone(),
+                ]);
+            }
             let node =
-                spawn_sim_node(exe, "stepper", extra).map_err(|source| SessionError::Spawn {
+                spawn_sim_node(exe, "stepper", &extra).map_err(|source| SessionError::Spawn {
                     node: spec.name.clone(),
                     source,
                 })?;

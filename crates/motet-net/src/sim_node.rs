@@ -133,6 +133,37 @@ impl Board for StepCounter {
     }
 }
 
+/// A board of steps counted and closed loops on a plant: what a
+/// simulated node with servo channels drives.
+struct WithPlant<'a> {
+    steps: &'a mut StepCounter,
+    plant: &'a mut (dyn Board + Send),
+}
+
+impl Board for WithPlant<'_> {
+    fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
+        self.steps.step(channel, forward, at_us);
+    }
+    fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
+        self.steps.set_tool(output, value, at_us);
+    }
+    fn encoder(&mut self, channel: u8, at_us: f64) -> Option<i64> {
+        self.plant.encoder(channel, at_us)
+    }
+    fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        self.plant.drive(channel, duty, at_us);
+    }
+    fn limit(&mut self, channel: u8, at_us: f64) -> bool {
+        self.plant.limit(channel, at_us)
+    }
+    fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.plant.temperature(index, at_us)
+    }
+    fn sensor(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.plant.sensor(index, at_us)
+    }
+}
+
 /// The endpoint type of simulated nodes.
 pub type SimEndpoint<S> = Endpoint<S, RamFlash<SIM_FLASH>, DEFAULT_QUEUE>;
 
@@ -144,6 +175,9 @@ pub struct SimNode<S: Store> {
     pub transport: Box<dyn Transport + Send>,
     /// The simulated board its outputs drive.
     pub board: StepCounter,
+    /// The plant its closed loops drive (servo motors, sensors), if any:
+    /// it answers the node's encoder reads and drives as it polls.
+    pub plant: Option<Box<dyn Board + Send>>,
     /// Transport errors seen (the link is down).
     pub link_errors: u64,
 }
@@ -156,6 +190,7 @@ impl<S: Store> SimNode<S> {
             endpoint: Box::new(Endpoint::new(cfg, store, RamFlash::new(), now)),
             transport,
             board: StepCounter::default(),
+            plant: None,
             link_errors: 0,
         }
     }
@@ -177,7 +212,16 @@ impl<S: Store> SimNode<S> {
                 }
             }
         }
-        self.endpoint.poll(now, &mut self.board);
+        match self.plant.as_mut() {
+            Some(plant) => self.endpoint.poll(
+                now,
+                &mut WithPlant {
+                    steps: &mut self.board,
+                    plant: plant.as_mut(),
+                },
+            ),
+            None => self.endpoint.poll(now, &mut self.board),
+        }
         let mut out = [0u8; MAX_FRAME];
         while let Some(f) = self.endpoint.transmit(now, &mut out) {
             if self.transport.send(f).is_err() {

@@ -423,6 +423,15 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             // out: the next poll goes on.
             self.ran_until = self.node.time();
         }
+        // What the loops send unasked (faults, samples) goes through the
+        // link as replies do, while the outbox has room; the rest waits in
+        // the node's own bounded queue.
+        while !self.outbox.is_full() {
+            let Some(m) = self.node.take_upstream() else {
+                break;
+            };
+            self.push(None, port::MOTION, &m);
+        }
         self.watch_group(now);
         self.report_state();
     }

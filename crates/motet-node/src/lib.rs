@@ -11,6 +11,7 @@
 
 pub mod board;
 pub mod channel;
+pub mod control;
 pub mod drift;
 pub mod endpoint;
 pub mod graph;

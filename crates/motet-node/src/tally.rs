@@ -64,6 +64,13 @@ impl StepTally {
         self.hash = mix(self.hash, at_us.to_bits() ^ what.wrapping_mul(WHAT));
     }
 
+    /// A drive output: the time's bits and `channel | 2 << 16 | duty's
+    /// bits << 32` (bit 17 sets it apart from steps and tool changes).
+    pub fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        let what = channel as u64 | 2 << 16 | (duty.to_bits() as u64) << 32;
+        self.hash = mix(self.hash, at_us.to_bits() ^ what.wrapping_mul(WHAT));
+    }
+
     /// A tool change: the time's bits and `output | 1 << 16 | value's
     /// bits << 32` (the bit 16 sets it apart from any step).
     pub fn tool(&mut self, output: u8, value: f32, at_us: f64) {
@@ -99,6 +106,27 @@ impl<B: Board> Board for Tallying<'_, B> {
     fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
         self.tally.tool(output, value, at_us);
         self.inner.set_tool(output, value, at_us);
+    }
+
+    fn encoder(&mut self, channel: u8, at_us: f64) -> Option<i64> {
+        self.inner.encoder(channel, at_us)
+    }
+
+    fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        self.tally.drive(channel, duty, at_us);
+        self.inner.drive(channel, duty, at_us);
+    }
+
+    fn limit(&mut self, channel: u8, at_us: f64) -> bool {
+        self.inner.limit(channel, at_us)
+    }
+
+    fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.inner.temperature(index, at_us)
+    }
+
+    fn sensor(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.inner.sensor(index, at_us)
     }
 }
 

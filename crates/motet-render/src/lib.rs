@@ -20,9 +20,11 @@
 //! them. Segments are clipped against the image in `f64` before they reach
 //! the rasterizer.
 
+pub mod plot;
 mod png;
 mod svg;
 
+pub use plot::{plot_png, write_plot, Line, Panel, Plot, PlotError};
 pub use png::{render_png, PngCanvas};
 pub use svg::{render_svg, SvgWriter, SVG_END};
 

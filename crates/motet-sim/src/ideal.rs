@@ -221,6 +221,38 @@ impl IdealTrajectory {
         Some(k * (p.v + i.u * (2.0 * p.half_a + 3.0 * i.u * p.sixth_j)))
     }
 
+    /// The path's acceleration at `i`, units/s² (`i` the last moment).
+    pub fn accel_at(&self, i: Moment) -> f64 {
+        let Some(f) = self.front.as_ref() else {
+            return 0.0;
+        };
+        let p = &f.piece;
+        // Per µs² to per s².
+        (2.0 * p.half_a + 6.0 * i.u * p.sixth_j) * 1e12
+    }
+
+    /// The path's speed at `i`, units/s (`i` the last moment).
+    pub fn speed_at(&self, i: Moment) -> f64 {
+        let Some(f) = self.front.as_ref() else {
+            return 0.0;
+        };
+        let p = &f.piece;
+        (p.v + i.u * (2.0 * p.half_a + 3.0 * i.u * p.sixth_j)) * 1e6
+    }
+
+    /// Where the ideal machine rests at `t` when no held segment holds it:
+    /// the end of the last one before `t`, or the start of the first after.
+    pub fn rest_point(&self, t: f64) -> Option<Point> {
+        let mut at = None;
+        for s in self.window.iter() {
+            if s.t0 > t {
+                return Some(at.unwrap_or(s.start));
+            }
+            at = Some(s.end);
+        }
+        at
+    }
+
     /// Whether the front segment extrudes.
     #[inline]
     pub fn extruding(&self) -> bool {

@@ -2,13 +2,18 @@
 //! firmware, against a simulated plant; reports how the machine moved and draws
 //! what it did.
 
+mod collector;
 pub mod dance;
 mod ideal;
+pub mod loops;
 pub mod path;
 pub mod plant;
 pub mod plant_thread;
+pub mod plots;
 pub mod report;
 pub mod run;
+pub mod servo;
+pub mod tune;
 
 pub use report::{format_duration, Report};
 pub use run::{

@@ -1,6 +1,10 @@
 //! The simulated plant: motors that move one step per step pulse, tool outputs,
 //! and an observer that checks every step against the ideal trajectory.
 
+mod servo_watch;
+
+pub use servo_watch::FollowingStats;
+
 use crate::ideal::IdealTrajectory;
 use crate::path::PathRecorder;
 use motet_host::Machine;
@@ -16,6 +20,16 @@ pub enum Output {
         /// The driver's direction line: forward is the joint's positive
         /// direction unless the actuator's `steps_per_unit` is negative.
         forward: bool,
+    },
+    /// A servo's tick: its encoder's count, and where its joint truly is.
+    Servo {
+        /// Index into the machine's actuators.
+        actuator: usize,
+        /// The encoder's count (as the node read it).
+        count: i64,
+        /// The joint's value, joint units (the motor's angle through the
+        /// chain).
+        joint: f64,
     },
     /// A tool output set.
     Tool {
@@ -47,6 +61,8 @@ pub struct ActuatorStats {
     pub max_deviation_steps: f64,
     /// Largest estimated |step time − ideal crossing time|, µs.
     pub max_step_error_us: f64,
+    /// A servo's following error, counts (none for a stepper).
+    pub following: Option<FollowingStats>,
 }
 
 struct ActuatorModel {
@@ -54,7 +70,13 @@ struct ActuatorModel {
     map: JointMap,
     /// Unsigned steps per joint unit.
     spu: f64,
+    /// Signed: a servo's counts per joint unit.
+    spu_signed: f64,
     invert: bool,
+    /// A servo's joint value at its last tick (its count is `position`).
+    servo_joint: Option<f64>,
+    following: FollowingStats,
+    servo: bool,
     position: i64,
     /// Whether a step of it moves the executed point in the drawing's
     /// plane (x or y): only then does the path recorder need the step.
@@ -119,7 +141,14 @@ impl Plant {
                     joint: a.joint,
                     map,
                     spu,
+                    spu_signed: a.steps_per_unit,
                     invert: a.steps_per_unit < 0.0,
+                    servo_joint: None,
+                    following: FollowingStats {
+                        last_rate: f64::NAN,
+                        ..FollowingStats::default()
+                    },
+                    servo: a.servo.is_some(),
                     position,
                     moves_xy: false,
                     sole_axis: None,
@@ -211,6 +240,11 @@ impl Plant {
         for o in outputs.iter() {
             match o.output {
                 Output::Step { actuator, forward } => self.step(o.time, actuator, forward),
+                Output::Servo {
+                    actuator,
+                    count,
+                    joint,
+                } => self.servo_tick(o.time, actuator, count, joint),
                 Output::Tool { tool, value } => {
                     self.tools[tool] = value;
                     if self.watch_tools {
@@ -336,7 +370,10 @@ impl Plant {
             return;
         }
         let acts = &self.joint_actuators[j];
-        let value = |i: usize| self.actuators[i].position as f64 / self.actuators[i].spu;
+        let value = |i: usize| {
+            let a = &self.actuators[i];
+            a.servo_joint.unwrap_or(a.position as f64 / a.spu)
+        };
         self.joints[j] = match acts.as_slice() {
             // One motor (the common case): its value, as the mean would give.
             [i] => value(*i),
@@ -369,6 +406,7 @@ impl Plant {
             .iter()
             .map(|a| ActuatorStats {
                 position: a.position,
+                following: a.servo.then(|| a.following.clone()),
                 ..a.stats.clone()
             })
             .collect()

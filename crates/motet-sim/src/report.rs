@@ -49,6 +49,39 @@ pub struct ActuatorReport {
     pub max_deviation_steps: f64,
     /// Largest |step time − ideal crossing time|, µs.
     pub max_step_time_error_us: f64,
+    /// A servo's following error, encoder counts (its `steps_per_unit`
+    /// are counts; `steps` and the step figures are then 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub following: Option<FollowingReport>,
+}
+
+/// How a servo actuator followed the trajectory, as the observer measured
+/// it at every tick (the encoder's count against the ideal trajectory),
+/// encoder counts.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FollowingReport {
+    /// Its loop's rate, Hz.
+    pub loop_hz: f64,
+    /// Ticks observed.
+    pub ticks: u64,
+    /// Largest |error| while the trajectory cruises.
+    pub max_cruise_counts: f64,
+    /// Largest once a cruise has held its speed for 5 ms (the loop settled
+    /// after a corner's jump in speed or a ramp).
+    pub max_settled_cruise_counts: f64,
+    /// Largest while it accelerates or decelerates.
+    pub max_accel_counts: f64,
+    /// Largest at rest.
+    pub max_rest_counts: f64,
+    /// Root mean square while moving.
+    pub rms_counts: f64,
+    /// Samples the node sent upstream, lost on the way, and their bytes a
+    /// second of the job (payload).
+    pub samples: u64,
+    /// Samples lost on the node.
+    pub samples_dropped: u64,
+    /// Payload bytes a second the samples took.
+    pub sample_bytes_per_s: f64,
 }
 
 /// How a simulated job went; written as `report.json`.
@@ -103,6 +136,10 @@ pub struct Report {
     /// Simulated seconds per wall-clock second (wall time counted as at
     /// least a microsecond, so the figure stays finite).
     pub speed_factor: f64,
+    /// The plots written beside `path.png` (servo, sensor, heater), by
+    /// file name.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub plots: Vec<String>,
 }
 
 /// A duration as `1h02m03.45s`; durations that are not finite numbers
@@ -154,10 +191,27 @@ impl Report {
             );
         }
         for a in &self.actuators {
-            s += &format!(
-                "  actuator {:<10} on {:<8} {:>12} steps\n",
-                a.name, a.node, a.steps
-            );
+            match &a.following {
+                Some(f) => {
+                    s += &format!(
+                        "  actuator {:<10} on {:<8} servo at {} Hz: following error {} counts max cruising ({} settled), {} accelerating, {} at rest, {} rms\n",
+                        a.name,
+                        a.node,
+                        finite(f.loop_hz, 0),
+                        finite(f.max_cruise_counts, 2),
+                        finite(f.max_settled_cruise_counts, 2),
+                        finite(f.max_accel_counts, 2),
+                        finite(f.max_rest_counts, 2),
+                        finite(f.rms_counts, 2)
+                    );
+                }
+                None => {
+                    s += &format!(
+                        "  actuator {:<10} on {:<8} {:>12} steps\n",
+                        a.name, a.node, a.steps
+                    )
+                }
+            }
         }
         s += &format!(
             "  executed vs commanded: {} mm max ({} steps); step timing error {} µs max\n",

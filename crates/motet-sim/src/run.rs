@@ -1,12 +1,14 @@
 //! The simulation: planner → distributor → bytes → nodes → plant, on one
 //! simulated clock.
 
+use crate::collector::{Collector, LOOP_CHUNK_US};
 use crate::path::PathRecorder;
-use crate::plant::{Output, Plant, Stamped};
+use crate::plant::Plant;
 use crate::plant_thread::{self, PlantSink};
 use crate::report::{ActuatorReport, AxisReport, JointReport, Report};
+use crate::servo::ServoPlants;
 use motet_host::{Distributor, Machine};
-use motet_node::{Board, Node};
+use motet_node::Node;
 use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
 use motet_render::Stroke;
 use motet_trajectory::{JointMap, JointPath, Point};
@@ -41,6 +43,12 @@ pub enum SimError {
     /// The job's own stream failed (a read error, a bad line).
     #[error("{0}")]
     Source(Box<dyn std::error::Error + Send + Sync>),
+    /// A node's loop stopped driving (its following error, a limit
+    /// switch, a sensor that stopped reporting), or a source's samples
+    /// stopped: the simulation stops there. Names the node, the actuator
+    /// or sensor, the field, and the time.
+    #[error("{0}")]
+    Fault(String),
 }
 
 /// What a run produced.
@@ -53,49 +61,6 @@ pub struct SimResult {
 
 /// Progress of a run: commands planned out of the total.
 pub type Progress<'a> = &'a mut dyn FnMut(usize, usize);
-
-/// Collects one node's outputs for the plant, translating its channel and tool
-/// numbers to the machine's actuators and tools.
-struct Collector<'a, P: PlantSink> {
-    actuators: &'a [usize],
-    tools: &'a [usize],
-    plant: &'a mut P,
-    /// Whether this is the only node, whose outputs are then in time order
-    /// as they come: the plant takes them every [`HANDOVER`] outputs
-    /// instead of at the frame's end, so a long frame needs no long buffer.
-    single: bool,
-}
-
-/// Outputs a single node's collector gathers before the plant takes them.
-const HANDOVER: usize = 8192;
-
-impl<P: PlantSink> Collector<'_, P> {
-    #[inline]
-    fn push(&mut self, s: Stamped) {
-        let out = self.plant.outputs();
-        out.push(s);
-        if self.single && out.len() >= HANDOVER {
-            self.plant.applied(s.time);
-        }
-    }
-}
-
-impl<P: PlantSink> Board for Collector<'_, P> {
-    fn step(&mut self, channel: u8, forward: bool, at_us: f64) {
-        let actuator = self.actuators[channel as usize];
-        self.push(Stamped {
-            time: at_us,
-            output: Output::Step { actuator, forward },
-        });
-    }
-    fn set_tool(&mut self, output: u8, value: f32, at_us: f64) {
-        let tool = self.tools[output as usize];
-        self.push(Stamped {
-            time: at_us,
-            output: Output::Tool { tool, value },
-        });
-    }
-}
 
 /// A machine of simulated nodes on one simulated clock, fed planned items one
 /// at a time: the engine under both `simulate` and the scripting API. Its
@@ -111,6 +76,10 @@ pub struct SimMachine<P: PlantSink = Plant> {
     now: f64,
     buf: [u8; MAX_MESSAGE],
     stats: Stats,
+    /// Each node's servo motors and sensors.
+    servos: Vec<ServoPlants>,
+    /// What the nodes' loops sent: samples kept per source, the first fault.
+    loops: crate::loops::LoopWatch,
 }
 
 #[derive(Default)]
@@ -181,6 +150,10 @@ impl<P: PlantSink> SimMachine<P> {
             frame,
             now: 0.0,
             buf: [0; MAX_MESSAGE],
+            servos: (0..machine.nodes.len())
+                .map(|k| ServoPlants::of_node(machine, k, &machine.start, 0.0))
+                .collect(),
+            loops: crate::loops::LoopWatch::new(machine),
             stats: Stats {
                 axes: machine
                     .axes
@@ -254,12 +227,16 @@ impl<P: PlantSink> SimMachine<P> {
     /// Runs until every node has nothing left to do.
     pub fn run_to_rest(&mut self) {
         self.flush_all();
-        while let Some(d) = self
-            .nodes
-            .iter_mut()
-            .filter_map(|n| n.next_deadline())
-            .reduce(f64::min)
-        {
+        // A loop that faulted stops the run where it is.
+        while self.fault().is_none() {
+            let Some(d) = self
+                .nodes
+                .iter_mut()
+                .filter_map(|n| n.next_deadline())
+                .reduce(f64::min)
+            else {
+                break;
+            };
             let until = self.frame_after(d.max(self.now));
             self.poll_all(until);
         }
@@ -297,6 +274,7 @@ impl<P: PlantSink> SimMachine<P> {
                 position: st.position,
                 max_deviation_steps: st.max_deviation_steps,
                 max_step_time_error_us: st.max_step_error_us,
+                following: self.following(i, st, duration_s),
             })
             .collect();
         Report {
@@ -328,7 +306,41 @@ impl<P: PlantSink> SimMachine<P> {
             max_clamp_mm: 0.0,
             wall_s: wall,
             speed_factor: duration_s / wall.max(1e-6),
+            plots: Vec::new(),
         }
+    }
+
+    /// Actuator `i`'s following figures, when it is a servo.
+    fn following(
+        &self,
+        i: usize,
+        st: &crate::plant::ActuatorStats,
+        duration_s: f64,
+    ) -> Option<crate::report::FollowingReport> {
+        let f = st.following.as_ref()?;
+        let servo = self.machine.actuators[i].servo.as_ref()?;
+        let (k, ch) = self
+            .machine
+            .nodes
+            .iter()
+            .enumerate()
+            .find_map(|(k, n)| n.actuators.iter().position(|&a| a == i).map(|c| (k, c)))?;
+        let series = self
+            .loops
+            .store
+            .get(k, motet_wire::control::SampleSource::Servo(ch as u8));
+        Some(crate::report::FollowingReport {
+            loop_hz: servo.rate_hz,
+            ticks: f.ticks,
+            max_cruise_counts: f.max_cruise,
+            max_settled_cruise_counts: f.max_settled,
+            max_accel_counts: f.max_accel,
+            max_rest_counts: f.max_rest,
+            rms_counts: f.rms(),
+            samples: series.map_or(0, |s| s.received),
+            samples_dropped: series.map_or(0, |s| s.dropped),
+            sample_bytes_per_s: series.map_or(0.0, |s| s.bytes as f64 / duration_s.max(1e-6)),
+        })
     }
 
     /// Segments queued on the nodes.
@@ -370,16 +382,34 @@ impl<P: PlantSink> SimMachine<P> {
                 actuators: &spec.actuators,
                 tools: &spec.tools,
                 plant: &mut self.plant,
+                servos: &mut self.servos[k],
                 single,
             };
             // The plant takes every node's outputs up to `until` together
             // (several nodes' are merged in time there): a poll that stops
             // at its output budget is continued.
-            node.poll(until, &mut c);
+            // A node with loops is polled a quarter second at a time, so
+            // that what they send never waits in its short queue for
+            // longer (the outputs are the same: each carries its time).
+            let chunk = if c.servos.any() || !spec.sensors.is_empty() {
+                LOOP_CHUNK_US
+            } else {
+                f64::INFINITY
+            };
             while node.time() < until {
-                node.poll(until, &mut c);
+                let to = (node.time().max(self.now) + chunk).min(until);
+                node.poll(to, &mut c);
+                // What its loops sent, as bytes, as over a link.
+                while let Some(m) = node.take_upstream() {
+                    if let Ok(bytes) = encode(&m, &mut self.buf) {
+                        if let Ok(m) = motet_wire::decode::<NodeMessage>(bytes) {
+                            self.loops.take(&self.machine, k, m, node.time());
+                        }
+                    }
+                }
             }
         }
+        self.loops.watch(&self.machine, until);
         self.plant.applied(until);
         self.now = until;
     }
@@ -388,7 +418,8 @@ impl<P: PlantSink> SimMachine<P> {
     /// (0: for an event).
     fn make_room(&mut self, k: usize, segments: usize) {
         let window = self.machine.nodes[k].queue.min(NODE_QUEUE);
-        loop {
+        // After a fault the run stops: `submit` says so.
+        while self.fault().is_none() {
             let st = self.nodes[k].status();
             let full = if segments > 0 {
                 NODE_QUEUE - st.segment_space + segments > window
@@ -409,9 +440,53 @@ impl<P: PlantSink> SimMachine<P> {
         }
     }
 
+    /// New gains for servo actuator `name`, sent to its node now, moving or
+    /// not (as `HostMessage::ServoGains`); the node takes them at its next
+    /// tick. An error when there is no such servo or the node refuses them.
+    pub fn set_servo_gains(
+        &mut self,
+        name: &str,
+        gains: motet_wire::control::ServoGains,
+    ) -> Result<(), SimError> {
+        let Some(a) = self.machine.actuators.iter().position(|x| x.name == name) else {
+            return Err(SimError::Fault(format!("no actuator `{name}`")));
+        };
+        let Some((k, ch)) = self
+            .machine
+            .nodes
+            .iter()
+            .enumerate()
+            .find_map(|(k, n)| n.actuators.iter().position(|&x| x == a).map(|c| (k, c)))
+        else {
+            return Err(SimError::Fault(format!("actuator {name} is on no node")));
+        };
+        self.flush_all();
+        self.send(
+            k,
+            &HostMessage::ServoGains {
+                channel: ch as u8,
+                gains,
+            },
+        )
+    }
+
+    /// The first fault of a node's loop (or a source that stopped
+    /// reporting), as the person reads it.
+    pub fn fault(&self) -> Option<&str> {
+        self.loops.fault.as_deref()
+    }
+
+    /// What the nodes' loops sent: samples per source.
+    pub fn samples(&self) -> &motet_host::samples::SampleStore {
+        &self.loops.store
+    }
+
     /// Sends one planned item to the nodes that subscribe to it, letting time
     /// pass when a node's queue is full.
     pub fn submit(&mut self, item: Planned) -> Result<(), SimError> {
+        if let Some(f) = self.fault() {
+            return Err(SimError::Fault(f.to_string()));
+        }
         // The nodes run the quantized trajectory the batches carry: that is
         // the record every output is checked against.
         let planned = item;
@@ -420,6 +495,7 @@ impl<P: PlantSink> SimMachine<P> {
             Planned::Segment(s) => {
                 self.stats.segments += 1;
                 self.plant.planned(*s);
+                self.loops.planned(s);
                 // Peak figures are the plan's: the quantized direction of a
                 // tiny move may differ from it by a position quantum over its
                 // length, which says nothing about the planner's limits.
@@ -574,6 +650,9 @@ pub struct StreamRun {
     pub report: Report,
     /// The largest of each count in [`SimMachine::held`] over the run.
     pub held: Held,
+    /// What the nodes' loops sent (samples per source), and each sensor's
+    /// planned acceleration.
+    pub loops: crate::loops::LoopWatch,
 }
 
 /// Plans and executes a job read as it runs: `commands` is consumed one
@@ -611,6 +690,7 @@ where
                 node_segments,
                 ..run.held
             },
+            loops: std::mem::take(&mut sim.loops),
         })
     })
 }
@@ -651,6 +731,9 @@ where
     // Run to the end, then until nothing is left to do.
     sim.run_until(end);
     sim.run_to_rest();
+    if let Some(f) = sim.fault() {
+        return Err(SimError::Fault(f.to_string()));
+    }
     node_segments = node_segments.max(sim.node_segments());
     progress(n, total.max(n));
     Ok((n, end, node_segments))

@@ -16,6 +16,9 @@ pub enum Unit {
     FullStep,
     /// The driver's microsteps (what a [`Element::Microstep`] gives).
     Microstep,
+    /// A quadrature encoder's counts, four a line (what an
+    /// [`Element::Encoder`] gives): a servo's chain ends in them.
+    Count,
 }
 
 impl Unit {
@@ -27,6 +30,7 @@ impl Unit {
             Unit::Revolution => "revolutions",
             Unit::FullStep => "full steps",
             Unit::Microstep => "microsteps",
+            Unit::Count => "encoder counts",
         }
     }
 }
@@ -64,6 +68,12 @@ pub enum Element {
     },
     /// Reverses the direction of motion.
     Invert,
+    /// A quadrature encoder on the motor: revolutions to counts, four a
+    /// line (×4 decoding). A chain that ends in one is a servo's.
+    Encoder {
+        /// Lines (slots) per revolution, `1..=1_000_000`.
+        lines: u32,
+    },
 }
 
 impl Element {
@@ -77,6 +87,7 @@ impl Element {
             Element::Stepper { .. } => "stepper",
             Element::Microstep { .. } => "microstep",
             Element::Invert => "invert",
+            Element::Encoder { .. } => "encoder",
         }
     }
 
@@ -132,6 +143,16 @@ impl Element {
                 need(Unit::FullStep, Unit::Microstep, divisions as f64)
             }
             Element::Invert => Ok((input, -1.0)),
+            Element::Encoder { lines } => {
+                if lines == 0 || lines > 1_000_000 {
+                    return Err(ChainErrorKind::BadValue { what: "lines" });
+                }
+                let per_rev = 4.0 * lines as f64;
+                match input {
+                    Unit::Degree => Ok((Unit::Count, per_rev / 360.0)),
+                    _ => need(Unit::Revolution, Unit::Count, per_rev),
+                }
+            }
         }
     }
 }
@@ -193,18 +214,27 @@ impl core::fmt::Display for ChainError {
             }
             ChainErrorKind::Incomplete { ends_in } => write!(
                 f,
-                "the chain ends in {}; it must end at a stepper (optionally followed by microstep)",
+                "the chain ends in {}; it must end at a stepper (optionally followed by microstep) or an encoder",
                 ends_in.name()
             ),
         }
     }
 }
 
-/// A validated chain: how many motor steps one joint unit is.
+/// A validated chain: how many motor steps (or, for a servo's, encoder
+/// counts) one joint unit is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ElementChain {
     /// Signed: negative when the chain inverts.
     pub steps_per_unit: f64,
+}
+
+impl ElementChain {
+    /// Whether `elements` end in an encoder: the chain of a servo, whose
+    /// `steps_per_unit` are encoder counts.
+    pub fn is_servo(elements: &[Element]) -> bool {
+        matches!(elements.last(), Some(Element::Encoder { .. }))
+    }
 }
 
 impl ElementChain {
@@ -220,7 +250,7 @@ impl ElementChain {
             factor *= k;
         }
         match unit {
-            Unit::FullStep | Unit::Microstep => Ok(ElementChain {
+            Unit::FullStep | Unit::Microstep | Unit::Count => Ok(ElementChain {
                 steps_per_unit: factor,
             }),
             ends_in => Err(ChainError {
@@ -297,6 +327,15 @@ mod tests {
                 ],
                 3.0 * 3200.0 / (PI * 7.5),
             ),
+            // A servo: 5 mm lead, 1000-line encoder ×4: 800 counts/mm.
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Leadscrew { lead: 5.0 },
+                    Element::Encoder { lines: 1000 },
+                ],
+                800.0,
+            ),
         ];
         for (unit, chain, want) in cases {
             let got = ElementChain::new(*unit, chain).unwrap().steps_per_unit;
@@ -357,6 +396,24 @@ mod tests {
             (Unit::Degree, &[Element::Stepper { step_angle: -1.8 }], 0),
             // Empty chain.
             (Unit::Millimetre, &[], 0),
+            // An encoder with no lines, and one after the stepper.
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Leadscrew { lead: 5.0 },
+                    Element::Encoder { lines: 0 },
+                ],
+                1,
+            ),
+            (
+                Unit::Millimetre,
+                &[
+                    Element::Leadscrew { lead: 5.0 },
+                    Element::Stepper { step_angle: 1.8 },
+                    Element::Encoder { lines: 1000 },
+                ],
+                2,
+            ),
         ];
         for (unit, chain, index) in cases {
             let err = ElementChain::new(*unit, chain).unwrap_err();

@@ -1,5 +1,8 @@
 //! Message types.
 
+use crate::control::{
+    FaultKind, SampleBatch, SampleSource, SensorConfig, ServoConfig, ServoGains, ServoTest,
+};
 use crate::stream::{SegmentBatch, StreamConfig};
 use heapless::Vec;
 use motet_trajectory::{JointMap, Point, ProfileParams, MAX_AXES};
@@ -220,6 +223,35 @@ pub enum HostMessage {
     /// Ask for a [`NodeMessage::Tally`] (refused `BadConfig` by a node that
     /// keeps none).
     TallyGet,
+    /// Set up (or replace, by `channel` id) a servo channel: a position
+    /// loop on an encoder. Only valid with an empty segment queue.
+    ConfigureServo(ServoConfig),
+    /// New gains for a servo channel, taken at its next tick, moving or
+    /// not (`BadConfig`: no such servo, or a gain out of range).
+    ServoGains {
+        /// The servo's board channel id.
+        channel: u8,
+        /// The gains.
+        gains: ServoGains,
+    },
+    /// Send a source's samples upstream, one every `every` ticks of it
+    /// (0: none), as [`NodeMessage::Samples`].
+    Sampling {
+        /// The servo, sensor or heater.
+        source: SampleSource,
+        /// Ticks a sample.
+        every: u32,
+    },
+    /// Set up (or replace, by `sensor`) a sensor channel.
+    ConfigureSensor(SensorConfig),
+    /// Run a tuning test on a servo at rest (`NotAtRest` with segments
+    /// queued, `BadConfig` for no such servo or a test out of range).
+    ServoTest {
+        /// The servo's board channel id.
+        channel: u8,
+        /// The test.
+        test: ServoTest,
+    },
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -270,7 +302,10 @@ pub enum GraphInputKind {
 pub struct GraphKind(pub u8);
 
 /// Node → host.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+// Samples are the large variant; without an allocator there is no box,
+// and a message is held one at a time (a node's upstream queue holds four).
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum NodeMessage {
     /// The node's queues and sequence numbers: the answer to `Status` and to a `Seal`.
     Status {
@@ -326,6 +361,21 @@ pub enum NodeMessage {
         /// The running hash of every output and its time (see `motet_node::tally`).
         hash: u64,
     },
+    /// A loop stopped driving (sent unasked, once): a servo's following
+    /// error or limit switch, a sensor that stopped reporting. A windowed
+    /// node also takes no more seals and brakes on its committed tail.
+    Fault {
+        /// The loop.
+        source: SampleSource,
+        /// Why.
+        kind: FaultKind,
+        /// Host time of the tick that found it, µs.
+        at: f64,
+        /// The following error (counts) for a servo; 0 otherwise.
+        value: f32,
+    },
+    /// Samples of one source (sent unasked, see [`HostMessage::Sampling`]).
+    Samples(SampleBatch),
 }
 
 /// Why a node refused a [`HostMessage`] (in [`NodeMessage::Refused`]); a

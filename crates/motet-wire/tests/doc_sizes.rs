@@ -108,6 +108,7 @@ fn documented_sizes() {
     for (m, n) in host {
         assert_eq!(len(&m), n, "{m:?}");
     }
+    closed_loop_sizes();
     let node = [
         (
             NodeMessage::Status {
@@ -480,5 +481,124 @@ mod services {
         let mut out = [0u8; MAX_FRAME];
         assert_eq!(frame::encode(&h, &t, &mut out).unwrap(), 3 + OVERHEAD);
         assert_eq!(OVERHEAD, 16);
+    }
+}
+
+/// The closed-loop rows of docs/wire.md's message tables.
+fn closed_loop_sizes() {
+    use motet_wire::control::*;
+    let gains = ServoGains {
+        kp: 0.01,
+        ki: 1.0,
+        kd: 1e-4,
+        kv: 1e-4,
+        ka: 1e-6,
+        kf: 0.01,
+        integral_limit: 0.3,
+        output_limit: 1.0,
+        derivative_hz: 0.0,
+    };
+    let servo = ServoConfig {
+        channel: 0,
+        map: motet_trajectory::JointMap::axis(0),
+        counts_per_unit: 100.0,
+        rate_hz: 10_000.0,
+        gains,
+        following_limit: 40.0,
+    };
+    let samples = |n: usize, delta: i32, err: i16| {
+        NodeMessage::Samples(SampleBatch {
+            source: SampleSource::Servo(1),
+            t0: 1e6,
+            period_us: 5000.0,
+            dropped: 0,
+            data: SampleData::Servo {
+                base: 0,
+                samples: (0..n)
+                    .map(|_| ServoSample {
+                        delta,
+                        error_lo: err,
+                        error_hi: err,
+                    })
+                    .collect(),
+            },
+        })
+    };
+    let host = [
+        (HostMessage::ConfigureServo(servo), 103),
+        (HostMessage::ServoGains { channel: 0, gains }, 38),
+        (
+            HostMessage::Sampling {
+                source: SampleSource::Sensor(0),
+                every: 50,
+            },
+            4,
+        ),
+        (
+            HostMessage::Sampling {
+                source: SampleSource::Servo(0),
+                every: u32::MAX,
+            },
+            8,
+        ),
+        (
+            HostMessage::ConfigureSensor(SensorConfig {
+                sensor: 0,
+                rate_hz: 1000.0,
+            }),
+            6,
+        ),
+        (
+            HostMessage::ServoTest {
+                channel: 0,
+                test: ServoTest::Step {
+                    duty: 0.2,
+                    duration_ms: 100,
+                },
+            },
+            8,
+        ),
+        (
+            HostMessage::ServoTest {
+                channel: 0,
+                test: ServoTest::Relay {
+                    amplitude: 0.2,
+                    hysteresis: 2.0,
+                    duration_ms: 60_000,
+                },
+            },
+            14,
+        ),
+    ];
+    for (m, n) in host {
+        assert_eq!(len(&m), n, "{m:?}");
+    }
+    let node = [
+        (
+            NodeMessage::Fault {
+                source: SampleSource::Servo(0),
+                kind: FaultKind::Following,
+                at: 1.0,
+                value: 41.0,
+            },
+            16,
+        ),
+        (samples(0, 0, 0), 19),
+        // A sample as a decimated print's usually is: a 2-byte delta,
+        // 1-byte errors.
+        (samples(32, 500, 20), 19 + 32 * 4),
+        (
+            NodeMessage::Samples(SampleBatch {
+                source: SampleSource::Sensor(0),
+                t0: 1e6,
+                period_us: 5000.0,
+                dropped: 0,
+                data: SampleData::Values((0..40).map(|i| i as f32).collect()),
+            }),
+            18 + 160,
+        ),
+    ];
+    for (m, n) in node {
+        assert_eq!(len(&m), n, "{m:?}");
     }
 }

@@ -17,6 +17,7 @@ mod peak;
 mod run;
 mod s3g;
 mod serve;
+mod tune;
 
 use clap::{Parser, Subcommand};
 use motet_api::{JobOptions, Placement};
@@ -195,6 +196,14 @@ enum Cmd {
         /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
         #[arg(long)]
         record: Option<PathBuf>,
+        /// Run the servo and sensor channels of this machine file's node
+        /// (`--plant-node`) on its simulated plant (motors, encoders,
+        /// switches, sensors).
+        #[arg(long, requires = "plant_node")]
+        plant: Option<PathBuf>,
+        /// The node of `--plant`'s machine file.
+        #[arg(long, requires = "plant")]
+        plant_node: Option<String>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -202,6 +211,28 @@ enum Cmd {
     Nodes {
         #[command(subcommand)]
         command: NodesCmd,
+    },
+    /// Tune a servo actuator: its node runs drive steps (and a relay) on
+    /// the simulated plant, the gains follow (Ziegler–Nichols, or from the
+    /// identified model), a move checks them, a plot shows it all.
+    Tune {
+        /// Machine file (TOML).
+        machine: PathBuf,
+        /// The servo actuator's name.
+        actuator: String,
+        /// `step` (drive steps: the reaction curve) or `relay`
+        /// (Åström–Hägglund: the ultimate gain and period).
+        #[arg(long, default_value = "step")]
+        method: String,
+        /// `model` (from the identified motor) or `zn` (Ziegler–Nichols).
+        #[arg(long, default_value = "model")]
+        rule: String,
+        /// Write the gains into the machine file (its comments kept).
+        #[arg(long)]
+        write: bool,
+        /// Where the plot goes [default: out/tune].
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Check a machine file and a job without running it.
     Check {
@@ -365,6 +396,21 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         }),
         cmd @ Cmd::Node { .. } => node_cmd(cmd),
         Cmd::Nodes { command } => nodes_cmd(command),
+        Cmd::Tune {
+            machine,
+            actuator,
+            method,
+            rule,
+            write,
+            out,
+        } => tune::tune_cmd(tune::TuneArgs {
+            machine,
+            actuator,
+            method,
+            rule,
+            write,
+            out,
+        }),
         Cmd::Check {
             machine,
             job,
@@ -444,6 +490,8 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         idle_exit,
         faults,
         record,
+        plant,
+        plant_node,
         quiet,
     } = cmd
     else {
@@ -474,6 +522,7 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         auto_press,
         idle_exit,
         quiet,
+        plant: plant.zip(plant_node),
     })
 }
 

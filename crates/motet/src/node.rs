@@ -25,6 +25,9 @@ pub struct NodeArgs {
     pub auto_press: bool,
     pub idle_exit: Option<f64>,
     pub quiet: bool,
+    /// The machine file and node whose closed loops this node runs on the
+    /// simulated plant.
+    pub plant: Option<(PathBuf, String)>,
 }
 
 /// Opens what the node listens on; returns the transport and the spec a host
@@ -80,13 +83,20 @@ pub fn node(args: NodeArgs) -> Result<()> {
     match &args.state {
         Some(path) => {
             let store = FileStore { path: path.clone() };
-            run(args_with(&args), cfg, store, transport, &link)
+            run(args_with(&args)?, cfg, store, transport, &link)
         }
-        None => run(args_with(&args), cfg, RamStore::default(), transport, &link),
+        None => run(
+            args_with(&args)?,
+            cfg,
+            RamStore::default(),
+            transport,
+            &link,
+        ),
     }
 }
 
 struct Opts {
+    plant: Option<Box<dyn motet_node::Board + Send>>,
     announce: bool,
     ppm: f64,
     time_scale: f64,
@@ -95,15 +105,31 @@ struct Opts {
     quiet: bool,
 }
 
-fn args_with(a: &NodeArgs) -> Opts {
-    Opts {
+fn args_with(a: &NodeArgs) -> Result<Opts> {
+    let plant = match &a.plant {
+        None => None,
+        Some((file, name)) => {
+            let m = motet_host::Machine::load(file)?;
+            let k = m
+                .nodes
+                .iter()
+                .position(|n| n.name == *name)
+                .with_context(|| {
+                    format!("--plant-node {name}: {} has no such node", file.display())
+                })?;
+            let plants = motet_sim::servo::ServoPlants::of_node(&m, k, &m.start, 0.0);
+            Some(Box::new(plants) as Box<dyn motet_node::Board + Send>)
+        }
+    };
+    Ok(Opts {
+        plant,
         announce: a.announce,
         ppm: a.ppm,
         time_scale: a.time_scale,
         auto_press: a.auto_press,
         idle_exit: a.idle_exit,
         quiet: a.quiet,
-    }
+    })
 }
 
 fn run<S: Store>(
@@ -120,6 +146,7 @@ fn run<S: Store>(
         (random_uid() % 1_000_000_000) + 1_000_000,
     );
     let mut node = SimNode::new(cfg, store, transport, clock.now_us());
+    node.plant = o.plant;
     let uid = node.endpoint.services().uid();
     if o.announce {
         println!("{}", announce_line(link, uid));

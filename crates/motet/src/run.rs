@@ -181,8 +181,10 @@ pub fn run(
         },
     )
     .map_err(|e| match e {
-        // The job's own errors already name their file.
+        // The job's own errors already name their file, a loop's fault its
+        // node and actuator.
         motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
+        motet_sim::SimError::Fault(e) => anyhow::anyhow!("{e}"),
         e => anyhow::anyhow!("{}:{e}", job_path.display()),
     })?;
     run_bar.finish_and_clear();
@@ -194,6 +196,7 @@ pub fn run(
     let mut report = run.report;
     report.clamped_moves = scan.clamps.moves;
     report.max_clamp_mm = scan.clamps.max_mm;
+    report.plots = motet_sim::plots::write_plots(&machine, &run.loops, &out)?;
 
     std::fs::write(
         out.join("path.png"),
@@ -215,10 +218,10 @@ pub fn run(
         if let Some(peak) = crate::peak::own_peak_mib() {
             println!("  {}{peak:.1} MiB", crate::peak::PEAK_LINE);
         }
-        println!(
-            "  wrote {}/{{path.png, path.svg, report.json}}",
-            out.display()
-        );
+        let mut files = vec!["path.png".to_string(), "path.svg".into()];
+        files.extend(report.plots.iter().cloned());
+        files.push("report.json".into());
+        println!("  wrote {}/{{{}}}", out.display(), files.join(", "));
     }
     Ok(())
 }

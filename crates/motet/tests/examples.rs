@@ -271,3 +271,78 @@ fn a_node_in_fixed_point_time_takes_the_same_steps_within_its_tolerance() {
         );
     }
 }
+
+/// The servo examples run their jobs with every servo within its target
+/// in accelerations, each ending within two counts of its last target;
+/// `motet run` writes their plots beside the path and lists them.
+#[test]
+fn servo_examples_follow_and_plot() {
+    for (machine, job) in [
+        ("servo-mill.toml", "servo-pocket.gcode"),
+        ("servo-printer.toml", "printer-vase-layers.gcode"),
+    ] {
+        let (m, cmds, r) = run(machine, job);
+        let last = cmds
+            .iter()
+            .rev()
+            .find_map(|c| match c.item {
+                Command::Move(mv) => Some(mv.target),
+                _ => None,
+            })
+            .unwrap();
+        for (a, ar) in m.actuators.iter().zip(&r.report.actuators) {
+            let Some(f) = &ar.following else { continue };
+            assert!(f.max_accel_counts <= 10.0, "{machine}: {} {f:?}", a.name);
+            assert!(f.rms_counts <= 1.0, "{machine}: {} {f:?}", a.name);
+            let want = m.joints[a.joint].map.value(&last, 0.0) * a.steps_per_unit;
+            assert!(
+                (ar.position as f64 - want).abs() <= 2.0,
+                "{machine}: {} at {} counts, want {want}",
+                a.name,
+                ar.position
+            );
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_motet"))
+        .args([
+            "run",
+            "examples/servo-mill.toml",
+            "examples/jobs/servo-pocket.gcode",
+            "--quiet",
+            "--out",
+        ])
+        .arg(dir.path())
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    let plots: Vec<&str> = report["plots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        plots,
+        [
+            "servo-x_servo.png",
+            "servo-y_servo.png",
+            "sensor-x_accel.png",
+            "servo-z_servo.png"
+        ]
+    );
+    for p in plots {
+        assert!(
+            std::fs::metadata(dir.path().join(p)).unwrap().len() > 1000,
+            "{p}"
+        );
+    }
+}

@@ -9,6 +9,9 @@ use motet_planner::ranges::{self, ValueRange};
 use motet_trajectory::{Element, ElementChain, Unit};
 use std::ops::Range;
 
+/// Lines of an encoder per revolution.
+const ENCODER_LINES: ValueRange = ValueRange::new(1.0, 1e6, "lines");
+
 /// The machine's actuators (in the file's order), each joint's limits
 /// narrowed by its actuators' own; every joint driven.
 pub(super) fn actuators(
@@ -80,6 +83,7 @@ pub(super) fn actuators(
             "dir_setup_us",
         )?;
         actuator_spans.push(a.pulse_us.as_ref().map_or(a.joint.span(), |p| p.span()));
+        let servo = super::servo::servo(src, name, a)?;
         actuators.push(Actuator {
             name: name.clone(),
             joint,
@@ -87,6 +91,7 @@ pub(super) fn actuators(
             pulse_us,
             dir_setup_us,
             max_step_hz: None,
+            servo,
         });
     }
     check_step_rates(src, &mut actuators, &actuator_spans, joints, axes)?;
@@ -135,6 +140,7 @@ fn chain(
             },
             ElementFile::Microstep(n) => Element::Microstep { divisions: *n },
             ElementFile::Invert => Element::Invert,
+            ElementFile::Encoder { lines } => Element::Encoder { lines: *lines },
         };
         elements.push(el);
     }
@@ -201,7 +207,8 @@ fn check_step_rates(
         a.max_step_hz =
             joint_speed_bound(&joints[a.joint], axes).map(|v| v * a.steps_per_unit.abs());
         let reach = 1e6 / (2.0 * a.pulse_us as f64);
-        if let Some(hz) = a.max_step_hz.filter(|&hz| hz > reach) {
+        // A servo's counts are an encoder's, not pulses its node gives.
+        if let Some(hz) = a.max_step_hz.filter(|&hz| hz > reach && a.servo.is_none()) {
             return Err(src.err(
                 span.clone(),
                 format!(
@@ -250,5 +257,6 @@ fn check_element(
         }
         ElementFile::Microstep(n) => check(ranges::MICROSTEPS, "microstep", f64::from(*n)),
         ElementFile::Invert => Ok(()),
+        ElementFile::Encoder { lines } => check(ENCODER_LINES, "encoder lines", f64::from(*lines)),
     }
 }

@@ -11,6 +11,7 @@ mod heaters;
 mod joints;
 mod motion;
 mod nodes;
+mod servo;
 mod tools;
 
 use crate::machine::{Machine, MachineError};
@@ -93,7 +94,8 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
     let actuators = actuators::actuators(src, &raw, &mut joints, &axes)?;
     let tools = tools::tools(src, &raw)?;
     let heaters = heaters::heaters(src, &raw, &axes)?;
-    let nodes = nodes::nodes(src, &raw, &actuators, &tools)?;
+    let sensors = servo::sensors(src, &raw, &actuators)?;
+    let nodes = nodes::nodes(src, &raw, &actuators, &tools, &sensors)?;
     let start = motion::start(src, m, &axes, kinematics, joints.kinematic_axes)?;
     let draw_feed = motion::draw_feed(src, m, &axes)?;
     let stop_horizon = motion::stop_horizon(src, m, &nodes)?;
@@ -117,5 +119,6 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
         lookahead: settings.lookahead,
         stop_horizon,
         heaters,
+        sensors,
     })
 }

@@ -4,6 +4,7 @@
 use super::Source;
 use crate::machine::{Actuator, MachineError, NodeSpec, Tool};
 use crate::machine_file::{MachineFile, NodeFile};
+use crate::servo::SensorSpec;
 use motet_planner::ranges;
 
 /// A node's own settings (queue, frame period, fixed-point time), each in
@@ -27,6 +28,12 @@ fn settings(src: &Source, name: &str, n: &NodeFile) -> Result<NodeSpec, MachineE
         format_args!("node {name}: fixed_time_us"),
         0.0,
     )?;
+    let sample_budget = src.value_or(
+        n.sample_budget.as_ref(),
+        super::servo::SAMPLE_BUDGET,
+        format_args!("node {name}: sample_budget"),
+        super::servo::DEFAULT_SAMPLE_BUDGET,
+    )?;
     Ok(NodeSpec {
         name: name.to_string(),
         actuators: vec![],
@@ -34,6 +41,8 @@ fn settings(src: &Source, name: &str, n: &NodeFile) -> Result<NodeSpec, MachineE
         queue,
         frame_us,
         fixed_time_us,
+        sensors: vec![],
+        sample_budget,
     })
 }
 
@@ -44,6 +53,7 @@ pub(super) fn nodes(
     raw: &MachineFile,
     actuators: &[Actuator],
     tools: &[Tool],
+    sensors: &[SensorSpec],
 ) -> Result<Vec<NodeSpec>, MachineError> {
     let mut nodes = Vec::new();
     let mut owner: Vec<Option<String>> = vec![None; actuators.len()];
@@ -90,6 +100,29 @@ pub(super) fn nodes(
             tool_owner[i] = Some(name.clone());
             spec.tools.push(i);
         }
+        for s in &n.sensors {
+            let i = sensors
+                .iter()
+                .position(|x| x.name == *s.get_ref())
+                .ok_or_else(|| {
+                    src.err(
+                        s.span(),
+                        format!("node {name}: unknown sensor `{}`", s.get_ref()),
+                    )
+                })?;
+            if !spec.actuators.contains(&sensors[i].actuator) {
+                return Err(src.err(
+                    s.span(),
+                    format!(
+                        "node {name}: sensor `{}` is on actuator {}, which another node drives",
+                        s.get_ref(),
+                        actuators[sensors[i].actuator].name
+                    ),
+                ));
+            }
+            spec.sensors.push(i);
+        }
+        check_loops(src, name, node_span.clone(), &spec, actuators)?;
         if spec.actuators.len() > 8 || spec.tools.len() > 4 {
             return Err(src.err(
                 node_span,
@@ -107,7 +140,10 @@ pub(super) fn nodes(
             queue: 64,
             frame_us: 40.0,
             fixed_time_us: 0.0,
+            sensors: (0..sensors.len()).collect(),
+            sample_budget: super::servo::DEFAULT_SAMPLE_BUDGET,
         });
+        check_loops(src, "main", 0..0, &nodes[0], actuators)?;
         if actuators.len() > 8 || tools.len() > 4 {
             // Point at the first actuator or tool that does not fit.
             let span = match raw.actuators.values().nth(8) {
@@ -128,4 +164,27 @@ pub(super) fn nodes(
     }
 
     Ok(nodes)
+}
+
+/// A node runs at most `MAX_SERVOS` servos and `MAX_SENSORS` sensors.
+fn check_loops(
+    src: &Source,
+    name: &str,
+    span: std::ops::Range<usize>,
+    spec: &NodeSpec,
+    actuators: &[Actuator],
+) -> Result<(), MachineError> {
+    use motet_node::control::{MAX_SENSORS, MAX_SERVOS};
+    let servos = spec
+        .actuators
+        .iter()
+        .filter(|&&a| actuators[a].servo.is_some())
+        .count();
+    if servos > MAX_SERVOS || spec.sensors.len() > MAX_SENSORS {
+        return Err(src.err(
+            span,
+            format!("node {name}: at most {MAX_SERVOS} servo actuators and {MAX_SENSORS} sensors per node"),
+        ));
+    }
+    Ok(())
 }

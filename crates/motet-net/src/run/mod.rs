@@ -14,6 +14,7 @@
 mod clocks;
 mod figures;
 mod group;
+mod loops;
 mod pace;
 mod stop;
 mod window;
@@ -265,6 +266,8 @@ pub struct NetRun {
     group: Option<group::Group>,
     /// How late the host runs, and the lead that covers it.
     pace: pace::Pace,
+    /// Samples the nodes' loops sent, per source.
+    samples: motet_host::samples::SampleStore,
 }
 
 impl NetRun {
@@ -324,6 +327,7 @@ impl NetRun {
             status: vec![None; n],
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
+            samples: motet_host::samples::SampleStore::new(),
         }
     }
 
@@ -602,6 +606,9 @@ impl NetRun {
                                 info.confirmed.push((k, committed));
                             }
                         }
+                    }
+                    Incoming::Motion(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
+                        self.on_loop_message(k, m, now)
                     }
                     Incoming::Service(_) => {}
                 }

@@ -6,6 +6,7 @@ use crate::channel::Channel;
 use crate::tally::StepTally;
 use crate::tool::ToolOutput;
 use motet_trajectory::Point;
+use motet_wire::control::{SampleSource, SensorConfig, ServoConfig, ServoGains, ServoTest};
 use motet_wire::{ChannelConfig, Refusal, StreamConfig, ToolConfig};
 
 impl<const Q: usize, const T: usize> Node<Q, T> {
@@ -33,7 +34,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             && spu <= MAX_STEPS_PER_UNIT
             && c.map.is_valid()
             && c.timing_is_valid();
-        if !valid || !self.segments.is_empty() {
+        if !valid || !self.segments.is_empty() || self.control.has_servo(c.channel) {
             return Err(Refusal::BadConfig);
         }
         // At rest where the node is: a new or changed channel takes its step
@@ -80,10 +81,52 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         for ch in self.channels.iter_mut() {
             ch.set_position(p);
         }
+        self.control.set_position(p);
         self.queue_end = *p;
         self.stopped = false;
         self.pending_events = 0;
         self.events.clear();
         Ok(())
+    }
+}
+
+impl<const Q: usize, const T: usize> Node<Q, T> {
+    /// A servo channel, at rest where the node is; its board channel id
+    /// not a step channel's.
+    pub(super) fn configure_servo(&mut self, c: ServoConfig) -> Result<(), Refusal> {
+        let taken = self
+            .channels
+            .iter()
+            .any(|x| x.config().channel == c.channel);
+        if !c.is_valid() || taken || !self.segments.is_empty() {
+            return Err(Refusal::BadConfig);
+        }
+        self.control.configure_servo(c, &self.queue_end)
+    }
+
+    /// New gains for a servo, moving or not.
+    pub(super) fn servo_gains(&mut self, channel: u8, gains: ServoGains) -> Result<(), Refusal> {
+        self.control.set_gains(channel, gains)
+    }
+
+    /// Samples of a source upstream, one every `every` of its ticks.
+    pub(super) fn sampling(&mut self, source: SampleSource, every: u32) -> Result<(), Refusal> {
+        self.control.set_sampling(source, every)
+    }
+
+    /// A sensor channel.
+    pub(super) fn configure_sensor(&mut self, c: SensorConfig) -> Result<(), Refusal> {
+        if !motet_wire::control::LOOP_HZ.contains(&c.rate_hz) {
+            return Err(Refusal::BadConfig);
+        }
+        self.control.configure_sensor(c)
+    }
+
+    /// A tuning test on a servo, at rest.
+    pub(super) fn servo_test(&mut self, channel: u8, test: ServoTest) -> Result<(), Refusal> {
+        if !self.segments.is_empty() {
+            return Err(Refusal::NotAtRest);
+        }
+        self.control.start_test(channel, test)
     }
 }

@@ -93,6 +93,12 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
                 self.clear_graph();
                 Ok(())
             }
+            // Closed loops.
+            HostMessage::ConfigureServo(c) => self.configure_servo(c),
+            HostMessage::ServoGains { channel, gains } => self.servo_gains(channel, gains),
+            HostMessage::Sampling { source, every } => self.sampling(source, every),
+            HostMessage::ConfigureSensor(c) => self.configure_sensor(c),
+            HostMessage::ServoTest { channel, test } => self.servo_test(channel, test),
         };
         done.map(|()| None)
     }

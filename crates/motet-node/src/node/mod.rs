@@ -19,6 +19,7 @@ mod window;
 
 use crate::board::Board;
 use crate::channel::Channel;
+use crate::control::Control;
 use crate::graph::spec::BuildError;
 use crate::graph::{self, FrameOut, Inputs, MAX_HW};
 use crate::tally::{StepTally, Tallying};
@@ -122,6 +123,9 @@ pub struct Node<const Q: usize = DEFAULT_QUEUE, const T: usize = 0> {
     /// Fixed-point time's tolerance, µs (0: exact; see
     /// [`Node::use_fixed_time`]).
     fixed_time: f64,
+    /// Closed loops: servo and sensor channels, and what they send
+    /// upstream.
+    control: Control,
 }
 
 impl<const Q: usize, const T: usize> Default for Node<Q, T> {
@@ -176,6 +180,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             },
             stream_state: StreamState::at([0.0; MAX_AXES]),
             fixed_time: 0.0,
+            control: Control::new(),
         }
     }
 
@@ -295,7 +300,22 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         if let Some(t) = self.graph_next() {
             best = Some(best.map_or(t, |b: f64| b.min(t)));
         }
+        if let Some(t) = self.control.deadline(self.now, !self.segments.is_empty()) {
+            best = Some(best.map_or(t, |b: f64| b.min(t)));
+        }
         best
+    }
+
+    /// The node's closed loops (servo and sensor channels).
+    pub fn control(&self) -> &Control {
+        &self.control
+    }
+
+    /// The oldest message the node sends unasked (a fault, a batch of
+    /// samples), taken: a link's endpoint sends it, a simulator hands it
+    /// to its host, as bytes either way.
+    pub fn take_upstream(&mut self) -> Option<NodeMessage> {
+        self.control.take_upstream()
     }
 
     /// Runs the frame ending at `until` (µs): every step and tool change due

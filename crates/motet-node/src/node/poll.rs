@@ -21,14 +21,37 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     /// Runs to `until`; false when the budget ran out first (the node's time
     /// is then that of its last output).
     fn poll_until<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {
-        while let Some(t) = self.graph_next().filter(|&t| t < until) {
+        loop {
+            // Graph frames and control ticks, in time order (a frame first
+            // on a tie), each after every output before it.
+            let frame = self.graph_next().unwrap_or(f64::INFINITY);
+            let tick = self.control.next_tick(self.now);
+            let t = frame.min(tick);
+            if t >= until {
+                break;
+            }
             if !self.poll_trajectory(t, board, budget) || *budget == 0 {
                 return false;
             }
-            self.graph_frame(t, board);
+            if frame <= tick {
+                self.graph_frame(t, board);
+            } else {
+                self.control_tick(t, board);
+            }
             *budget -= 1;
         }
         self.poll_trajectory(until, board, budget)
+    }
+
+    /// Every loop's tick due at `t`. A fault on a windowed node closes its
+    /// run: no more seals, and it brakes on its committed tail, as every
+    /// node does once the host stops the run.
+    fn control_tick<B: Board>(&mut self, t: f64, board: &mut B) {
+        let end = self.committed_len();
+        let now = self.now;
+        if self.control.tick(t, now, &self.segments, end, board) && self.windowed {
+            self.close(None);
+        }
     }
 
     fn poll_trajectory<B: Board>(&mut self, until: f64, board: &mut B, budget: &mut u32) -> bool {

@@ -154,7 +154,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             .iter()
             .map(|c| c.segments_done())
             .min()
-            .unwrap_or(usize::MAX);
+            .unwrap_or(usize::MAX)
+            .min(self.control.segments_done());
         let done = done.min(self.committed_len());
         let mut n = 0;
         let mut exit_speed = 0.0;
@@ -171,6 +172,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         for ch in self.channels.iter_mut() {
             ch.drop_segments(n);
         }
+        self.control.drop_segments(n);
         if n > 0 && self.segments.is_empty() && exit_speed > 0.0 && !self.starved {
             // Out of trajectory while not at rest: the host fell behind.
             self.underruns += 1;

@@ -1,0 +1,40 @@
+//! What a run does with what nodes' closed loops send unasked: a fault
+//! stops the run on its tail (every node brakes on the committed
+//! trajectory, the faulted loop has already stopped driving); samples are
+//! kept for the report.
+
+use super::NetRun;
+use motet_wire::NodeMessage;
+
+impl NetRun {
+    /// A fault or samples from node `k`.
+    pub(super) fn on_loop_message(&mut self, k: usize, m: NodeMessage, now: u64) {
+        if let NodeMessage::Fault {
+            source,
+            kind,
+            at,
+            value,
+        } = m
+        {
+            let text = motet_host::loops::fault_text(
+                &self.machine,
+                k,
+                source,
+                kind,
+                at,
+                value,
+                self.feed_t0,
+            );
+            self.stop(&text, now);
+        } else if let NodeMessage::Samples(b) = &m {
+            let mut buf = [0u8; motet_wire::MAX_MESSAGE];
+            let n = motet_wire::encode(&m, &mut buf).map_or(0, |b| b.len());
+            self.samples.take(&self.machine, k, b, n, now as f64);
+        }
+    }
+
+    /// What the nodes' loops sent: samples per source.
+    pub fn samples(&self) -> &motet_host::samples::SampleStore {
+        &self.samples
+    }
+}
