@@ -8,6 +8,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod describe;
 pub mod frame;
 pub mod group;
 pub mod image;
