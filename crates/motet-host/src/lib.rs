@@ -8,6 +8,7 @@ pub mod machine;
 mod machine_build;
 mod machine_file;
 mod machine_kinematics;
+pub mod module;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};

@@ -221,6 +221,9 @@ pub struct Machine {
     pub stop_horizon: usize,
     /// Simulated heaters (`[heaters.NAME]`; see [`Heater`]).
     pub heaters: Vec<Heater>,
+    /// The modules it was composed from, in chain order
+    /// (`[modules.NAME]`; empty for a machine written by hand).
+    pub modules: Vec<crate::module::ModuleRecord>,
 }
 
 impl Machine {

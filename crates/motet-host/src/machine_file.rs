@@ -26,6 +26,9 @@ pub struct MachineFile {
     pub nodes: BTreeMap<String, Spanned<NodeFile>>,
     #[serde(default)]
     pub heaters: BTreeMap<String, Spanned<HeaterFile>>,
+    /// The modules the machine was composed from (`crate::module::record`).
+    #[serde(default)]
+    pub modules: BTreeMap<String, Spanned<crate::module::record::ModuleRecordFile>>,
 }
 
 #[derive(Debug, Deserialize)]
