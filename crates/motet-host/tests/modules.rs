@@ -406,7 +406,7 @@ fn the_bus_against_the_records() {
     assert_eq!(d, ["y and x are swapped: y now answers at x's place (address 5 on udp:127.0.0.1:47003) and x at y's (address 4 on udp:127.0.0.1:47002)"]);
     assert!(same, "the chain is mechanical: the same machine");
     let b = bus_check(&expected(&m), &swapped);
-    assert_eq!(b.places[3], ("x".into(), Some(place(2))));
+    assert_eq!(b.places[3], ("x".into(), Some((place(2), 0x103))));
     // A spare board with the same description where x was: the same machine.
     let mut spare = found(&m);
     spare[3].uid = 0xfeed;

@@ -161,7 +161,10 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
     pub fn announce(&mut self) {
         let head = self.services.description().head(self.services.uid());
         let me = self.services.address();
-        let reply = ServiceReply::Description(motet_wire::describe::DescribePart::Head(head));
+        let reply = ServiceReply::Description {
+            part: 0,
+            data: motet_wire::describe::DescribePart::Head(head),
+        };
         self.push(Some((HOST_ADDRESS, me)), port::DESCRIBE, &reply);
     }
 

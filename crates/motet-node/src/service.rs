@@ -464,7 +464,7 @@ impl<S: Store, F: Flash> Services<S, F> {
                     return Handled::error(ServiceError::WrongUid { uid: self.uid() });
                 }
                 match self.description.part(self.uid(), part) {
-                    Some(p) => Handled::reply(ServiceReply::Description(p)),
+                    Some(data) => Handled::reply(ServiceReply::Description { part, data }),
                     None => Handled::error(ServiceError::NoPart {
                         parts: self.description.parts(),
                     }),

@@ -98,7 +98,10 @@ fn ask(s: &mut Svc, uid: Option<u64>, part: u8, broadcast: bool) -> Option<Servi
 
 /// The whole description, read a part at a time as a host does.
 fn read_all(s: &mut Svc, uid: Option<u64>, broadcast: bool) -> Description {
-    let Some(ServiceReply::Description(DescribePart::Head(head))) = ask(s, uid, 0, broadcast)
+    let Some(ServiceReply::Description {
+        part: 0,
+        data: DescribePart::Head(head),
+    }) = ask(s, uid, 0, broadcast)
     else {
         panic!("no head")
     };
@@ -106,7 +109,7 @@ fn read_all(s: &mut Svc, uid: Option<u64>, broadcast: bool) -> Description {
     let mut a = Assembler::new(head).unwrap();
     for i in 1..head.parts {
         match ask(s, uid, i, broadcast) {
-            Some(ServiceReply::Description(p)) => a.take(i, p).unwrap(),
+            Some(ServiceReply::Description { part, data }) if part == i => a.take(i, data).unwrap(),
             other => panic!("part {i}: {other:?}"),
         }
     }
@@ -156,11 +159,17 @@ fn who_answers() {
     assert_eq!(ask(&mut u, Some(OTHER), 0, false), None);
     assert!(matches!(
         ask(&mut u, Some(UID), 0, false),
-        Some(ServiceReply::Description(DescribePart::Head(_)))
+        Some(ServiceReply::Description {
+            part: 0,
+            data: DescribePart::Head(_)
+        })
     ));
     assert!(matches!(
         ask(&mut u, None, 3, true),
-        Some(ServiceReply::Description(DescribePart::Limits(_)))
+        Some(ServiceReply::Description {
+            part: 3,
+            data: DescribePart::Limits(_)
+        })
     ));
     // A Describe on another port is refused there.
     assert_eq!(
@@ -198,7 +207,10 @@ fn a_node_announces_its_head_when_it_starts() {
     );
     assert_eq!(
         decode::<ServiceReply>(f.payload).unwrap(),
-        ServiceReply::Description(DescribePart::Head(x_axis().head(UID)))
+        ServiceReply::Description {
+            part: 0,
+            data: DescribePart::Head(x_axis().head(UID))
+        }
     );
     // And it answers a broadcast describe from the host as a datagram.
     let mut buf = [0u8; 64];
@@ -218,6 +230,6 @@ fn a_node_announces_its_head_when_it_starts() {
     let f = frame::decode(&sent, &mut raw).unwrap();
     assert!(matches!(
         decode::<ServiceReply>(f.payload).unwrap(),
-        ServiceReply::Description(DescribePart::Identity(Identity { name, .. })) if name == "x"
+        ServiceReply::Description { part: 1, data: DescribePart::Identity(Identity { name, .. }) } if name == "x"
     ));
 }

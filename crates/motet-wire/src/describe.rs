@@ -634,6 +634,18 @@ impl Assembler {
         Ok(())
     }
 
+    /// Whether part `index` came.
+    pub fn has(&self, index: u8) -> bool {
+        match index {
+            0 => true,
+            1 => self.identity.is_some(),
+            2 => self.placement.is_some(),
+            3 => self.limits.is_some(),
+            i if i < self.head.parts => self.channels[usize::from(i - FIXED_PARTS)].is_some(),
+            _ => false,
+        }
+    }
+
     /// The first part still to come, if any.
     pub fn missing(&self) -> Option<u8> {
         if self.identity.is_none() {
@@ -756,7 +768,10 @@ mod tests {
         let d = widest();
         let mut buf = [0u8; MAX_MESSAGE];
         for i in 0..d.parts() {
-            let reply = ServiceReply::Description(d.part(u64::MAX, i).unwrap());
+            let reply = ServiceReply::Description {
+                part: i,
+                data: d.part(u64::MAX, i).unwrap(),
+            };
             let bytes = encode(&reply, &mut buf).unwrap();
             assert!(
                 bytes.len() <= MAX_MESSAGE,

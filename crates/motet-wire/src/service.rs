@@ -366,10 +366,15 @@ pub enum ServiceReply {
         /// When the reply left, µs on the node clock.
         t3: u64,
     },
-    /// Answer to [`ServiceRequest::Describe`]: one part of the node's
-    /// description. A node also sends its head unasked when it starts
-    /// (its announcement).
-    Description(crate::describe::DescribePart),
+    /// Answer to [`ServiceRequest::Describe`]: part `part` of the node's
+    /// description. A node also sends its head (part 0) unasked when it
+    /// starts (its announcement).
+    Description {
+        /// Which part this is, as asked.
+        part: u8,
+        /// The part.
+        data: crate::describe::DescribePart,
+    },
 }
 
 impl ServiceReply {
@@ -383,7 +388,7 @@ impl ServiceReply {
                 | ServiceReply::Info(_)
                 | ServiceReply::Paired { .. }
                 | ServiceReply::Time { .. }
-                | ServiceReply::Description(_)
+                | ServiceReply::Description { .. }
         )
     }
 

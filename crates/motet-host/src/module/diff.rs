@@ -160,8 +160,9 @@ pub struct BusCheck {
     /// describing itself as recorded, nothing new that moves or works):
     /// then it may run, with each machine node where it answers now.
     pub same_machine: bool,
-    /// Where each machine node answers now (`None`: missing).
-    pub places: Vec<(String, Option<Place>)>,
+    /// Where each machine node answers now and which device it is
+    /// (`None`: missing).
+    pub places: Vec<(String, Option<(Place, u64)>)>,
 }
 
 /// Each field of a description as text, in a fixed order: what
@@ -361,7 +362,7 @@ pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
         if let Some(i) = i {
             used[i] = true;
         }
-        places.push((r.node.clone(), module.map(|f| f.place.clone())));
+        places.push((r.node.clone(), module.map(|f| (f.place.clone(), f.uid))));
         if let Some(Ok(d)) = module.map(|f| &f.description) {
             chain.push(ModuleAt {
                 uid: module.map_or(r.uid, |f| f.uid),
