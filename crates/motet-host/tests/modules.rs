@@ -403,8 +403,15 @@ fn the_bus_against_the_records() {
     swapped[2].place = p3;
     swapped[3].place = p2;
     let (d, same) = differences(&m, &swapped);
-    assert_eq!(d, ["y and x are swapped: y now answers at x's place (address 5 on udp:127.0.0.1:47003) and x at y's (address 4 on udp:127.0.0.1:47002)"]);
+    assert_eq!(d, ["y and x are swapped: y now answers at address 5 on udp:127.0.0.1:47003, where x was, and x at address 4 on udp:127.0.0.1:47002, where y was"]);
     assert!(same, "the chain is mechanical: the same machine");
+    // On links of their own they keep their addresses: still a swap.
+    let mut relinked = found(&m);
+    relinked[2].place.link = place(3).link;
+    relinked[3].place.link = place(2).link;
+    let (d, same) = differences(&m, &relinked);
+    assert_eq!(d, ["y and x are swapped: y now answers at address 4 on udp:127.0.0.1:47003, where x was, and x at address 5 on udp:127.0.0.1:47002, where y was"]);
+    assert!(same);
     let b = bus_check(&expected(&m), &swapped);
     assert_eq!(b.places[3], ("x".into(), Some((place(2), 0x103))));
     // A spare board with the same description where x was: the same machine.

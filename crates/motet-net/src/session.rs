@@ -118,6 +118,18 @@ impl Session {
         extra: &[String],
         clock: &SharedClock,
     ) -> Result<Session, SessionError> {
+        let each = vec![extra.to_vec(); machine.nodes.len()];
+        Session::spawn_each(machine, exe, &each, clock)
+    }
+
+    /// [`Session::spawn`] with arguments of its own for each machine node
+    /// (`extra[k]`: a module's `--describe` and `--uid`, say).
+    pub fn spawn_each(
+        machine: &Machine,
+        exe: &Path,
+        extra: &[Vec<String>],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
             nodes: Vec::new(),
@@ -125,8 +137,9 @@ impl Session {
             spawned: Vec::new(),
         };
         for (k, spec) in machine.nodes.iter().enumerate() {
+            let args = extra.get(k).map_or(&[][..], |e| &e[..]);
             let node =
-                spawn_sim_node(exe, "stepper", extra).map_err(|source| SessionError::Spawn {
+                spawn_sim_node(exe, "stepper", args).map_err(|source| SessionError::Spawn {
                     node: spec.name.clone(),
                     source,
                 })?;

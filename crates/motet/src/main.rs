@@ -10,6 +10,8 @@ mod dance;
 mod elf;
 mod error_text;
 mod flags;
+mod machine_cmd;
+mod modules;
 mod netrun;
 mod node;
 mod nodes;
@@ -195,6 +197,10 @@ enum Cmd {
         /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
         #[arg(long)]
         record: Option<PathBuf>,
+        /// A description file: the module this node is (docs/network.md,
+        /// "Machines from modules").
+        #[arg(long, value_name = "FILE")]
+        describe: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -203,12 +209,23 @@ enum Cmd {
         #[command(subcommand)]
         command: NodesCmd,
     },
+    /// Machines from modules: compose the modules on the bus (or
+    /// description files) into a machine file, follow them live.
+    Machine {
+        #[command(subcommand)]
+        command: machine_cmd::MachineCmd,
+    },
     /// Check a machine file and a job without running it.
     Check {
         machine: PathBuf,
         job: Option<PathBuf>,
         #[arg(long)]
         allow_unknown: bool,
+        /// `paired`: also check that the modules on the bus are those the
+        /// machine file records, and that they still make a machine fit
+        /// for the job.
+        #[arg(long, value_parser = ["paired"])]
+        nodes: Option<String>,
         #[command(flatten)]
         place: flags::PlacementFlags,
     },
@@ -369,6 +386,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine,
             job,
             allow_unknown,
+            nodes,
             place,
         } => run::check(
             &machine,
@@ -377,7 +395,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 allow_unknown,
                 placement: place.placement()?,
             },
+            nodes.is_some(),
         ),
+        Cmd::Machine { command } => machine_cmd::machine_cmd(command),
         Cmd::Dance {
             machine,
             graph,
@@ -444,11 +464,15 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         idle_exit,
         faults,
         record,
+        describe,
         quiet,
     } = cmd
     else {
         unreachable!("dispatch passes `node` only")
     };
+    if kind == "s3g" && describe.is_some() {
+        anyhow::bail!("--describe is for motet nodes (a simulated S3G bot is one whole machine)");
+    }
     if kind == "s3g" {
         return s3g::bot(s3g::BotArgs {
             listen,
@@ -474,6 +498,7 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         auto_press,
         idle_exit,
         quiet,
+        describe,
     })
 }
 

@@ -25,6 +25,8 @@ pub struct NodeArgs {
     pub auto_press: bool,
     pub idle_exit: Option<f64>,
     pub quiet: bool,
+    /// A description file: the module this node is.
+    pub describe: Option<PathBuf>,
 }
 
 /// Opens what the node listens on; returns the transport and the spec a host
@@ -76,13 +78,24 @@ pub fn node(args: NodeArgs) -> Result<()> {
     };
     let cfg = sim_config(&args.kind, uid)
         .with_context(|| format!("--type {:?}: at most 16 bytes", args.kind))?;
+    // A bad description is refused before the node listens.
+    let description = match &args.describe {
+        Some(p) => Some(motet_host::module::load_description(p)?),
+        None => None,
+    };
     let (transport, link) = listen(&args.listen)?;
     match &args.state {
         Some(path) => {
             let store = FileStore { path: path.clone() };
-            run(args_with(&args), cfg, store, transport, &link)
+            run(args_with(&args, description), cfg, store, transport, &link)
         }
-        None => run(args_with(&args), cfg, RamStore::default(), transport, &link),
+        None => run(
+            args_with(&args, description),
+            cfg,
+            RamStore::default(),
+            transport,
+            &link,
+        ),
     }
 }
 
@@ -93,9 +106,10 @@ struct Opts {
     auto_press: bool,
     idle_exit: Option<f64>,
     quiet: bool,
+    description: Option<motet_wire::describe::Description>,
 }
 
-fn args_with(a: &NodeArgs) -> Opts {
+fn args_with(a: &NodeArgs, description: Option<motet_wire::describe::Description>) -> Opts {
     Opts {
         announce: a.announce,
         ppm: a.ppm,
@@ -103,6 +117,7 @@ fn args_with(a: &NodeArgs) -> Opts {
         auto_press: a.auto_press,
         idle_exit: a.idle_exit,
         quiet: a.quiet,
+        description,
     }
 }
 
@@ -120,14 +135,25 @@ fn run<S: Store>(
         (random_uid() % 1_000_000_000) + 1_000_000,
     );
     let mut node = SimNode::new(cfg, store, transport, clock.now_us());
+    let module = o
+        .description
+        .as_ref()
+        .map(|d| format!(", module {} ({})", d.identity.name, d.kind.name()));
+    if let Some(d) = o.description {
+        node.endpoint.set_description(d);
+    }
+    // It says it is here as it starts (a host on its link hears it at
+    // once; on UDP, once a host has spoken, at the host's next probe).
+    node.endpoint.announce();
     let uid = node.endpoint.services().uid();
     if o.announce {
         println!("{}", announce_line(link, uid));
     } else {
         println!(
-            "motet node: {} uid {uid:016x}, firmware {}, listening on {link}",
+            "motet node: {} uid {uid:016x}, firmware {}{}, listening on {link}",
             node.endpoint.services().info().kind,
-            node.endpoint.services().firmware()
+            node.endpoint.services().firmware(),
+            module.unwrap_or_default()
         );
     }
     use std::io::Write;

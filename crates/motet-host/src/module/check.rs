@@ -74,7 +74,7 @@ pub fn problems(d: &Description) -> Vec<Problem> {
 }
 
 /// A number as the description gave it (`0.01`, not its `f64` expansion).
-pub(crate) fn num(v: f32) -> String {
+pub fn num(v: f32) -> String {
     if v.is_finite() && v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
         format!("{v:e}")
     } else {

@@ -102,16 +102,16 @@ pub enum Difference {
         same: bool,
     },
     /// Two recorded modules traded places.
-    #[error("{first} and {second} are swapped: {first} now answers at {second}'s place ({at_second}) and {second} at {first}'s ({at_first})")]
+    #[error("{first} and {second} are swapped: {first} now answers at {first_now}, where {second} was, and {second} at {second_now}, where {first} was")]
     Swapped {
         /// One.
         first: String,
         /// The other.
         second: String,
-        /// Where the first now is (the second's old place).
-        at_second: Place,
-        /// Where the second now is.
-        at_first: Place,
+        /// Where the first answers now.
+        first_now: Place,
+        /// Where the second answers now.
+        second_now: Place,
     },
     /// A recorded module answers somewhere else.
     #[error("{node} moved from {from} to {to}")]
@@ -290,6 +290,16 @@ pub fn changes(node: &str, was: &Description, now: &Description) -> Vec<Differen
     out
 }
 
+/// Whether one module now at `a_now` and another at `b_now` traded the
+/// places `b_was` and `a_was`: their links, or on one shared link their
+/// addresses (a module keeps its own address wherever it is plugged in).
+fn traded(a_now: &Place, b_was: &Place, b_now: &Place, a_was: &Place) -> bool {
+    let links = a_now.link == b_was.link && b_now.link == a_was.link;
+    links
+        && (a_was.link != b_was.link
+            || (a_now.address == b_was.address && b_now.address == a_was.address))
+}
+
 /// Compares the modules `found` on the bus with those `expected`.
 pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
     let mut differences = Vec::new();
@@ -380,7 +390,7 @@ pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
         let (ka, ref to_a) = moved[a];
         let swap = (a + 1..moved.len()).find(|&b| {
             let (kb, ref to_b) = moved[b];
-            !taken[b] && *to_a == expected[kb].place && *to_b == expected[ka].place
+            !taken[b] && traded(to_a, &expected[kb].place, to_b, &expected[ka].place)
         });
         match swap {
             Some(b) => {
@@ -389,8 +399,8 @@ pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
                 differences.push(Difference::Swapped {
                     first: expected[ka].record.node.clone(),
                     second: expected[kb].record.node.clone(),
-                    at_second: expected[kb].place.clone(),
-                    at_first: expected[ka].place.clone(),
+                    first_now: to_a.clone(),
+                    second_now: moved[b].1.clone(),
                 });
             }
             None => differences.push(Difference::Moved {

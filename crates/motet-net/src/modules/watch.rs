@@ -69,6 +69,8 @@ pub struct WatchReport {
     /// A running job must stop: the machine is not viable for it, or a
     /// node it drives is gone or replaced.
     pub stop: bool,
+    /// The watch checks a job (not only the machine).
+    pub job: bool,
 }
 
 impl WatchReport {
@@ -81,10 +83,11 @@ impl WatchReport {
         if self.differences.is_empty() {
             s += "\n  - every module is back as the machine file records it";
         }
+        let what = if self.job { " for the job" } else { "" };
         if self.reasons.is_empty() {
-            s += "\nthe machine is still viable for the job";
+            s += &format!("\nthe machine is still viable{what}");
         } else {
-            s += "\nthe machine is not viable for the job:";
+            s += &format!("\nthe machine is not viable{what}:");
             for r in &self.reasons {
                 s += &format!("\n  - {r}");
             }
@@ -368,6 +371,7 @@ impl ModuleWatch {
             differences,
             reasons,
             stop,
+            job: self.needs.is_some(),
         })
     }
 
