@@ -142,8 +142,7 @@ fn from_scan(
         out.file_stem()
             .map_or("machine".into(), |s| s.to_string_lossy().into_owned())
     });
-    std::fs::write(out, machine_toml(&c, &name))
-        .with_context(|| format!("cannot write {}", out.display()))?;
+    write(out, &machine_toml(&c, &name))?;
     let p = pairing_path(out);
     pairing.save(&p)?;
     // What was written must read back as it was meant.
@@ -151,6 +150,14 @@ fn from_scan(
     module::check_file(&m).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
     println!("wrote {} and {}", out.display(), p.display());
     Ok(())
+}
+
+/// Writes `text` to `path`, making its folder if need be.
+fn write(path: &Path, text: &str) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// The modules `order` names, each once.
@@ -288,7 +295,7 @@ fn compose_files(files: &[PathBuf], out: Option<&Path>, name: &str) -> Result<()
                 println!("  {l}");
             }
             print_offers(&c);
-            std::fs::write(p, &text).with_context(|| format!("cannot write {}", p.display()))?;
+            write(p, &text)?;
             println!("wrote {}", p.display());
         }
         None => print!("{text}"),

@@ -313,3 +313,19 @@ fn bad_descriptions_and_compositions_are_refused_and_in_process_runs_check_the_j
         "{err}"
     );
 }
+
+#[test]
+fn the_example_mill_is_what_its_modules_compose() {
+    let ex = |n: &str| format!("examples/modules/{n}.toml");
+    let files: Vec<String> = ORDER.iter().map(|n| ex(n)).collect();
+    let mut args = vec!["machine", "compose"];
+    args.extend(files.iter().map(String::as_str));
+    args.extend(["--name", "reconfigurable mill (examples/modules)"]);
+    let (ok, out, err) = motet(&args);
+    assert!(ok, "{err}");
+    let file = std::fs::read_to_string(root().join("examples/modules/mill.toml")).unwrap();
+    assert_eq!(
+        out, file,
+        "examples/modules/mill.toml is not what its modules compose: write it again with `motet machine compose examples/modules/{{spindle,z,y,x,a}}.toml --name \"reconfigurable mill (examples/modules)\" > examples/modules/mill.toml`"
+    );
+}

@@ -7,7 +7,7 @@
 //! - [`description`]: description files (TOML, located errors);
 //!   [`write_description`] writes one back.
 //! - [`check`]: what every description must hold, from a file or the wire.
-//! - [`compose`]: the placement chain into axes, tools and heaters.
+//! - [`mod@compose`]: the placement chain into axes, tools and heaters.
 //! - [`viability`]: the viability rule, what a composition offers, and
 //!   what a job needs of it.
 //! - [`write_machine`]: the machine file a composition makes.

@@ -26,10 +26,7 @@ fn node_name(m: &Composed) -> &str {
 /// The machine file for a viable composition named `name`.
 pub fn machine_toml(c: &Composition, name: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Composed from modules (`motet machine from-scan`), tool to workpiece:"
-    );
+    let _ = writeln!(s, "# Composed from modules, tool to workpiece:");
     for m in &c.modules {
         let role = match &m.role {
             Role::Axis { axis, inverted } => {
