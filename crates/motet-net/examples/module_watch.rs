@@ -60,7 +60,7 @@ enum Change {
     Nothing,
     Remove(&'static str),
     Replace(&'static str, &'static str),
-    Plug(Description),
+    Plug(Box<Description>),
 }
 
 struct Outcome {
@@ -138,7 +138,7 @@ fn run(change: Change, watched: bool) -> Outcome {
                     lb.nodes[k].alive = false;
                     plugged.push(plug(&lb, desc(with), 0xfeed, 2 + k as u16));
                 }
-                Some(Change::Plug(d)) => plugged.push(plug(&lb, d, 0xbeef, 0)),
+                Some(Change::Plug(d)) => plugged.push(plug(&lb, *d, 0xbeef, 0)),
                 _ => {}
             }
         }
@@ -189,8 +189,8 @@ fn main() {
             "x replaced by the short rail",
             Change::Replace("x", "x-short"),
         ),
-        ("a second X module plugged in", Change::Plug(x2)),
-        ("a sensor plugged in", Change::Plug(probe)),
+        ("a second X module plugged in", Change::Plug(Box::new(x2))),
+        ("a sensor plugged in", Change::Plug(Box::new(probe))),
     ] {
         let o = run(change, true);
         let Some((at, r)) = &o.report else {
