@@ -436,6 +436,9 @@ pub struct JobScan {
     pub planned_s: f64,
     /// Where the drawing was placed (see [`JobReader::placed`]).
     pub placed: Option<Placed>,
+    /// The axes, tools and heaters it uses, each with where it first does
+    /// (what a machine composed from modules must offer it).
+    pub needs: motet_host::module::JobNeeds,
 }
 
 /// Reads a job through, checking every command and planning it (see
@@ -448,8 +451,10 @@ pub fn scan_job(
     let m = reader.machine;
     let mut planner = Planner::new(m.limits(), m.start, 0.0);
     let mut n = 0usize;
+    let mut needs = motet_host::module::JobNeeds::default();
     while let Some(c) = reader.next() {
         let c = c?;
+        needs.take(m, &c);
         planner.push(&c.item).map_err(|e| {
             reader.source_error(SourceError {
                 loc: c.loc,
@@ -472,5 +477,6 @@ pub fn scan_job(
         clamps: reader.clamps(),
         planned_s: planner.clock() * 1e-6,
         placed: reader.placed(),
+        needs,
     })
 }

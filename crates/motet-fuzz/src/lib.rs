@@ -15,23 +15,27 @@
 //! planned job, a bounded stretch of simulated time) so that a fuzzer spends
 //! its time on many inputs rather than on one long job.
 
+pub mod describe_wire;
 mod example;
 pub mod firmware_image;
 pub mod gcode;
 pub mod graph_file;
 pub mod journal;
 pub mod machine_file;
+pub mod module_description;
 pub mod mutate;
 pub mod pairing_file;
 mod plan;
 pub mod svg;
 pub mod wire_frame;
 
+pub use describe_wire::describe_wire;
 pub use firmware_image::firmware_image;
 pub use gcode::gcode;
 pub use graph_file::graph_file;
 pub use journal::journal;
 pub use machine_file::machine_file;
+pub use module_description::module_description;
 pub use pairing_file::pairing_file;
 pub use svg::svg;
 pub use wire_frame::wire_frame;
@@ -53,6 +57,8 @@ pub const TARGETS: &[(&str, Harness)] = &[
     ("journal", journal),
     ("firmware_image", firmware_image),
     ("wire_frame", wire_frame),
+    ("module_description", module_description),
+    ("describe_wire", describe_wire),
 ];
 
 /// The harness called `name`.

@@ -111,4 +111,6 @@ corpus_tests!(
     journal,
     firmware_image,
     wire_frame,
+    module_description,
+    describe_wire,
 );

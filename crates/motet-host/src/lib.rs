@@ -10,6 +10,7 @@ mod machine_build;
 mod machine_file;
 mod machine_file_loops;
 mod machine_kinematics;
+pub mod module;
 pub mod samples;
 pub mod servo;
 

@@ -231,6 +231,9 @@ pub struct Machine {
     pub heaters: Vec<Heater>,
     /// Sensors (`[sensors.NAME]`), by name.
     pub sensors: Vec<crate::servo::SensorSpec>,
+    /// The modules it was composed from, in chain order
+    /// (`[modules.NAME]`; empty for a machine written by hand).
+    pub modules: Vec<crate::module::ModuleRecord>,
 }
 
 impl Machine {

@@ -28,6 +28,9 @@ pub struct MachineFile {
     pub heaters: BTreeMap<String, Spanned<HeaterFile>>,
     #[serde(default)]
     pub sensors: BTreeMap<String, Spanned<SensorFile>>,
+    /// The modules the machine was composed from (`crate::module::record`).
+    #[serde(default)]
+    pub modules: BTreeMap<String, Spanned<crate::module::record::ModuleRecordFile>>,
 }
 
 pub use crate::machine_file_loops::{MotorFile, SensorFile, ServoFile};

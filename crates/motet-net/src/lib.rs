@@ -13,6 +13,7 @@ pub mod digest;
 pub mod journal;
 pub mod loopback;
 pub mod medium;
+pub mod modules;
 pub mod node_clock;
 pub mod pairing;
 pub mod pairing_file;

@@ -67,6 +67,9 @@ pub struct Loopback {
     /// The bus every node and the host share, for a run on one medium
     /// ([`Loopback::on_bus`]).
     pub bus: Option<CanBus>,
+    /// The host's end of the bus, for what comes from addresses the run
+    /// does not know ([`Medium::take_strangers`]).
+    pub medium: Option<Medium>,
     /// Hosts started on the bus so far (each takes its own identifier).
     hosts: u32,
     /// The bus's clock: host time.
@@ -123,6 +126,7 @@ impl Loopback {
             host_alive: true,
             max_step_us: 1_000,
             bus: None,
+            medium: None,
             hosts: 0,
             bus_clock: SimClock::new(),
         }
@@ -158,6 +162,7 @@ impl Loopback {
             host_alive: true,
             max_step_us: 1_000,
             bus: Some(bus),
+            medium: None,
             hosts: 0,
             bus_clock,
         };
@@ -180,6 +185,7 @@ impl Loopback {
             .ok()?;
         self.hosts += 1;
         let medium = Medium::new(Box::new(CanTransport::new(host, None)));
+        self.medium = Some(medium.clone());
         let peers = (0..self.nodes.len())
             .map(|k| {
                 let address = 2 + k as u16;

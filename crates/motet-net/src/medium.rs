@@ -28,6 +28,9 @@ pub struct MediumStats {
     pub bad_frames: u64,
 }
 
+/// Service datagrams from unknown addresses kept.
+const STRANGERS: usize = 64;
+
 /// A frame as it arrived, with its stamp.
 type Arrived = (Vec<u8>, Option<Stamp>);
 
@@ -37,6 +40,9 @@ struct Demux {
     /// stamps.
     queues: BTreeMap<u16, VecDeque<Arrived>>,
     stats: MediumStats,
+    /// Service datagrams to the host from addresses no port has (a module
+    /// plugged in, an unpaired node), the newest few, with their source.
+    strangers: VecDeque<(u16, motet_wire::ServiceReply)>,
 }
 
 impl Demux {
@@ -65,6 +71,14 @@ impl Demux {
                 None => {
                     self.stats.strangers += 1;
                     self.stats.last_stranger = Some(f.header.src);
+                    let to_host = f.header.dst == HOST_ADDRESS
+                        && f.header.flags == motet_wire::frame::Flags::NONE;
+                    if let (true, Ok(r)) = (to_host, motet_wire::decode(f.payload)) {
+                        if self.strangers.len() == STRANGERS {
+                            self.strangers.pop_front();
+                        }
+                        self.strangers.push_back((f.header.src, r));
+                    }
                 }
             }
         }
@@ -91,6 +105,7 @@ impl Medium {
                 transport,
                 queues: BTreeMap::new(),
                 stats: MediumStats::default(),
+                strangers: VecDeque::new(),
             })),
         }
     }
@@ -110,6 +125,15 @@ impl Medium {
     /// What came in that no port took.
     pub fn stats(&self) -> MediumStats {
         lock(&self.inner).stats
+    }
+
+    /// Service datagrams to the host from addresses no port has, with
+    /// their source, oldest first (a module watch's answers from modules
+    /// the run does not know). Takes what the transport has first.
+    pub fn take_strangers(&self) -> Vec<(u16, motet_wire::ServiceReply)> {
+        let mut d = lock(&self.inner);
+        let _ = d.pump();
+        d.strangers.drain(..).collect()
     }
 }
 

@@ -168,7 +168,7 @@ impl PairingFile {
     pub fn save(&self, path: &Path) -> Result<(), PairingFileError> {
         let body = toml::to_string_pretty(self).expect("pairing file serialises");
         let text = format!(
-            "# Written by `motet nodes pair`: the device behind each node of the machine.\n{body}"
+            "# Written by `motet nodes pair` (or `motet machine from-scan`): the device behind each node of the machine.\n{body}"
         );
         std::fs::write(path, text).map_err(|error| PairingFileError::Io {
             path: path.display().to_string(),

@@ -88,8 +88,14 @@ pub struct Peer {
     asked: VecDeque<u64>,
     /// Clock answers to no exchange the host asked: ignored.
     pub unasked: u64,
+    /// Service datagrams to the host from another address than the node's
+    /// (another device on its link: a module replaced or plugged in), the
+    /// newest few, with their source.
+    strangers: VecDeque<(u16, ServiceReply)>,
 }
 
+/// Service datagrams from other addresses kept.
+const STRANGERS: usize = 32;
 /// Sync frames remembered for their answers.
 const HEARD_OWN: usize = 8;
 /// Exchanges remembered for their answers: more than are in flight at the
@@ -122,6 +128,7 @@ impl Peer {
             heard_own: VecDeque::new(),
             asked: VecDeque::new(),
             unasked: 0,
+            strangers: VecDeque::new(),
         }
     }
 
@@ -306,6 +313,14 @@ impl Peer {
         }
         if f.header.src != self.address {
             self.wrong_address += 1;
+            if f.header.flags == Flags::NONE {
+                if let Ok(reply) = decode::<ServiceReply>(f.payload) {
+                    if self.strangers.len() == STRANGERS {
+                        self.strangers.pop_front();
+                    }
+                    self.strangers.push_back((f.header.src, reply));
+                }
+            }
             return;
         }
         self.last_heard = Some(now);
@@ -337,6 +352,12 @@ impl Peer {
             }
             d = self.link.recv().map(|d| (d.port, d.payload.to_vec()));
         }
+    }
+
+    /// Service datagrams that came from another address than the node's,
+    /// with their source, oldest first.
+    pub fn take_strangers(&mut self) -> Vec<(u16, ServiceReply)> {
+        self.strangers.drain(..).collect()
     }
 
     /// The next reply the node sent.

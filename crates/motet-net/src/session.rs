@@ -118,6 +118,18 @@ impl Session {
         extra: &[String],
         clock: &SharedClock,
     ) -> Result<Session, SessionError> {
+        let each = vec![extra.to_vec(); machine.nodes.len()];
+        Session::spawn_each(machine, exe, &each, clock)
+    }
+
+    /// [`Session::spawn`] with arguments of its own for each machine node
+    /// (`extra[k]`: a module's `--describe` and `--uid`, say).
+    pub fn spawn_each(
+        machine: &Machine,
+        exe: &Path,
+        extra: &[Vec<String>],
+        clock: &SharedClock,
+    ) -> Result<Session, SessionError> {
         let mut s = Session {
             peers: Vec::new(),
             nodes: Vec::new(),
@@ -126,13 +138,13 @@ impl Session {
         };
         for (k, spec) in machine.nodes.iter().enumerate() {
             // A node with closed loops runs its machine's simulated plant.
-            let mut extra = extra.to_vec();
+            let mut args = extra.get(k).cloned().unwrap_or_default();
             if spec
                 .actuators
                 .iter()
                 .any(|&a| machine.actuators[a].servo.is_some())
             {
-                extra.extend([
+                args.extend([
                     "--plant".to_string(),
                     machine.file.display().to_string(),
                     "--plant-node".to_string(),
@@ -140,7 +152,7 @@ impl Session {
                 ]);
             }
             let node =
-                spawn_sim_node(exe, "stepper", &extra).map_err(|source| SessionError::Spawn {
+                spawn_sim_node(exe, "stepper", &args).map_err(|source| SessionError::Spawn {
                     node: spec.name.clone(),
                     source,
                 })?;

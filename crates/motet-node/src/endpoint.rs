@@ -148,6 +148,26 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         self.last_host_frame
     }
 
+    /// What the node says of itself on port 8 (see
+    /// [`Services::set_description`]).
+    pub fn set_description(&mut self, description: motet_wire::describe::Description) {
+        self.services.set_description(description);
+    }
+
+    /// The node announces itself, as it does when it starts or is plugged
+    /// in: the head of its description goes to the host unasked (a
+    /// datagram on port 8), so a host watching the bus knows at once that
+    /// a module came and whether it is one it knew.
+    pub fn announce(&mut self) {
+        let head = self.services.description().head(self.services.uid());
+        let me = self.services.address();
+        let reply = ServiceReply::Description {
+            part: 0,
+            data: motet_wire::describe::DescribePart::Head(head),
+        };
+        self.push(Some((HOST_ADDRESS, me)), port::DESCRIBE, &reply);
+    }
+
     /// The node's button (pairing).
     pub fn press_button(&mut self, now_local_us: u64) {
         let old = self.services.address();

@@ -16,6 +16,7 @@
 
 use crate::drift::DriftMeter;
 use crate::storage::{Flash, Persisted, Store};
+use motet_wire::describe::Description;
 use motet_wire::frame::Crc32c;
 use motet_wire::image::{ImageError, ImageHeader, MAX_HEADER_LEN, MIN_HEADER_LEN};
 use motet_wire::service::{
@@ -131,6 +132,8 @@ pub struct Services<S: Store, F: Flash> {
     clock: Option<ClockModel>,
     /// The node's own measure of its clock's drift.
     drift: DriftMeter,
+    /// What it says of itself on port 8: its board's default until given one.
+    description: Description,
 }
 
 fn checked_end(offset: u32, len: usize) -> Option<u32> {
@@ -155,7 +158,6 @@ impl<S: Store, F: Flash> Services<S, F> {
             }
         };
         Services {
-            cfg,
             store,
             flash,
             persisted,
@@ -167,7 +169,27 @@ impl<S: Store, F: Flash> Services<S, F> {
             pairing: None,
             clock: None,
             drift: DriftMeter::default(),
+            description: Description::default_for(
+                cfg.kind.as_str(),
+                cfg.board.as_ref().map_or("", |b| b.as_str()),
+                cfg.channels,
+                cfg.tools,
+                cfg.max_step_hz,
+            ),
+            cfg,
         }
+    }
+
+    /// What the node says of itself (port 8): a simulated module's file, a
+    /// board's stored description. Without one it serves its board's
+    /// default, made from its channels.
+    pub fn set_description(&mut self, description: Description) {
+        self.description = description;
+    }
+
+    /// The description the node serves.
+    pub fn description(&self) -> &Description {
+        &self.description
     }
 
     /// The node's address ([`UNPAIRED`] until paired).
@@ -312,7 +334,7 @@ impl<S: Store, F: Flash> Services<S, F> {
         from_broadcast: bool,
         now_local_us: u64,
     ) -> Handled {
-        if !(port::STATUS..=port::TIME).contains(&port) {
+        if !(port::STATUS..=port::DESCRIBE).contains(&port) {
             return self.unless_broadcast(
                 Handled::reply(ServiceReply::UnknownPort { port }),
                 from_broadcast,
@@ -320,9 +342,12 @@ impl<S: Store, F: Flash> Services<S, F> {
         }
         let req = decode::<ServiceRequest>(payload);
         if !self.paired() && !from_broadcast {
-            let names_me =
-                matches!(&req, Ok(ServiceRequest::SetAddress { uid, .. }) if *uid == self.uid());
-            if !names_me || port != port::ADDRESS {
+            let names_me = match &req {
+                Ok(ServiceRequest::SetAddress { uid, .. }) => *uid == self.uid(),
+                Ok(ServiceRequest::Describe { uid: Some(uid), .. }) => *uid == self.uid(),
+                _ => false,
+            };
+            if !names_me || !matches!(port, port::ADDRESS | port::DESCRIBE) {
                 return Handled::SILENT;
             }
         }
@@ -433,6 +458,17 @@ impl<S: Store, F: Flash> Services<S, F> {
                 }
                 self.clock = Some(ClockModel { offset, skew });
                 Handled::reply(ServiceReply::Ack)
+            }
+            ServiceRequest::Describe { uid, part } => {
+                if uid.is_some_and(|u| u != self.uid()) {
+                    return Handled::error(ServiceError::WrongUid { uid: self.uid() });
+                }
+                match self.description.part(self.uid(), part) {
+                    Some(data) => Handled::reply(ServiceReply::Description { part, data }),
+                    None => Handled::error(ServiceError::NoPart {
+                        parts: self.description.parts(),
+                    }),
+                }
             }
         }
     }

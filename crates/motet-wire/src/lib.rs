@@ -9,6 +9,7 @@
 #![forbid(unsafe_code)]
 
 pub mod control;
+pub mod describe;
 pub mod frame;
 pub mod group;
 pub mod image;

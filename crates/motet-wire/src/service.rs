@@ -40,6 +40,9 @@ pub mod port {
     pub const FIRMWARE: u8 = 6;
     /// Clock exchanges and the clock model.
     pub const TIME: u8 = 7;
+    /// The module's description of itself, a part at a time
+    /// ([`crate::describe`]).
+    pub const DESCRIBE: u8 = 8;
     /// Motion messages (`HostMessage` / `NodeMessage`).
     pub const MOTION: u8 = 10;
     /// Seals, stops and heartbeats to every node at once
@@ -187,6 +190,16 @@ pub enum ServiceRequest {
         /// µs); within ±[`MAX_SKEW`].
         skew: f64,
     },
+    /// Port 8. Part `part` of the node's description
+    /// ([`crate::describe`]): [`ServiceReply::Description`]. With `uid`,
+    /// only that node answers (an unpaired one too, as for `SetAddress`);
+    /// without, any node asked.
+    Describe {
+        /// The node meant, or any.
+        uid: Option<u64>,
+        /// Which part: 0 is the head, which says how many there are.
+        part: u8,
+    },
 }
 
 impl ServiceRequest {
@@ -206,6 +219,7 @@ impl ServiceRequest {
             | ServiceRequest::FirmwareVerify
             | ServiceRequest::FirmwareStart => port::FIRMWARE,
             ServiceRequest::TimeGet { .. } | ServiceRequest::TimeSet { .. } => port::TIME,
+            ServiceRequest::Describe { .. } => port::DESCRIBE,
         }
     }
 
@@ -352,6 +366,15 @@ pub enum ServiceReply {
         /// When the reply left, µs on the node clock.
         t3: u64,
     },
+    /// Answer to [`ServiceRequest::Describe`]: part `part` of the node's
+    /// description. A node also sends its head (part 0) unasked when it
+    /// starts (its announcement).
+    Description {
+        /// Which part this is, as asked.
+        part: u8,
+        /// The part.
+        data: crate::describe::DescribePart,
+    },
 }
 
 impl ServiceReply {
@@ -365,6 +388,7 @@ impl ServiceReply {
                 | ServiceReply::Info(_)
                 | ServiceReply::Paired { .. }
                 | ServiceReply::Time { .. }
+                | ServiceReply::Description { .. }
         )
     }
 
@@ -453,6 +477,11 @@ pub enum ServiceError {
     Busy,
     /// The image names another board than the node's, or (format 1) none.
     WrongBoard,
+    /// Describe: the description has only `parts` parts.
+    NoPart {
+        /// Parts the description has.
+        parts: u8,
+    },
 }
 
 impl core::fmt::Display for ServiceError {
@@ -496,6 +525,9 @@ impl core::fmt::Display for ServiceError {
             ServiceError::WrongBoard => {
                 f.write_str("firmware image built for another board (or naming none)")
             }
+            ServiceError::NoPart { parts } => {
+                write!(f, "the description has {parts} parts")
+            }
         }
     }
 }
@@ -511,7 +543,7 @@ mod tests {
         k
     }
 
-    pub(crate) fn requests() -> [ServiceRequest; 14] {
+    pub(crate) fn requests() -> [ServiceRequest; 15] {
         [
             ServiceRequest::Status,
             ServiceRequest::Identify { ms: u32::MAX },
@@ -547,6 +579,10 @@ mod tests {
             ServiceRequest::TimeSet {
                 offset: -1e12,
                 skew: 1e-4,
+            },
+            ServiceRequest::Describe {
+                uid: Some(u64::MAX),
+                part: u8::MAX,
             },
         ]
     }
@@ -629,8 +665,8 @@ mod tests {
 
     #[test]
     fn every_request_has_a_service_port() {
-        let ports: [u8; 14] = requests().map(|r| r.port());
-        assert_eq!(ports, [1, 2, 3, 4, 4, 4, 5, 6, 6, 6, 6, 6, 7, 7]);
+        let ports: [u8; 15] = requests().map(|r| r.port());
+        assert_eq!(ports, [1, 2, 3, 4, 4, 4, 5, 6, 6, 6, 6, 6, 7, 7, 8]);
     }
 
     #[test]

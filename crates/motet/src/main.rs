@@ -10,6 +10,8 @@ mod dance;
 mod elf;
 mod error_text;
 mod flags;
+mod machine_cmd;
+mod modules;
 mod netrun;
 mod node;
 mod nodes;
@@ -204,6 +206,10 @@ enum Cmd {
         /// The node of `--plant`'s machine file.
         #[arg(long, requires = "plant")]
         plant_node: Option<String>,
+        /// A description file: the module this node is (docs/network.md,
+        /// "Machines from modules").
+        #[arg(long, value_name = "FILE")]
+        describe: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -234,12 +240,23 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Machines from modules: compose the modules on the bus (or
+    /// description files) into a machine file, follow them live.
+    Machine {
+        #[command(subcommand)]
+        command: machine_cmd::MachineCmd,
+    },
     /// Check a machine file and a job without running it.
     Check {
         machine: PathBuf,
         job: Option<PathBuf>,
         #[arg(long)]
         allow_unknown: bool,
+        /// `paired`: also check that the modules on the bus are those the
+        /// machine file records, and that they still make a machine fit
+        /// for the job.
+        #[arg(long, value_parser = ["paired"])]
+        nodes: Option<String>,
         #[command(flatten)]
         place: flags::PlacementFlags,
     },
@@ -415,6 +432,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             machine,
             job,
             allow_unknown,
+            nodes,
             place,
         } => run::check(
             &machine,
@@ -423,7 +441,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 allow_unknown,
                 placement: place.placement()?,
             },
+            nodes.is_some(),
         ),
+        Cmd::Machine { command } => machine_cmd::machine_cmd(command),
         Cmd::Dance {
             machine,
             graph,
@@ -492,11 +512,15 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         record,
         plant,
         plant_node,
+        describe,
         quiet,
     } = cmd
     else {
         unreachable!("dispatch passes `node` only")
     };
+    if kind == "s3g" && describe.is_some() {
+        anyhow::bail!("--describe is for motet nodes (a simulated S3G bot is one whole machine)");
+    }
     if kind == "s3g" {
         return s3g::bot(s3g::BotArgs {
             listen,
@@ -523,6 +547,7 @@ fn node_cmd(cmd: Cmd) -> anyhow::Result<()> {
         idle_exit,
         quiet,
         plant: plant.zip(plant_node),
+        describe,
     })
 }
 

@@ -111,6 +111,8 @@ struct Scanned {
     job_sha256: Digest,
     commands: usize,
     warnings: Vec<String>,
+    /// What the job asks of the machine (a machine from modules checks it).
+    needs: motet_host::module::JobNeeds,
 }
 
 fn scan_files(machine_path: &Path, job_path: &Path, opts: &JobOptions) -> Result<Scanned> {
@@ -130,6 +132,7 @@ fn scan_files(machine_path: &Path, job_path: &Path, opts: &JobOptions) -> Result
         job_sha256,
         commands: scan.commands,
         warnings: scan.warnings,
+        needs: scan.needs,
     })
 }
 
@@ -208,6 +211,12 @@ pub fn run(a: NetArgs) -> Result<()> {
             eprintln!("warning: {w}");
         }
     }
+    // A machine composed from modules runs only what fits it, on the
+    // modules it was composed from.
+    let composed = crate::modules::check_machine(machine, !a.quiet)?;
+    if let Some(c) = &composed {
+        crate::modules::check_fit(c, &files.needs, a.job_path, crate::modules::MODULES)?;
+    }
     let name = job_name(a.job_path);
     let out = a.out.unwrap_or_else(|| PathBuf::from("out").join(&name));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -221,14 +230,21 @@ pub fn run(a: NetArgs) -> Result<()> {
                 "60".to_string(),
                 "--quiet".to_string(),
             ];
-            Session::spawn(machine, &exe, &extra, &motet_net::clock::wall())?
+            let each = crate::modules::spawn_args(machine, &out, &extra)?;
+            Session::spawn_each(machine, &exe, &each, &motet_net::clock::wall())?
         }
-        NodesMode::Paired => Session::paired(
-            machine,
-            &crate::nodes::paired(a.machine_path)?,
-            &pairing_path(a.machine_path),
-            &motet_net::clock::wall(),
-        )?,
+        NodesMode::Paired => {
+            let pairing = match composed {
+                Some(_) => crate::modules::check_the_bus(machine, a.machine_path)?.1,
+                None => crate::nodes::paired(a.machine_path)?,
+            };
+            Session::paired(
+                machine,
+                &pairing,
+                &pairing_path(a.machine_path),
+                &motet_net::clock::wall(),
+            )?
+        }
         NodesMode::Sim => unreachable!("in-process runs do not come here"),
     };
     let identity = RunIdentity::new(files.machine_sha256, files.job_sha256);
@@ -246,6 +262,7 @@ pub fn run(a: NetArgs) -> Result<()> {
         continues: None,
         nodes: record_nodes(&session),
     };
+    let watch = crate::modules::run_watch(machine, &session, files.needs);
     std::thread::scope(|scope| {
         let source = stream_job(scope, machine, &files.job_path, opts);
         drive(
@@ -257,6 +274,7 @@ pub fn run(a: NetArgs) -> Result<()> {
             identity,
             &out,
             a.quiet,
+            watch,
         )
     })
 }
@@ -303,6 +321,7 @@ fn drive(
     identity: RunIdentity,
     out: &Path,
     quiet: bool,
+    mut watch: Option<(motet_net::modules::ModuleWatch, Vec<String>)>,
 ) -> Result<()> {
     record.save(out)?;
     let journal = JournalWriter::create(&out.join("journal"))?;
@@ -314,7 +333,15 @@ fn drive(
     let started = std::time::Instant::now();
     let phase = loop {
         let now = clock.now_us();
-        let phase = run.poll(now)?.clone();
+        run.poll(now)?;
+        if let Some((w, links)) = watch.as_mut() {
+            // A module added, removed or replaced: said at once, and a
+            // machine no longer fit for the job stops on its tail.
+            if let Some(r) = motet_net::modules::watch_run(w, &mut run, links, None, now) {
+                bar.suspend(|| eprintln!("{}", r.text()));
+            }
+        }
+        let phase = run.phase().clone();
         bar.set_position(run.progress().0 as u64);
         for note in run.take_notes().into_iter().filter(|_| !quiet) {
             bar.suspend(|| eprintln!("warning: {note}"));
@@ -663,5 +690,6 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
         identity,
         out,
         a.quiet,
+        None,
     )
 }

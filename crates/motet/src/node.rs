@@ -28,6 +28,8 @@ pub struct NodeArgs {
     /// The machine file and node whose closed loops this node runs on the
     /// simulated plant.
     pub plant: Option<(PathBuf, String)>,
+    /// A description file: the module this node is.
+    pub describe: Option<PathBuf>,
 }
 
 /// Opens what the node listens on; returns the transport and the spec a host
@@ -79,14 +81,19 @@ pub fn node(args: NodeArgs) -> Result<()> {
     };
     let cfg = sim_config(&args.kind, uid)
         .with_context(|| format!("--type {:?}: at most 16 bytes", args.kind))?;
+    // A bad description is refused before the node listens.
+    let description = match &args.describe {
+        Some(p) => Some(motet_host::module::load_description(p)?),
+        None => None,
+    };
     let (transport, link) = listen(&args.listen)?;
     match &args.state {
         Some(path) => {
             let store = FileStore { path: path.clone() };
-            run(args_with(&args)?, cfg, store, transport, &link)
+            run(args_with(&args, description)?, cfg, store, transport, &link)
         }
         None => run(
-            args_with(&args)?,
+            args_with(&args, description)?,
             cfg,
             RamStore::default(),
             transport,
@@ -103,9 +110,10 @@ struct Opts {
     auto_press: bool,
     idle_exit: Option<f64>,
     quiet: bool,
+    description: Option<motet_wire::describe::Description>,
 }
 
-fn args_with(a: &NodeArgs) -> Result<Opts> {
+fn args_with(a: &NodeArgs, description: Option<motet_wire::describe::Description>) -> Result<Opts> {
     let plant = match &a.plant {
         None => None,
         Some((file, name)) => {
@@ -129,6 +137,7 @@ fn args_with(a: &NodeArgs) -> Result<Opts> {
         auto_press: a.auto_press,
         idle_exit: a.idle_exit,
         quiet: a.quiet,
+        description,
     })
 }
 
@@ -147,14 +156,25 @@ fn run<S: Store>(
     );
     let mut node = SimNode::new(cfg, store, transport, clock.now_us());
     node.plant = o.plant;
+    let module = o
+        .description
+        .as_ref()
+        .map(|d| format!(", module {} ({})", d.identity.name, d.kind.name()));
+    if let Some(d) = o.description {
+        node.endpoint.set_description(d);
+    }
+    // It says it is here as it starts (a host on its link hears it at
+    // once; on UDP, once a host has spoken, at the host's next probe).
+    node.endpoint.announce();
     let uid = node.endpoint.services().uid();
     if o.announce {
         println!("{}", announce_line(link, uid));
     } else {
         println!(
-            "motet node: {} uid {uid:016x}, firmware {}, listening on {link}",
+            "motet node: {} uid {uid:016x}, firmware {}{}, listening on {link}",
             node.endpoint.services().info().kind,
-            node.endpoint.services().firmware()
+            node.endpoint.services().firmware(),
+            module.unwrap_or_default()
         );
     }
     use std::io::Write;

@@ -50,6 +50,16 @@ pub fn scan(links: &[String], wait: f64) -> Result<()> {
                 i.tools,
                 i.queue_capacity
             );
+            // What the module says of itself.
+            let bc = motet_wire::frame::BROADCAST;
+            match motet_net::modules::describe(&mut a, bc, Some(i.uid)) {
+                Ok(d) => {
+                    for l in crate::modules::description_lines(&d) {
+                        println!("    {l}");
+                    }
+                }
+                Err(e) => println!("    no description: {e}"),
+            }
         }
     }
     println!("{total} node(s)");

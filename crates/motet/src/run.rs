@@ -1,5 +1,6 @@
 //! `motet run` and `motet check`.
 
+use crate::modules::{BUS, MODULES};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use motet_api::{job_name, scan_job, JobOptions, JobReader, Placed};
@@ -12,7 +13,7 @@ pub fn load_machine(path: &Path) -> Result<Machine> {
     Ok(Machine::load(path)?)
 }
 
-pub fn check(machine: &Path, job_path: Option<&Path>, opts: &JobOptions) -> Result<()> {
+pub fn check(machine: &Path, job_path: Option<&Path>, opts: &JobOptions, bus: bool) -> Result<()> {
     let m = load_machine(machine)?;
     println!(
         "{}: ok ({}, {} axes, {} actuators, {} nodes)",
@@ -22,6 +23,14 @@ pub fn check(machine: &Path, job_path: Option<&Path>, opts: &JobOptions) -> Resu
         m.actuators.len(),
         m.nodes.len()
     );
+    let composed = crate::modules::check_machine(&m, true)?;
+    if bus && composed.is_none() {
+        anyhow::bail!(
+            "--nodes paired checks the modules of a machine composed from them; {} has no [modules]",
+            machine.display()
+        );
+    }
+    let mut needs = None;
     if let Some(j) = job_path {
         let scan = scan_job(JobReader::open(&m, j, opts)?, &mut |_, _| {})?;
         for w in &scan.warnings {
@@ -43,6 +52,19 @@ pub fn check(machine: &Path, job_path: Option<&Path>, opts: &JobOptions) -> Resu
                 motet_planner::ranges::number(scan.clamps.max_mm)
             );
         }
+        if let Some(c) = &composed {
+            crate::modules::check_fit(c, &scan.needs, j, MODULES)?;
+            println!("  fits the machine its modules make");
+        }
+        needs = Some((j, scan.needs));
+    }
+    if bus {
+        let (check, _) = crate::modules::scan_the_bus(&m, machine)?;
+        if let (Some((j, needs)), Ok(())) = (&needs, &check.viability) {
+            crate::modules::check_fit(&check.now, needs, j, BUS)?;
+            println!("  the job fits the machine the modules on the bus make");
+        }
+        crate::modules::require_same(&check, machine)?;
     }
     Ok(())
 }
@@ -136,6 +158,10 @@ pub fn run(
         for w in &scan.warnings {
             eprintln!("warning: {w}");
         }
+    }
+    // A machine composed from modules runs only what fits it.
+    if let Some(c) = crate::modules::check_machine(&machine, false)? {
+        crate::modules::check_fit(&c, &scan.needs, job_path, MODULES)?;
     }
     let name = job_name(job_path);
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&name));

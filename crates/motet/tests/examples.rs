@@ -29,6 +29,7 @@ const EXAMPLES: &[(&str, &str)] = &[
     ("scara.toml", "scara-star.gcode"),
     ("fivebar.toml", "fivebar-star.gcode"),
     ("delta.toml", "delta-vase.gcode"),
+    ("modules/mill.toml", "mill-4axis.gcode"),
 ];
 
 #[test]

@@ -78,6 +78,8 @@ pub fn run<B: Board>(
         Endpoint::new(node_config(&board, &cfg), store, staging, now);
     // Without a floating-point unit, steps in fixed-point time.
     ep.node_mut().use_fixed_time(B::FIXED_TIME_US);
+    // It describes itself by its channels (port 8) and says it is here.
+    ep.announce();
     board.console(format_args!(
         "motet: {} node on {}, firmware {}, uid {:016x}, address {} (endpoint {} bytes)",
         cfg.kind,

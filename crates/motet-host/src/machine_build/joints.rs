@@ -81,7 +81,12 @@ pub(super) fn joints(
         joints.push(Joint {
             name: a.name.clone(),
             map: JointMap::axis(i),
-            unit: Unit::Millimetre,
+            // A, B and C are rotary axes, in degrees (as G-code reads them).
+            unit: if matches!(a.name.as_str(), "a" | "b" | "c") {
+                Unit::Degree
+            } else {
+                Unit::Millimetre
+            },
             max_velocity: None,
             max_acceleration: None,
         });

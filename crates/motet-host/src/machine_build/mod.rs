@@ -99,6 +99,7 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
     let start = motion::start(src, m, &axes, kinematics, joints.kinematic_axes)?;
     let draw_feed = motion::draw_feed(src, m, &axes)?;
     let stop_horizon = motion::stop_horizon(src, m, &nodes)?;
+    let modules = crate::module::record::records(src, &raw.modules, &nodes)?;
     Ok(Machine {
         name: raw.name,
         description: raw.description,
@@ -120,5 +121,6 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
         stop_horizon,
         heaters,
         sensors,
+        modules,
     })
 }

@@ -40,6 +40,9 @@ use window::Committed;
 /// connect timeout passes may wait as long again.
 const CLOSE_ENOUGH: f64 = 3.0;
 
+/// Service replies kept for [`NetRun::take_service_replies`].
+const SERVICE_REPLIES: usize = 256;
+
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NetConfig {
@@ -268,6 +271,8 @@ pub struct NetRun {
     pace: pace::Pace,
     /// Samples the nodes' loops sent, per source.
     samples: motet_host::samples::SampleStore,
+    /// Service replies the run does not act on (a module watch's), by node.
+    service_replies: VecDeque<(usize, motet_wire::ServiceReply)>,
 }
 
 impl NetRun {
@@ -328,6 +333,7 @@ impl NetRun {
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
             samples: motet_host::samples::SampleStore::new(),
+            service_replies: VecDeque::new(),
         }
     }
 
@@ -356,6 +362,12 @@ impl NetRun {
     /// The links to the nodes, in the machine's order.
     pub fn peers(&self) -> &[Peer] {
         &self.peers
+    }
+
+    /// Service replies the nodes sent that the run does not act on (what a
+    /// module watch asked), each with its node's index, oldest first.
+    pub fn take_service_replies(&mut self) -> Vec<(usize, motet_wire::ServiceReply)> {
+        self.service_replies.drain(..).collect()
     }
 
     /// The link to machine node `k`, to send it a service request (identify)
@@ -610,7 +622,14 @@ impl NetRun {
                     Incoming::Motion(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
                         self.on_loop_message(k, m, now)
                     }
-                    Incoming::Service(_) => {}
+                    Incoming::Service(r) => {
+                        // Kept for whoever asked (a module watch), the
+                        // newest few.
+                        if self.service_replies.len() == SERVICE_REPLIES {
+                            self.service_replies.pop_front();
+                        }
+                        self.service_replies.push_back((k, r));
+                    }
                 }
             }
         }
