@@ -604,9 +604,11 @@ impl NetRun {
                             }
                         }
                     }
-                    Incoming::Motion(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
-                        self.on_loop_message(k, m, now)
-                    }
+                    Incoming::Motion(
+                        m @ (NodeMessage::Fault { .. }
+                        | NodeMessage::Samples(_)
+                        | NodeMessage::HeaterReady { .. }),
+                    ) => self.on_loop_message(k, m, now),
                     Incoming::Service(_) => {}
                 }
             }
