@@ -3,10 +3,12 @@
 
 pub mod distribute;
 pub mod heater;
+pub mod heater_loop;
 pub mod job;
 pub mod machine;
 mod machine_build;
 mod machine_file;
+mod machine_file_heaters;
 mod machine_kinematics;
 
 pub use distribute::{Distributor, Subscription};
