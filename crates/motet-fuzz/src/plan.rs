@@ -150,6 +150,9 @@ fn run(machine: &Machine, items: &[Planned], end: f64) {
             Err(SimError::Plan { .. } | SimError::Source(_)) => {
                 unreachable!("submit neither plans nor reads a job")
             }
+            // A heater the machine's model says runs away stops the run:
+            // what a real machine does, not a fault of the plan.
+            Err(SimError::Heater { .. }) => return,
         }
     }
     sim.run_until(end);

@@ -4,6 +4,7 @@
 pub mod distribute;
 pub mod heater;
 pub mod heater_loop;
+pub mod heater_trace;
 pub mod job;
 pub mod machine;
 mod machine_build;

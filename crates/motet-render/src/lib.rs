@@ -22,6 +22,7 @@
 
 mod png;
 mod svg;
+pub mod timeplot;
 
 pub use png::{render_png, PngCanvas};
 pub use svg::{render_svg, SvgWriter, SVG_END};

@@ -273,6 +273,11 @@ fn lay_tool(pixmap: &mut Pixmap, tool: &Mask) {
     }
 }
 
+/// A pixmap as the bytes of a PNG file (the plots' too).
+pub(crate) fn encode_pixmap(pixmap: Pixmap) -> Result<Vec<u8>, RenderError> {
+    encode(pixmap)
+}
+
 /// The picture as the bytes of a PNG file.
 fn encode(pixmap: Pixmap) -> Result<Vec<u8>, RenderError> {
     let (w, h) = (pixmap.width(), pixmap.height());

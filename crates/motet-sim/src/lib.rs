@@ -3,12 +3,15 @@
 //! what it did.
 
 pub mod dance;
+pub mod heaters;
 mod ideal;
 pub mod path;
 pub mod plant;
 pub mod plant_thread;
 pub mod report;
+pub mod report_heaters;
 pub mod run;
+pub mod thermal;
 
 pub use report::{format_duration, Report};
 pub use run::{

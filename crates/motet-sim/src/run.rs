@@ -41,6 +41,17 @@ pub enum SimError {
     /// The job's own stream failed (a read error, a bad line).
     #[error("{0}")]
     Source(Box<dyn std::error::Error + Send + Sync>),
+    /// A heater a node drives tripped (runaway, a lost sensor) or did not
+    /// get to a target the job waited for: the run stops there. The
+    /// message names the node, the heater, what it saw and when; the
+    /// heaters' samples up to then come with it (for their plots).
+    #[error("{message}")]
+    Heater {
+        /// As the person reads it.
+        message: String,
+        /// Every node-driven heater's samples.
+        heaters: Vec<motet_host::heater_trace::HeaterTrace>,
+    },
 }
 
 /// What a run produced.
@@ -60,6 +71,8 @@ struct Collector<'a, P: PlantSink> {
     actuators: &'a [usize],
     tools: &'a [usize],
     plant: &'a mut P,
+    /// The node's simulated heaters.
+    heat: &'a mut crate::heaters::NodeHeat,
     /// Whether this is the only node, whose outputs are then in time order
     /// as they come: the plant takes them every [`HANDOVER`] outputs
     /// instead of at the frame's end, so a long frame needs no long buffer.
@@ -95,6 +108,12 @@ impl<P: PlantSink> Board for Collector<'_, P> {
             output: Output::Tool { tool, value },
         });
     }
+    fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.heat.read(index, at_us)
+    }
+    fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        self.heat.drive(channel, duty, at_us);
+    }
 }
 
 /// A machine of simulated nodes on one simulated clock, fed planned items one
@@ -103,14 +122,18 @@ impl<P: PlantSink> Board for Collector<'_, P> {
 /// or on a thread of its own for a whole job
 /// ([`PlantLink`](crate::plant_thread::PlantLink)).
 pub struct SimMachine<P: PlantSink = Plant> {
-    machine: Machine,
+    pub(crate) machine: Machine,
     nodes: Vec<Node<NODE_QUEUE>>,
     dist: Distributor,
     plant: P,
     frame: f64,
-    now: f64,
+    pub(crate) now: f64,
     buf: [u8; MAX_MESSAGE],
     stats: Stats,
+    /// Each node's simulated heaters.
+    pub(crate) heat: Vec<crate::heaters::NodeHeat>,
+    /// What the host knows of them.
+    pub(crate) heaters: crate::heaters::HeaterWatch,
 }
 
 #[derive(Default)]
@@ -181,6 +204,10 @@ impl<P: PlantSink> SimMachine<P> {
             frame,
             now: 0.0,
             buf: [0; MAX_MESSAGE],
+            heat: (0..machine.nodes.len())
+                .map(|k| crate::heaters::NodeHeat::of_node(machine, k))
+                .collect(),
+            heaters: crate::heaters::HeaterWatch::new(machine),
             stats: Stats {
                 axes: machine
                     .axes
@@ -203,6 +230,13 @@ impl<P: PlantSink> SimMachine<P> {
             for msg in msgs {
                 sim.send(k, &msg)?;
             }
+        }
+        if motet_host::heater_loop::any(machine) {
+            // Every heater reads its sensor at its first tick, at 0: one
+            // that does not report stops the run before anything moves.
+            let until = sim.frame_after(0.0);
+            sim.poll_all(until);
+            sim.heater_fault()?;
         }
         Ok(sim)
     }
@@ -231,7 +265,7 @@ impl<P: PlantSink> SimMachine<P> {
 
     /// Sends every batch still being filled: before time passes for the
     /// caller, so no node waits for segments the host holds.
-    fn flush_all(&mut self) {
+    pub(crate) fn flush_all(&mut self) {
         for k in 0..self.nodes.len() {
             if let Some(out) = self.dist.flush(k) {
                 self.make_room(k, out.segments);
@@ -324,6 +358,7 @@ impl<P: PlantSink> SimMachine<P> {
                 .fold(0.0, f64::max),
             actuators,
             underruns: self.underruns(),
+            heaters: self.heaters.report(&self.machine),
             clamped_moves: 0,
             max_clamp_mm: 0.0,
             wall_s: wall,
@@ -348,7 +383,7 @@ impl<P: PlantSink> SimMachine<P> {
     /// be finer than an `f64` resolves there; then the next representable
     /// time, so that the clock always moves on and whatever is due at `t`
     /// runs.
-    fn frame_after(&self, t: f64) -> f64 {
+    pub(crate) fn frame_after(&self, t: f64) -> f64 {
         let f = ((t / self.frame).floor() + 1.0) * self.frame;
         if f > t || !t.is_finite() {
             f
@@ -359,7 +394,20 @@ impl<P: PlantSink> SimMachine<P> {
     }
 
     /// Runs every node up to `until` and applies their outputs to the plant.
-    fn poll_all(&mut self, until: f64) {
+    pub(crate) fn poll_all(&mut self, until: f64) {
+        if self.heaters.any() {
+            // A node holds four messages upstream and its heaters send a
+            // batch about every second: the host takes them at least as
+            // often, as a link would.
+            while until - self.now > crate::heaters::TAKE_EVERY_US {
+                let t = self.now + crate::heaters::TAKE_EVERY_US;
+                self.poll_once(t);
+            }
+        }
+        self.poll_once(until);
+    }
+
+    fn poll_once(&mut self, until: f64) {
         if until <= self.now {
             return;
         }
@@ -370,6 +418,7 @@ impl<P: PlantSink> SimMachine<P> {
                 actuators: &spec.actuators,
                 tools: &spec.tools,
                 plant: &mut self.plant,
+                heat: &mut self.heat[k],
                 single,
             };
             // The plant takes every node's outputs up to `until` together
@@ -378,6 +427,10 @@ impl<P: PlantSink> SimMachine<P> {
             node.poll(until, &mut c);
             while node.time() < until {
                 node.poll(until, &mut c);
+            }
+            // What its loops sent, as a link would carry it.
+            while let Some(m) = node.take_upstream() {
+                self.heaters.take(&self.machine, k, &m);
             }
         }
         self.plant.applied(until);
@@ -412,6 +465,7 @@ impl<P: PlantSink> SimMachine<P> {
     /// Sends one planned item to the nodes that subscribe to it, letting time
     /// pass when a node's queue is full.
     pub fn submit(&mut self, item: Planned) -> Result<(), SimError> {
+        self.heater_fault()?;
         // The nodes run the quantized trajectory the batches carry: that is
         // the record every output is checked against.
         let planned = item;
@@ -433,7 +487,15 @@ impl<P: PlantSink> SimMachine<P> {
                     self.stats.tool_on = e.value > 0.0;
                 }
             }
-            Planned::Aux(_) => self.stats.aux_events += 1,
+            Planned::Aux(a) => {
+                self.stats.aux_events += 1;
+                if a.channel == motet_planner::AuxChannel::Fan(0) {
+                    // The part-cooling fan blows on the hot ends.
+                    for h in self.heat.iter_mut() {
+                        h.fan_at(a.time, a.value as f64);
+                    }
+                }
+            }
             // The simulated operator resumes at once.
             Planned::Pause { .. } => self.stats.pauses += 1,
         }
@@ -574,6 +636,8 @@ pub struct StreamRun {
     pub report: Report,
     /// The largest of each count in [`SimMachine::held`] over the run.
     pub held: Held,
+    /// The samples of every heater a node drives, for their plots.
+    pub heaters: Vec<motet_host::heater_trace::HeaterTrace>,
 }
 
 /// Plans and executes a job read as it runs: `commands` is consumed one
@@ -611,6 +675,7 @@ where
                 node_segments,
                 ..run.held
             },
+            heaters: sim.heaters().traces().cloned().collect(),
         })
     })
 }
@@ -626,7 +691,8 @@ fn run_commands<P: PlantSink, E>(
 where
     E: std::error::Error + Send + Sync + 'static,
 {
-    let mut planner = Planner::new(sim.machine.limits(), sim.machine.start, 0.0);
+    // From the host's time: past the heaters' first check, if any.
+    let mut planner = Planner::new(sim.machine.limits(), sim.machine.start, sim.now());
     let mut node_segments = 0;
     let mut n = 0usize;
     for c in commands {
@@ -634,9 +700,7 @@ where
         planner
             .push(&c.item)
             .map_err(|error| SimError::Plan { loc: c.loc, error })?;
-        while let Some(item) = planner.pop() {
-            sim.submit(item)?;
-        }
+        crate::heaters::submit_planned(sim, &mut planner, c.loc, &mut |_| {})?;
         node_segments = node_segments.max(sim.node_segments());
         if n.is_multiple_of(1024) {
             progress(n, total);
@@ -651,6 +715,7 @@ where
     // Run to the end, then until nothing is left to do.
     sim.run_until(end);
     sim.run_to_rest();
+    sim.heater_fault()?;
     node_segments = node_segments.max(sim.node_segments());
     progress(n, total.max(n));
     Ok((n, end, node_segments))

@@ -117,8 +117,10 @@ pub fn run(
     out: Option<PathBuf>,
     opts: &JobOptions,
     quiet: bool,
+    heater_faults: &[(String, motet_host::heater_loop::HeaterFault)],
 ) -> Result<()> {
-    let machine = load_machine(machine_path)?;
+    let mut machine = load_machine(machine_path)?;
+    crate::heaters::inject(&mut machine, heater_faults)?;
     let scan_bar = bar(
         quiet,
         0,
@@ -183,6 +185,20 @@ pub fn run(
     .map_err(|e| match e {
         // The job's own errors already name their file.
         motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
+        // A heater stopped the run: its plot shows what it saw.
+        motet_sim::SimError::Heater { message, heaters } => {
+            match crate::heaters::write_plots(&machine, &heaters, &out) {
+                Ok(files) => {
+                    let names: Vec<String> = files.into_iter().map(|f| f.1).collect();
+                    anyhow::anyhow!(
+                        "{message}; the run was stopped (plots in {}: {})",
+                        out.display(),
+                        names.join(", ")
+                    )
+                }
+                Err(e) => anyhow::anyhow!("{message}; the run was stopped ({e})"),
+            }
+        }
         e => anyhow::anyhow!("{}:{e}", job_path.display()),
     })?;
     run_bar.finish_and_clear();
@@ -192,6 +208,11 @@ pub fn run(
     svg.finish()
         .with_context(|| format!("writing {}", svg_path.display()))?;
     let mut report = run.report;
+    for (name, file) in crate::heaters::write_plots(&machine, &run.heaters, &out)? {
+        if let Some(h) = report.heaters.iter_mut().find(|h| h.name == name) {
+            h.plot = Some(file);
+        }
+    }
     report.clamped_moves = scan.clamps.moves;
     report.max_clamp_mm = scan.clamps.max_mm;
 
@@ -215,8 +236,14 @@ pub fn run(
         if let Some(peak) = crate::peak::own_peak_mib() {
             println!("  {}{peak:.1} MiB", crate::peak::PEAK_LINE);
         }
+        let plots: String = report
+            .heaters
+            .iter()
+            .filter_map(|h| h.plot.as_ref())
+            .map(|p| format!(", {p}"))
+            .collect();
         println!(
-            "  wrote {}/{{path.png, path.svg, report.json}}",
+            "  wrote {}/{{path.png, path.svg, report.json{plots}}}",
             out.display()
         );
     }

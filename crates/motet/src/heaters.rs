@@ -1,0 +1,90 @@
+//! `motet run`'s heaters: faults injected from `--heater-fault`, and each
+//! node-driven heater's plot, `heater-NAME.png`, beside `path.png`.
+
+use anyhow::{Context, Result};
+use motet_host::heater_loop::{HeaterFault, HeaterFaultKind};
+use motet_host::heater_trace::HeaterTrace;
+use motet_host::Machine;
+use std::path::Path;
+
+/// Plot size, pixels.
+const PLOT_W: u32 = 1200;
+const PLOT_H: u32 = 800;
+
+/// `--heater-fault NAME=KIND@SECONDS`: a fault for the simulator to
+/// inject into a heater a node drives.
+pub fn parse_fault(s: &str) -> Result<(String, HeaterFault), String> {
+    let (name, rest) = s
+        .split_once('=')
+        .ok_or("expected NAME=KIND@SECONDS, e.g. hotend=disconnected@60")?;
+    let (kind, at) = rest.split_once('@').unwrap_or((rest, "0"));
+    let kind = HeaterFaultKind::parse(kind).ok_or_else(|| {
+        format!(
+            "unknown fault `{kind}`; expected {}",
+            HeaterFaultKind::NAMES
+        )
+    })?;
+    let at_s: f64 = at
+        .parse()
+        .map_err(|_| format!("`{at}` is not a number of seconds"))?;
+    let at_s = motet_planner::ranges::JOB_S
+        .check("--heater-fault time", at_s)
+        .map_err(|e| e.to_string())?;
+    Ok((name.to_string(), HeaterFault { kind, at_s }))
+}
+
+/// The faults of `--heater-fault` put on `machine`'s heaters, each of
+/// which a node must drive.
+pub fn inject(machine: &mut Machine, faults: &[(String, HeaterFault)]) -> Result<()> {
+    for (name, fault) in faults {
+        let Some(h) = machine.heaters.iter_mut().find(|h| h.name == *name) else {
+            anyhow::bail!("--heater-fault: the machine has no heater `{name}`");
+        };
+        let Some(l) = h.node_loop.as_mut() else {
+            anyhow::bail!("--heater-fault: no node drives heater `{name}` ([nodes.NAME] heaters)");
+        };
+        l.fault = Some(*fault);
+    }
+    Ok(())
+}
+
+/// Writes each heater's plot into `out`; the file names, by heater.
+pub fn write_plots(
+    machine: &Machine,
+    traces: &[HeaterTrace],
+    out: &Path,
+) -> Result<Vec<(String, String)>> {
+    let mut written = vec![];
+    for t in traces {
+        let file = format!("heater-{}.png", t.name);
+        let plot = motet_sim::heaters::heater_plot(machine, t);
+        let png = motet_render::timeplot::render_plot(&plot, PLOT_W, PLOT_H)
+            .with_context(|| format!("rendering {file}"))?;
+        let path = out.join(&file);
+        std::fs::write(&path, png).with_context(|| format!("writing {}", path.display()))?;
+        written.push((t.name.clone(), file));
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn faults_parse_or_say_why_not() {
+        let f = parse_fault("hotend=disconnected@60").unwrap();
+        assert_eq!(f.0, "hotend");
+        assert_eq!((f.1.kind, f.1.at_s), (HeaterFaultKind::Disconnected, 60.0));
+        assert_eq!(parse_fault("bed=sensor-lost").unwrap().1.at_s, 0.0);
+        for (bad, words) in [
+            ("hotend", "expected NAME=KIND@SECONDS"),
+            ("hotend=melted@3", "unknown fault `melted`"),
+            ("hotend=disconnected@soon", "not a number"),
+            ("hotend=disconnected@-1", "must be from 0"),
+        ] {
+            let e = parse_fault(bad).unwrap_err();
+            assert!(e.contains(words), "{bad}: {e}");
+        }
+    }
+}
