@@ -11,6 +11,7 @@ mod machine_build;
 mod machine_file;
 mod machine_file_heaters;
 mod machine_kinematics;
+pub mod thermal;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};

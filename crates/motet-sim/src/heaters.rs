@@ -13,11 +13,11 @@
 use crate::plant_thread::PlantSink;
 use crate::report_heaters::{HeatUpReport, HeaterReport};
 use crate::run::{SimError, SimMachine};
-use crate::thermal::ThermalSim;
-use motet_host::heater_loop::{self, HEATER_DRIVE_BASE};
+use motet_host::heater_loop;
 use motet_host::heater_trace::HeaterTrace;
+pub use motet_host::thermal::NodeHeat;
 use motet_host::Machine;
-use motet_planner::{AuxChannel, AuxEvent, Command, Planned, Planner, SourceLoc};
+use motet_planner::{AuxEvent, Command, Planned, Planner, SourceLoc};
 use motet_render::timeplot::{Line, Panel, Plot};
 use motet_wire::control::SampleSource;
 use motet_wire::NodeMessage;
@@ -29,60 +29,6 @@ pub const WAIT_LIMIT_S: f64 = 1800.0;
 /// Longest the host leaves a node with heaters without taking what it
 /// sent upstream, µs.
 pub const TAKE_EVERY_US: f64 = 500_000.0;
-
-/// One node's simulated heaters, by their index on it.
-#[derive(Clone, Debug, Default)]
-pub struct NodeHeat {
-    sims: Vec<ThermalSim>,
-    /// The heaters' indices in the machine, by their index on the node.
-    heaters: Vec<usize>,
-}
-
-impl NodeHeat {
-    /// Node `k`'s heaters of `machine`, cold and off.
-    pub fn of_node(machine: &Machine, k: usize) -> NodeHeat {
-        let heaters = heater_loop::on_node(machine, k);
-        let sims = heaters
-            .iter()
-            .map(|&h| {
-                let heater = &machine.heaters[h];
-                let l = heater.node_loop.as_ref().expect("on a node");
-                let cooled = matches!(heater.channel, AuxChannel::Hotend(_));
-                ThermalSim::new(l.plant, cooled, l.fault, 1 + h as u64)
-            })
-            .collect();
-        NodeHeat { sims, heaters }
-    }
-
-    /// Sensor `index`'s reading at host time `at_us`.
-    pub fn read(&mut self, index: u8, at_us: f64) -> Option<f32> {
-        self.sims.get_mut(index as usize)?.read(at_us)
-    }
-
-    /// Drive output `channel` set to `duty` at `at_us` (a heater's
-    /// outputs are from [`HEATER_DRIVE_BASE`] on).
-    pub fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
-        if let Some(s) = channel
-            .checked_sub(HEATER_DRIVE_BASE)
-            .and_then(|i| self.sims.get_mut(i as usize))
-        {
-            s.drive(at_us, duty);
-        }
-    }
-
-    /// The part-cooling fan (fan 0) set to `speed` at `at_us`.
-    pub fn fan_at(&mut self, at_us: f64, speed: f64) {
-        for s in self.sims.iter_mut() {
-            s.fan_at(at_us, speed);
-        }
-    }
-
-    /// The block of the machine's heater `h`, if on this node, °C.
-    pub fn block_c(&self, h: usize) -> Option<f64> {
-        let i = self.heaters.iter().position(|&x| x == h)?;
-        Some(self.sims[i].block_c())
-    }
-}
 
 /// What the host knows of the node-driven heaters.
 #[derive(Clone, Debug, Default)]

@@ -11,7 +11,6 @@ pub mod plant_thread;
 pub mod report;
 pub mod report_heaters;
 pub mod run;
-pub mod thermal;
 
 pub use report::{format_duration, Report};
 pub use run::{

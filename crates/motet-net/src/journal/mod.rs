@@ -23,6 +23,10 @@
 //! pace COMMAND S                                   the commands from COMMAND on were
 //!                                                  planned with moves of at least S
 //!                                                  seconds (the host fell behind)
+//! hold COMMAND S                                   after command COMMAND (a wait for a
+//!                                                  heater) the trajectory held at rest
+//!                                                  for S seconds more (one piece of the
+//!                                                  wait, planned as a dwell)
 //! ```
 //!
 //! The header carries what the plan depends on beyond the two files: where
@@ -216,6 +220,17 @@ pub enum BadRecord {
         /// The previous pace record's.
         last: usize,
     },
+    /// A `hold` record for an earlier command than the one before it, or a
+    /// hold that is not a positive number of seconds.
+    #[error(
+        "hold after command {command} for {seconds} s: holds go forward and last more than 0 s"
+    )]
+    BadHold {
+        /// Its command.
+        command: usize,
+        /// Its seconds.
+        seconds: f64,
+    },
     /// A seal with fewer segments done, or an earlier host time, than the
     /// seal before it.
     #[error("segments done or host time going back")]
@@ -278,6 +293,18 @@ pub struct JournalPace {
     pub command: usize,
     /// Shortest move time, s.
     pub min_move_s: f64,
+}
+
+/// The run held the trajectory at rest after command `command` (a wait for
+/// a heater a node drives) for `seconds` more: one piece of the wait,
+/// planned as a dwell, journaled before the seal that commits it so that a
+/// resume plans the same dwells at the same place.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JournalHold {
+    /// The waiting command.
+    pub command: usize,
+    /// The piece's length, s.
+    pub seconds: f64,
 }
 
 /// How a run stopped: the window and tail it stopped on, the segments every

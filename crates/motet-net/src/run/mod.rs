@@ -14,6 +14,7 @@
 mod clocks;
 mod figures;
 mod group;
+mod heaters;
 mod loops;
 mod pace;
 mod stop;
@@ -266,6 +267,8 @@ pub struct NetRun {
     group: Option<group::Group>,
     /// How late the host runs, and the lead that covers it.
     pace: pace::Pace,
+    /// The heaters its nodes drive: heard from, ready, tripped; a wait.
+    heat: heaters::Heat,
 }
 
 impl NetRun {
@@ -325,6 +328,7 @@ impl NetRun {
             status: vec![None; n],
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
+            heat: heaters::Heat::default(),
         }
     }
 
@@ -666,7 +670,8 @@ impl NetRun {
         let ready = self.peers.iter().all(|p| {
             p.sync.error_bound(now as f64) <= clock_target(&self.cfg, p) && p.backlog() == 0
         });
-        if ready {
+        // Nothing moves before every heater a node drives has reported.
+        if ready && self.heaters_heard()? {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
             // The stop horizon keeps a window's tail inside the node's queue;

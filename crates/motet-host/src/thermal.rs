@@ -1,4 +1,5 @@
-//! The simulated heaters: each a heated block (its power, heat capacity
+//! Simulated heaters a node drives (for the in-process simulator and the
+//! simulated network nodes alike): each a heated block (its power, heat capacity
 //! and loss to the room, a hot end's raised by its part-cooling fan) read
 //! through a sensor that lags it, with a little noise, and the faults a
 //! test or a person injects (a disconnected heater, a sensor that drops
@@ -9,7 +10,9 @@
 //! the sensor's lag toward it over the same steps. Everything is
 //! deterministic: the noise comes from a generator seeded by the heater.
 
-use motet_host::heater_loop::{HeaterFault, HeaterFaultKind, ThermalPlant};
+use crate::heater_loop::{self, HeaterFault, HeaterFaultKind, ThermalPlant, HEATER_DRIVE_BASE};
+use crate::Machine;
+use motet_planner::AuxChannel;
 
 /// Longest step the block is integrated over, s.
 const STEP_S: f64 = 0.01;
@@ -21,7 +24,7 @@ const OFF_SHARE: f64 = 0.15;
 const OFF_LAG: f64 = 5.0;
 
 /// One simulated heater.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ThermalSim {
     plant: ThermalPlant,
     /// Whether the part-cooling fan blows on it (a hot end).
@@ -162,10 +165,64 @@ impl ThermalSim {
     }
 }
 
+/// One node's simulated heaters, by their index on it: what its board
+/// reads (`Board::temperature`) and drives (`Board::drive`, from
+/// [`HEATER_DRIVE_BASE`] on).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeHeat {
+    sims: Vec<ThermalSim>,
+    /// The heaters' indices in the machine, by their index on the node.
+    heaters: Vec<usize>,
+}
+
+impl NodeHeat {
+    /// Node `k`'s heaters of `machine`, cold and off.
+    pub fn of_node(machine: &Machine, k: usize) -> NodeHeat {
+        let heaters = heater_loop::on_node(machine, k);
+        let sims = heaters
+            .iter()
+            .filter_map(|&h| {
+                let heater = &machine.heaters[h];
+                let l = heater.node_loop.as_ref()?;
+                let cooled = matches!(heater.channel, AuxChannel::Hotend(_));
+                Some(ThermalSim::new(l.plant, cooled, l.fault, 1 + h as u64))
+            })
+            .collect();
+        NodeHeat { sims, heaters }
+    }
+
+    /// Sensor `index`'s reading at host time `at_us`.
+    pub fn read(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.sims.get_mut(index as usize)?.read(at_us)
+    }
+
+    /// Drive output `channel` set to `duty` at `at_us`.
+    pub fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        if let Some(s) = channel
+            .checked_sub(HEATER_DRIVE_BASE)
+            .and_then(|i| self.sims.get_mut(i as usize))
+        {
+            s.drive(at_us, duty);
+        }
+    }
+
+    /// The part-cooling fan (fan 0) set to `speed` at `at_us`.
+    pub fn fan_at(&mut self, at_us: f64, speed: f64) {
+        for s in self.sims.iter_mut() {
+            s.fan_at(at_us, speed);
+        }
+    }
+
+    /// The block of the machine's heater `h`, if on this node, °C.
+    pub fn block_c(&self, h: usize) -> Option<f64> {
+        let i = self.heaters.iter().position(|&x| x == h)?;
+        Some(self.sims[i].block_c())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use motet_planner::AuxChannel;
 
     fn hotend() -> ThermalPlant {
         ThermalPlant {
