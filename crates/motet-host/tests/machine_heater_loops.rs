@@ -205,3 +205,22 @@ fn mistakes_are_reported_where_they_are() {
         assert_eq!((e.line, e.column), (*line, *column), "{extra}: {e}");
     }
 }
+
+/// The heated printer's hot end and bed are its mainboard's heaters, with
+/// the models its file gives.
+#[test]
+fn the_heated_printer_drives_its_hot_end_and_bed() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let m = Machine::load(&root.join("printer-heated.toml")).unwrap();
+    let on: Vec<&str> = heater_loop::on_node(&m, 0)
+        .into_iter()
+        .map(|h| m.heaters[h].name.as_str())
+        .collect();
+    assert_eq!(on, ["hotend", "bed"]);
+    let hot = &m.heaters[heater_loop::by_channel(&m, AuxChannel::Hotend(0)).unwrap()];
+    let l = hot.node_loop.as_ref().unwrap();
+    assert_eq!((l.plant.power_w, l.plant.capacity_j_per_k), (40.0, 13.0));
+    assert_eq!((l.ready.window_c, l.ready.residency_s), (1.0, 10.0));
+    let bed = &m.heaters[heater_loop::by_channel(&m, AuxChannel::Bed).unwrap()];
+    assert_eq!(bed.node_loop.as_ref().unwrap().plant.power_w, 220.0);
+}
