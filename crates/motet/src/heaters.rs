@@ -67,6 +67,59 @@ pub fn write_plots(
     Ok(written)
 }
 
+/// The plots written into `out` for the report (each heater's `plot`).
+pub fn plot_into(
+    machine: &Machine,
+    traces: &[HeaterTrace],
+    out: &Path,
+    report: &mut motet_sim::Report,
+) -> Result<()> {
+    for (name, file) in write_plots(machine, traces, out)? {
+        if let Some(h) = report.heaters.iter_mut().find(|h| h.name == name) {
+            h.plot = Some(file);
+        }
+    }
+    Ok(())
+}
+
+/// `, heater-hotend.png, …`: the plots, for the summary's last line.
+pub fn plot_names(report: &motet_sim::Report) -> String {
+    report
+        .heaters
+        .iter()
+        .filter_map(|h| h.plot.as_ref())
+        .map(|p| format!(", {p}"))
+        .collect()
+}
+
+/// A simulation's error as `motet run` says it: the job's own errors name
+/// their file; a heater that stopped the run gets its plots written, to
+/// show what it saw; others are located in the job.
+pub fn sim_error(
+    machine: &Machine,
+    job: &Path,
+    out: &Path,
+    e: motet_sim::SimError,
+) -> anyhow::Error {
+    match e {
+        motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
+        motet_sim::SimError::Heater { message, heaters } => {
+            match write_plots(machine, &heaters, out) {
+                Ok(files) => {
+                    let names: Vec<String> = files.into_iter().map(|f| f.1).collect();
+                    anyhow::anyhow!(
+                        "{message}; the run was stopped (plots in {}: {})",
+                        out.display(),
+                        names.join(", ")
+                    )
+                }
+                Err(e) => anyhow::anyhow!("{message}; the run was stopped ({e})"),
+            }
+        }
+        e => anyhow::anyhow!("{}:{e}", job.display()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -182,25 +182,7 @@ pub fn run(
             }
         },
     )
-    .map_err(|e| match e {
-        // The job's own errors already name their file.
-        motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
-        // A heater stopped the run: its plot shows what it saw.
-        motet_sim::SimError::Heater { message, heaters } => {
-            match crate::heaters::write_plots(&machine, &heaters, &out) {
-                Ok(files) => {
-                    let names: Vec<String> = files.into_iter().map(|f| f.1).collect();
-                    anyhow::anyhow!(
-                        "{message}; the run was stopped (plots in {}: {})",
-                        out.display(),
-                        names.join(", ")
-                    )
-                }
-                Err(e) => anyhow::anyhow!("{message}; the run was stopped ({e})"),
-            }
-        }
-        e => anyhow::anyhow!("{}:{e}", job_path.display()),
-    })?;
+    .map_err(|e| crate::heaters::sim_error(&machine, job_path, &out, e))?;
     run_bar.finish_and_clear();
     if let Some(e) = svg_error {
         return Err(e).with_context(|| format!("writing {}", svg_path.display()));
@@ -208,11 +190,7 @@ pub fn run(
     svg.finish()
         .with_context(|| format!("writing {}", svg_path.display()))?;
     let mut report = run.report;
-    for (name, file) in crate::heaters::write_plots(&machine, &run.heaters, &out)? {
-        if let Some(h) = report.heaters.iter_mut().find(|h| h.name == name) {
-            h.plot = Some(file);
-        }
-    }
+    crate::heaters::plot_into(&machine, &run.heaters, &out, &mut report)?;
     report.clamped_moves = scan.clamps.moves;
     report.max_clamp_mm = scan.clamps.max_mm;
 
@@ -236,12 +214,7 @@ pub fn run(
         if let Some(peak) = crate::peak::own_peak_mib() {
             println!("  {}{peak:.1} MiB", crate::peak::PEAK_LINE);
         }
-        let plots: String = report
-            .heaters
-            .iter()
-            .filter_map(|h| h.plot.as_ref())
-            .map(|p| format!(", {p}"))
-            .collect();
+        let plots = crate::heaters::plot_names(&report);
         println!(
             "  wrote {}/{{path.png, path.svg, report.json{plots}}}",
             out.display()

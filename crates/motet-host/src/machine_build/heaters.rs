@@ -205,60 +205,68 @@ fn heater_loop(
     channel: AuxChannel,
     max_c: f64,
 ) -> Result<HeaterLoop, MachineError> {
-    let d = ThermalPlant::default_for(channel);
-    let model = h.model.as_ref().map(|m| m.get_ref());
+    let plant = plant(src, name, h, channel, max_c)?;
     let empty = Default::default();
-    let m = model.unwrap_or(&empty);
+    let m = h.model.as_ref().map_or(&empty, |m| m.get_ref());
+    let fault = fault(src, name, m)?;
+    let (rate_hz, gains) = gains(src, name, h, &plant)?;
+    let (watch, min_c) = watch(src, name, h, &plant, channel, max_c)?;
+    let v = |f: &Option<Spanned<f64>>, range, key: &str, d: f32| {
+        opt(
+            src,
+            f,
+            range,
+            format_args!("heater {name}: {key}"),
+            d as f64,
+        )
+        .map(|v| v as f32)
+    };
+    let ready = ReadyRule {
+        window_c: v(&h.window, READY_C, "window", DEFAULT_READY.window_c)?,
+        residency_s: v(
+            &h.residency,
+            RESIDENCY_S,
+            "residency",
+            DEFAULT_READY.residency_s,
+        )?,
+    };
+    Ok(HeaterLoop {
+        node: usize::MAX,
+        index: 0,
+        rate_hz,
+        gains,
+        plant,
+        watch,
+        min_c,
+        ready,
+        fault,
+    })
+}
+
+/// The heater's thermal model: its `[model]` table over the channel's
+/// defaults, checked to reach the heater's `max` and to heat as a heater
+/// does.
+fn plant(
+    src: &Source,
+    name: &str,
+    h: &HeaterFile,
+    channel: AuxChannel,
+    max_c: f64,
+) -> Result<ThermalPlant, MachineError> {
+    let d = ThermalPlant::default_for(channel);
+    let empty = Default::default();
+    let m = h.model.as_ref().map_or(&empty, |m| m.get_ref());
+    let v = |f: &Option<Spanned<f64>>, range, key: &str, d: f64| {
+        opt(src, f, range, format_args!("heater {name}: model {key}"), d)
+    };
     let plant = ThermalPlant {
-        power_w: opt(
-            src,
-            &m.power,
-            POWER_W,
-            format_args!("heater {name}: model power"),
-            d.power_w,
-        )?,
-        capacity_j_per_k: opt(
-            src,
-            &m.capacity,
-            CAPACITY,
-            format_args!("heater {name}: model capacity"),
-            d.capacity_j_per_k,
-        )?,
-        loss_w_per_k: opt(
-            src,
-            &m.loss,
-            LOSS,
-            format_args!("heater {name}: model loss"),
-            d.loss_w_per_k,
-        )?,
-        fan_loss_w_per_k: opt(
-            src,
-            &m.fan_loss,
-            FAN_LOSS,
-            format_args!("heater {name}: model fan_loss"),
-            d.fan_loss_w_per_k,
-        )?,
-        sensor_lag_s: opt(
-            src,
-            &m.sensor_lag,
-            LAG_S,
-            format_args!("heater {name}: model sensor_lag"),
-            d.sensor_lag_s,
-        )?,
-        ambient_c: opt(
-            src,
-            &m.ambient,
-            AMBIENT_C,
-            format_args!("heater {name}: model ambient"),
-            d.ambient_c,
-        )?,
-        noise_c: opt(
-            src,
-            &m.noise,
-            NOISE_C,
-            format_args!("heater {name}: model noise"),
-            d.noise_c,
-        )?,
+        power_w: v(&m.power, POWER_W, "power", d.power_w)?,
+        capacity_j_per_k: v(&m.capacity, CAPACITY, "capacity", d.capacity_j_per_k)?,
+        loss_w_per_k: v(&m.loss, LOSS, "loss", d.loss_w_per_k)?,
+        fan_loss_w_per_k: v(&m.fan_loss, FAN_LOSS, "fan_loss", d.fan_loss_w_per_k)?,
+        sensor_lag_s: v(&m.sensor_lag, LAG_S, "sensor_lag", d.sensor_lag_s)?,
+        ambient_c: v(&m.ambient, AMBIENT_C, "ambient", d.ambient_c)?,
+        noise_c: v(&m.noise, NOISE_C, "noise", d.noise_c)?,
     };
     let reach = plant.full_power_c();
     if max_c >= reach {
@@ -270,16 +278,28 @@ fn heater_loop(
             ),
         ));
     }
-    let model_rate = plant.power_w / plant.capacity_j_per_k;
-    if !(1e-4..=1000.0).contains(&model_rate) || plant.loss_w_per_k / plant.capacity_j_per_k > 10.0
-    {
+    let rate = plant.power_w / plant.capacity_j_per_k;
+    if !(1e-4..=1000.0).contains(&rate) || plant.loss_w_per_k / plant.capacity_j_per_k > 10.0 {
         let span = h.model.as_ref().map_or(h.max.span(), |m| m.span());
         return Err(src.err(
             span,
-            format!("heater {name}: model heats at {} °C/s or loses more than 10 °C/s per °C: no heater does", ranges::rounded(model_rate)),
+            format!(
+                "heater {name}: model heats at {} °C/s or loses more than 10 °C/s per °C: no heater does",
+                ranges::rounded(rate)
+            ),
         ));
     }
-    let fault = fault(src, name, m)?;
+    Ok(plant)
+}
+
+/// The loop's rate and gains: its `[pid]` table over the gains the
+/// reaction curve gives the model.
+fn gains(
+    src: &Source,
+    name: &str,
+    h: &HeaterFile,
+    plant: &ThermalPlant,
+) -> Result<(f64, HeaterGains), MachineError> {
     let empty = Default::default();
     let p = h.pid.as_ref().map_or(&empty, |p| p.get_ref());
     let rate_hz = opt(
@@ -289,8 +309,7 @@ fn heater_loop(
         format_args!("heater {name}: pid rate_hz"),
         DEFAULT_RATE_HZ,
     )?;
-    let g = reaction_curve_gains(&plant, rate_hz);
-    let mut values = g.values();
+    let mut values = reaction_curve_gains(plant, rate_hz).values();
     let given = [
         &p.kp,
         &p.ki,
@@ -319,38 +338,37 @@ fn heater_loop(
         derivative_s: values[5],
         feed_forward: values[6],
     };
-    let w = default_watch(&plant, channel);
+    Ok((rate_hz, gains))
+}
+
+/// The runaway watch and the lowest plausible reading: its `[runaway]`
+/// table over what the model gives.
+fn watch(
+    src: &Source,
+    name: &str,
+    h: &HeaterFile,
+    plant: &ThermalPlant,
+    channel: AuxChannel,
+    max_c: f64,
+) -> Result<(RunawayWatch, f64), MachineError> {
+    let w = default_watch(plant, channel);
     let empty = Default::default();
     let r = h.runaway.as_ref().map_or(&empty, |r| r.get_ref());
+    let v = |f: &Option<Spanned<f64>>, range, key: &str, d: f32| {
+        opt(
+            src,
+            f,
+            range,
+            format_args!("heater {name}: runaway {key}"),
+            d as f64,
+        )
+        .map(|v| v as f32)
+    };
     let watch = RunawayWatch {
-        window_s: opt(
-            src,
-            &r.window,
-            WINDOW_S,
-            format_args!("heater {name}: runaway window"),
-            w.window_s as f64,
-        )? as f32,
-        margin_c: opt(
-            src,
-            &r.margin,
-            MARGIN_C,
-            format_args!("heater {name}: runaway margin"),
-            w.margin_c as f64,
-        )? as f32,
-        hysteresis_c: opt(
-            src,
-            &r.hysteresis,
-            MARGIN_C,
-            format_args!("heater {name}: runaway hysteresis"),
-            w.hysteresis_c as f64,
-        )? as f32,
-        period_s: opt(
-            src,
-            &r.period,
-            WINDOW_S,
-            format_args!("heater {name}: runaway period"),
-            w.period_s as f64,
-        )? as f32,
+        window_s: v(&r.window, WINDOW_S, "window", w.window_s)?,
+        margin_c: v(&r.margin, MARGIN_C, "margin", w.margin_c)?,
+        hysteresis_c: v(&r.hysteresis, MARGIN_C, "hysteresis", w.hysteresis_c)?,
+        period_s: v(&r.period, WINDOW_S, "period", w.period_s)?,
     };
     let below = ValueRange::new(-273.15, max_c - 1.0, "°C");
     let min_c = opt(
@@ -360,33 +378,7 @@ fn heater_loop(
         format_args!("heater {name}: runaway min"),
         0.0,
     )?;
-    let ready = ReadyRule {
-        window_c: opt(
-            src,
-            &h.window,
-            READY_C,
-            format_args!("heater {name}: window"),
-            DEFAULT_READY.window_c as f64,
-        )? as f32,
-        residency_s: opt(
-            src,
-            &h.residency,
-            RESIDENCY_S,
-            format_args!("heater {name}: residency"),
-            DEFAULT_READY.residency_s as f64,
-        )? as f32,
-    };
-    Ok(HeaterLoop {
-        node: usize::MAX,
-        index: 0,
-        rate_hz,
-        gains,
-        plant,
-        watch,
-        min_c,
-        ready,
-        fault,
-    })
+    Ok((watch, min_c))
 }
 
 /// The fault the model table injects, if any.

@@ -424,6 +424,60 @@ mod tests {
         assert!(!j.torn_tail);
     }
 
+    /// Hold records read back where the run wrote them, in their order
+    /// among pace records at the same place, and are written again so; one
+    /// for an earlier command, or of no time, is refused.
+    #[test]
+    fn hold_records_read_back_in_place() {
+        let dir = tempfile::Builder::new()
+            .prefix("motet-journal-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("journal");
+        let mut w = JournalWriter::create(&path).unwrap();
+        w.header(&header()).unwrap();
+        let hold = |command, seconds| JournalHold { command, seconds };
+        let segs = segs();
+        w.segment(&segs[0]).unwrap();
+        w.hold(&hold(1, 0.5)).unwrap();
+        w.pace(&JournalPace {
+            command: 2,
+            min_move_s: 0.01,
+        })
+        .unwrap();
+        w.hold(&hold(1, 0.25)).unwrap();
+        for s in &segs[1..3] {
+            w.segment(s).unwrap();
+        }
+        w.seal(JournalSeal {
+            end: 3,
+            tail: 1,
+            done: 0,
+            time: 10,
+        })
+        .unwrap();
+        drop(w);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let j = Journal::parse(&text, "j").unwrap();
+        assert_eq!(j.holds, vec![hold(1, 0.5), hold(1, 0.25)]);
+        assert_eq!(j.hold_after, vec![(1, 0), (1, 0)]);
+        assert_eq!(j.to_text(), text);
+        for (from, to, words) in [
+            ("hold 1 0.25", "hold 0 0.25", "hold after command 0"),
+            ("hold 1 0.25", "hold 1 0.0", "last more than 0 s"),
+        ] {
+            // Re-signed, so only the record's own check can refuse it.
+            let mut chain = 0;
+            let changed: String = text
+                .lines()
+                .map(|l| l.rsplit_once(" *").unwrap().0.replace(from, to))
+                .map(|l| text::signed(&mut chain, &l))
+                .collect();
+            let e = Journal::parse(&changed, "j").unwrap_err().to_string();
+            assert!(e.contains(words), "{e}");
+        }
+    }
+
     /// Pace records where the run wrote them (before the first segment,
     /// after a seal, before the stop) read back and are written again in
     /// the same places; one for an earlier command is refused.
