@@ -156,6 +156,9 @@ fn run(machine: &Machine, items: &[Planned], end: f64) {
                 assert!(e.contains("node "), "a fault names its node: {e}");
                 return;
             }
+            // A heater the machine's model says runs away stops the run:
+            // what a real machine does, not a fault of the plan.
+            Err(SimError::Heater { .. }) => return,
         }
     }
     sim.run_until(end);

@@ -334,7 +334,11 @@ impl Rig {
             )
             | None => {}
             // Sent unasked, never as a reply.
-            Some(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
+            Some(
+                m @ (NodeMessage::Fault { .. }
+                | NodeMessage::Samples(_)
+                | NodeMessage::HeaterReady { .. }),
+            ) => {
                 panic!("a reply that is never one: {m:?}")
             }
         }

@@ -1,8 +1,10 @@
 //! Distribution: which messages each node gets.
 //!
 //! A node subscribes to the position tracks (axes) its channels' joints depend
-//! on and to the event tracks of its tools. Each planned segment goes to every
-//! node with at least one subscribed axis, carrying only those axes.
+//! on and to the event tracks of its tools and heaters. Each planned segment
+//! goes to every node with at least one subscribed axis, carrying only those
+//! axes; a temperature change goes to the node that drives its heater, as
+//! an event on the heater's track.
 
 use crate::machine::Machine;
 use motet_planner::Planned;
@@ -19,6 +21,9 @@ pub struct Subscription {
     pub tracks: Vec<u8>,
     /// Next segment sequence number for this node.
     next_seq: u32,
+    /// The heaters it drives: the temperature channel each follows and
+    /// the event track its targets go on.
+    pub heaters: Vec<(motet_planner::AuxChannel, u8)>,
 }
 
 /// A message for a node and the segments it carries (for queue room).
@@ -48,7 +53,8 @@ impl Distributor {
         let subscriptions = machine
             .nodes
             .iter()
-            .map(|n| {
+            .enumerate()
+            .map(|(k, n)| {
                 let mut axes = 0u8;
                 for &a in &n.actuators {
                     axes |= machine.joints[machine.actuators[a].joint].map.axis_mask();
@@ -57,6 +63,13 @@ impl Distributor {
                     axes,
                     tracks: n.tools.iter().map(|&t| t as u8).collect(),
                     next_seq: 0,
+                    heaters: crate::heater_loop::on_node(machine, k)
+                        .into_iter()
+                        .map(|h| {
+                            let track = crate::heater_loop::HEATER_TRACK_BASE + h as u8;
+                            (machine.heaters[h].channel, track)
+                        })
+                        .collect(),
                 }
             })
             .collect();
@@ -163,7 +176,14 @@ impl Distributor {
                     segments: 0,
                 }));
             }
-            Planned::Aux(_) | Planned::Pause { .. } => out.extend(self.flush(node)),
+            Planned::Aux(_) => {
+                out.extend(self.flush(node));
+                out.extend(self.route(node, item).map(|message| Outgoing {
+                    message,
+                    segments: 0,
+                }));
+            }
+            Planned::Pause { .. } => out.extend(self.flush(node)),
         }
         Ok(out)
     }
@@ -199,6 +219,7 @@ impl Distributor {
                 dir_setup_us: act.dir_setup_us,
             }));
         }
+        out.extend(crate::heater_loop::setup(machine, node));
         for (output, &t) in spec.tools.iter().enumerate() {
             out.push(HostMessage::ConfigureTool(ToolConfig {
                 output: output as u8,
@@ -208,6 +229,18 @@ impl Distributor {
         out.extend(crate::loops::setup(machine, node));
         out.push(HostMessage::SetPosition { position: *start });
         out
+    }
+
+    /// Whether node `node` takes `item` as an event (a tool's change, a
+    /// temperature for a heater it drives): a windowed node holds it
+    /// pending until the next seal.
+    pub fn takes_event(&self, node: usize, item: &Planned) -> bool {
+        let sub = &self.subscriptions[node];
+        match item {
+            Planned::Event(e) => sub.tracks.contains(&e.tool),
+            Planned::Aux(a) => sub.heaters.iter().any(|(c, _)| *c == a.channel),
+            _ => false,
+        }
     }
 
     /// Sequence number of the next segment for node `node`; `None` for a node
@@ -258,8 +291,19 @@ impl Distributor {
                     feed: feed as f32,
                 },
             }),
-            // No node drives auxiliary channels yet, and pauses are the host's.
-            Planned::Aux(_) | Planned::Pause { .. } => None,
+            // A temperature for a heater the node drives; other auxiliary
+            // channels are no node's, and pauses are the host's.
+            Planned::Aux(a) => {
+                sub.heaters
+                    .iter()
+                    .find(|(c, _)| *c == a.channel)
+                    .map(|&(_, track)| HostMessage::Event {
+                        track,
+                        time: a.time,
+                        value: a.value,
+                    })
+            }
+            Planned::Pause { .. } => None,
         }
     }
 }

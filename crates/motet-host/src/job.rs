@@ -65,6 +65,10 @@ impl JobCheck {
         c: &mut Located<Command>,
     ) -> Result<(), SourceError> {
         let loc = c.loc;
+        if let Command::Aux { channel, value, .. } = c.item {
+            return crate::heater_loop::check_target(machine, channel, value)
+                .map_err(|message| SourceError { loc, message });
+        }
         let Command::Move(m) = &mut c.item else {
             return Ok(());
         };

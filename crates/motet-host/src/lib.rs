@@ -3,16 +3,20 @@
 
 pub mod distribute;
 pub mod heater;
+pub mod heater_loop;
+pub mod heater_trace;
 pub mod job;
 pub mod loops;
 pub mod machine;
 mod machine_build;
 mod machine_file;
+mod machine_file_heaters;
 mod machine_file_loops;
 mod machine_kinematics;
 pub mod module;
 pub mod samples;
 pub mod servo;
+pub mod thermal;
 
 pub use distribute::{Distributor, Subscription};
 pub use job::{check_job, check_move, clamp_move, Clamps, JobCheck, MoveError};

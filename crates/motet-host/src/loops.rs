@@ -17,7 +17,9 @@ pub fn source_name(machine: &Machine, node: usize, source: SampleSource) -> Stri
             .and_then(|n| n.sensors.get(i as usize))
             .map(|&s| format!("sensor {}", machine.sensors[s].name))
             .unwrap_or_else(|| format!("sensor {i}")),
-        SampleSource::Heater(i) => format!("heater {i}"),
+        SampleSource::Heater(i) => crate::heater_loop::by_source(machine, node, i)
+            .map(|h| format!("heater {}", machine.heaters[h].name))
+            .unwrap_or_else(|| format!("heater {i}")),
     }
 }
 
@@ -32,6 +34,10 @@ pub fn fault_text(
     value: f32,
     t0_us: f64,
 ) -> String {
+    // A heater's fault says what its runaway watch saw.
+    if let SampleSource::Heater(i) = source {
+        return crate::heater_loop::fault_text(machine, node, i, kind, at_us, value, t0_us);
+    }
     let name = source_name(machine, node, source);
     let node_name = machine.nodes.get(node).map_or("?", |n| n.name.as_str());
     let at = (at_us - t0_us) * 1e-6;
@@ -40,6 +46,7 @@ pub fn fault_text(
         (_, FaultKind::SensorLost) => "reading",
         (_, FaultKind::Following) => "following error",
         (_, FaultKind::Limit) => "limit switch",
+        (_, FaultKind::Runaway) => "reading",
     };
     match kind {
         FaultKind::Following => format!(
@@ -48,7 +55,7 @@ pub fn fault_text(
         FaultKind::Limit => format!(
             "node {node_name}: {name}: {field} open at {at:.4} s (following error {value:.1} counts); the drive was stopped"
         ),
-        FaultKind::SensorLost => format!(
+        FaultKind::SensorLost | FaultKind::Runaway => format!(
             "node {node_name}: {name}: {field} stopped reporting at {at:.4} s; the drive was stopped"
         ),
     }

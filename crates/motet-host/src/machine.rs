@@ -121,8 +121,12 @@ pub struct Heater {
     pub channel: motet_planner::AuxChannel,
     /// Highest target it takes, °C.
     pub max_c: f64,
-    /// Time constant, s.
+    /// Time constant, s (the first-order lag `motet serve` and the S3G
+    /// bot model it with).
     pub tau_s: f64,
+    /// When a node drives it (`[nodes.NAME] heaters`): its loop, model and
+    /// runaway watch.
+    pub node_loop: Option<crate::heater_loop::HeaterLoop>,
 }
 
 impl Heater {
@@ -135,12 +139,14 @@ impl Heater {
                 channel: motet_planner::AuxChannel::Hotend(0),
                 max_c: 275.0,
                 tau_s: 20.0,
+                node_loop: None,
             },
             Heater {
                 name: "bed".into(),
                 channel: motet_planner::AuxChannel::Bed,
                 max_c: 120.0,
                 tau_s: 60.0,
+                node_loop: None,
             },
         ]
     }

@@ -182,8 +182,9 @@ pub struct ToolFile {
     pub on_value: Option<Spanned<f32>>,
 }
 
-/// A simulated heater: which temperature commands set it, its highest
-/// target, its time constant.
+/// A heater: which temperature commands set it, its highest target, and
+/// either its time constant (a simulated first-order lag) or, when a node
+/// drives it, its loop, model and runaway watch.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HeaterFile {
@@ -194,8 +195,21 @@ pub struct HeaterFile {
     pub index: Option<Spanned<i64>>,
     /// °C.
     pub max: Spanned<f64>,
-    /// Seconds.
-    pub time_constant: Spanned<f64>,
+    /// Seconds; needed unless a node drives the heater.
+    #[serde(default)]
+    pub time_constant: Option<Spanned<f64>>,
+    /// A wait is over once the reading is within this of the target, °C.
+    #[serde(default)]
+    pub window: Option<Spanned<f64>>,
+    /// for this long, s.
+    #[serde(default)]
+    pub residency: Option<Spanned<f64>>,
+    #[serde(default)]
+    pub pid: Option<Spanned<crate::machine_file_heaters::HeaterPidFile>>,
+    #[serde(default)]
+    pub model: Option<Spanned<crate::machine_file_heaters::HeaterModelFile>>,
+    #[serde(default)]
+    pub runaway: Option<Spanned<crate::machine_file_heaters::HeaterRunawayFile>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -205,6 +219,9 @@ pub struct NodeFile {
     pub actuators: Vec<Spanned<String>>,
     #[serde(default)]
     pub tools: Vec<Spanned<String>>,
+    /// Heaters it drives (`[heaters.NAME]`), in the order of their index.
+    #[serde(default)]
+    pub heaters: Vec<Spanned<String>>,
     /// Segment queue capacity the node is built with.
     #[serde(default)]
     pub queue: Option<Spanned<i64>>,

@@ -198,6 +198,37 @@ const EXAMPLES: &[Expect] = &[
         min_radius: 1.0,
     },
     Expect {
+        file: "printer-heated.toml",
+        kinematics: KinematicsKind::CARTESIAN,
+        profile: ProfileKind::Trapezoid,
+        axes: &[
+            ("x", [0.0, 220.0], true, None),
+            ("y", [0.0, 220.0], true, None),
+            ("z", [0.0, 250.0], true, None),
+            ("e", [-INF, INF], false, None),
+        ],
+        joints: &["x", "y", "z", "e"],
+        actuators: &[
+            ("e_motor", "e", -3200.0 / (PI * 11.0)),
+            ("x_motor", "x", GT2_20),
+            ("y_motor", "y", GT2_20),
+            ("z_motor", "z", 400.0),
+        ],
+        tools: &[],
+        nodes: &[(
+            "mainboard",
+            &["x_motor", "y_motor", "z_motor", "e_motor"],
+            &[],
+        )],
+        start: &[0.0, 0.0, 0.0, 0.0],
+        joint_limits: &[],
+        // Half the slowest path axis (z, 15 mm/s); e does not count.
+        draw_feed: 7.5,
+        tolerance: 0.01,
+        junction_deviation: 0.05,
+        min_radius: 1.0,
+    },
+    Expect {
         file: "plotter.toml",
         kinematics: KinematicsKind::COREXY,
         profile: ProfileKind::Trapezoid,

@@ -33,13 +33,15 @@ fn heaters_are_read_as_written() {
                 name: "box".into(),
                 channel: AuxChannel::Chamber,
                 max_c: 70.0,
-                tau_s: 300.0
+                tau_s: 300.0,
+                node_loop: None,
             },
             Heater {
                 name: "nozzle".into(),
                 channel: AuxChannel::Hotend(1),
                 max_c: 300.0,
-                tau_s: 5.0
+                tau_s: 5.0,
+                node_loop: None,
             },
         ]
     );

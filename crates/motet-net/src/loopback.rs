@@ -117,7 +117,9 @@ impl Loopback {
                 host_end,
                 0x1000 + k as u16,
             ));
-            nodes.push(loopback_node(k, node_end, clocks));
+            let mut node = loopback_node(k, node_end, clocks);
+            node.node.board.heat = motet_host::thermal::NodeHeat::of_node(machine, k);
+            nodes.push(node);
         }
         Loopback {
             run: NetRun::new(machine, commands, peers, start, cfg, journal),
@@ -152,7 +154,9 @@ impl Loopback {
                 let node = bus.attach(id, false).expect("one identifier per node");
                 let crystal = clocks.get(k).copied().unwrap_or_default();
                 let transport = CanTransport::with_clock(node, None, crystal);
-                loopback_node(k, Box::new(transport), clocks)
+                let mut node = loopback_node(k, Box::new(transport), clocks);
+                node.node.board.heat = motet_host::thermal::NodeHeat::of_node(machine, k);
+                node
             })
             .collect();
         let mut lb = Loopback {

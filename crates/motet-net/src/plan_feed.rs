@@ -7,7 +7,7 @@
 //! and shortest move time give the same segments bit for bit: resuming
 //! re-plans the stopped run and compares the result with its journal.
 
-use crate::journal::{JournalHeader, JournalPace};
+use crate::journal::{JournalHeader, JournalHold, JournalPace};
 use crate::source::{Sourced, SourcedPlanner};
 use motet_host::{Distributor, Machine};
 use motet_planner::{Command, Limits, Located, PlanError, Planned, Planner, SourceLoc};
@@ -78,6 +78,9 @@ pub struct PlanFeed {
     /// Slowdowns still to apply, each before its command is planned (a
     /// journaled run planned again).
     paces: VecDeque<(usize, f64)>,
+    /// Holds still to plan, each right after its (waiting) command (a
+    /// journaled run planned again).
+    holds: VecDeque<JournalHold>,
 }
 
 impl PlanFeed {
@@ -93,6 +96,7 @@ impl PlanFeed {
             exhausted: false,
             open: false,
             paces: VecDeque::new(),
+            holds: VecDeque::new(),
         }
     }
 
@@ -109,6 +113,23 @@ impl PlanFeed {
     pub fn with_paces(mut self, paces: &[JournalPace]) -> PlanFeed {
         self.paces = paces.iter().map(|p| (p.command, p.min_move_s)).collect();
         self
+    }
+
+    /// The holds a run's journal recorded ([`PlanFeed::hold`]), planned
+    /// again after the same commands.
+    pub fn with_holds(mut self, holds: &[JournalHold]) -> PlanFeed {
+        self.holds = holds.iter().copied().collect();
+        self
+    }
+
+    /// Holds the trajectory at rest for `seconds` more after the last
+    /// command given to the planner (a wait for a heater, which the
+    /// planner has planned to rest): a dwell, planned now. Returns the
+    /// record to journal.
+    pub fn hold(&mut self, seconds: f64) -> Result<JournalHold, PlanError> {
+        let command = self.next_command.saturating_sub(1);
+        self.planner.push(command, &Command::Dwell { seconds })?;
+        Ok(JournalHold { command, seconds })
     }
 
     /// Plans the commands not yet given to the planner with moves of at
@@ -194,6 +215,17 @@ impl PlanFeed {
                 self.planner
                     .push(self.next_command, &c.item)
                     .map_err(|e| FeedError::Plan(c.loc, e))?;
+                while let Some(h) = self
+                    .holds
+                    .front()
+                    .filter(|h| h.command == self.next_command)
+                {
+                    let dwell = Command::Dwell { seconds: h.seconds };
+                    self.planner
+                        .push(h.command, &dwell)
+                        .map_err(|e| FeedError::Plan(c.loc, e))?;
+                    self.holds.pop_front();
+                }
                 self.next_command += 1;
             } else if let Some(source) = self.source.as_mut() {
                 match source.next_command() {
@@ -219,19 +251,21 @@ impl PlanFeed {
 
 /// A run's first `count` segments (fewer if the job has fewer), each with
 /// its command, planned again from what its journal header records and
-/// the slowdowns it journaled.
+/// the slowdowns and holds it journaled.
 pub fn replan(
     machine: &Machine,
     commands: Vec<Located<Command>>,
     header: &JournalHeader,
-    paces: &[JournalPace],
+    (paces, holds): (&[JournalPace], &[JournalHold]),
     count: usize,
 ) -> Result<Vec<(usize, Segment)>, (SourceLoc, PlanError)> {
     let mut dist = Distributor::new(machine);
     // As a run does when it configures the nodes: the stream starts here.
     dist.stream_setup(machine, &header.start);
     let limits = run_limits(machine, header.min_move_s);
-    let mut feed = PlanFeed::new(limits, header.start, header.t0, commands).with_paces(paces);
+    let mut feed = PlanFeed::new(limits, header.start, header.t0, commands)
+        .with_paces(paces)
+        .with_holds(holds);
     let mut out = Vec::new();
     while out.len() < count {
         match feed.next_given(&mut dist)? {

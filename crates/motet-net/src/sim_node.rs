@@ -111,6 +111,9 @@ pub struct StepCounter {
     pub trace: Option<Vec<(f64, u8, bool)>>,
     /// Every tool change (host time µs, output, value) when tracing.
     pub tool_trace: Option<Vec<(f64, u8, f32)>>,
+    /// The heaters the node drives, simulated (none: a board without
+    /// temperature sensors).
+    pub heat: motet_host::thermal::NodeHeat,
 }
 
 impl Board for StepCounter {
@@ -130,6 +133,12 @@ impl Board for StepCounter {
         if let Some(t) = self.tool_trace.as_mut() {
             t.push((at_us, output, value));
         }
+    }
+    fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.heat.read(index, at_us)
+    }
+    fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        self.heat.drive(channel, duty, at_us);
     }
 }
 

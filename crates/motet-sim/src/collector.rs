@@ -1,6 +1,7 @@
 //! The board a simulated node polls: its outputs collected for the plant
 //! (channel and tool numbers translated to the machine's actuators and
-//! tools), its servo motors integrated up to each read and drive it makes.
+//! tools), its servo motors and heaters integrated up to each read and drive it
+//! makes.
 
 use crate::plant::{Output, Stamped};
 use crate::plant_thread::PlantSink;
@@ -15,6 +16,8 @@ pub(crate) struct Collector<'a, P: PlantSink> {
     pub(crate) plant: &'a mut P,
     /// The node's servo motors, answering its loops as it polls.
     pub(crate) servos: &'a mut ServoPlants,
+    /// The node's simulated heaters.
+    pub(crate) heat: &'a mut crate::heaters::NodeHeat,
     /// Whether this is the only node, whose outputs are then in time order
     /// as they come: the plant takes them every [`HANDOVER`] outputs
     /// instead of at the frame's end, so a long frame needs no long buffer.
@@ -69,7 +72,13 @@ impl<P: PlantSink> Board for Collector<'_, P> {
         count
     }
     fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
+        // Servo channels and heater outputs (from
+        // `motet_host::thermal::HEATER_DRIVE_BASE`) never share a number.
         self.servos.drive(channel, duty, at_us);
+        self.heat.drive(channel, duty, at_us);
+    }
+    fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
+        self.heat.read(index, at_us)
     }
     fn limit(&mut self, channel: u8, at_us: f64) -> bool {
         self.servos.limit(channel, at_us)

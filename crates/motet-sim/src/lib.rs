@@ -4,6 +4,7 @@
 
 mod collector;
 pub mod dance;
+pub mod heaters;
 mod ideal;
 pub mod loops;
 pub mod path;
@@ -11,6 +12,7 @@ pub mod plant;
 pub mod plant_thread;
 pub mod plots;
 pub mod report;
+pub mod report_heaters;
 pub mod run;
 pub mod servo;
 pub mod tune;

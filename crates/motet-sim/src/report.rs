@@ -126,6 +126,9 @@ pub struct Report {
     pub max_step_time_error_us: f64,
     /// Times a node ran dry while moving (0 when the host keeps up).
     pub underruns: u32,
+    /// Heaters a node drives.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub heaters: Vec<crate::report_heaters::HeaterReport>,
     /// Moves with a coordinate beyond travel by less than half a step,
     /// clamped onto it when the job was checked.
     pub clamped_moves: usize,
@@ -226,6 +229,7 @@ impl Report {
                 motet_planner::ranges::number(self.max_clamp_mm)
             );
         }
+        s += &crate::report_heaters::summary(&self.heaters);
         s += &format!(
             "  simulated in {} s wall ({}x real time)",
             finite(self.wall_s, 2),

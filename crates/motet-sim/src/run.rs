@@ -49,6 +49,17 @@ pub enum SimError {
     /// or sensor, the field, and the time.
     #[error("{0}")]
     Fault(String),
+    /// A heater a node drives tripped (runaway, a lost sensor) or did not
+    /// get to a target the job waited for: the run stops there. The
+    /// message names the node, the heater, what it saw and when; the
+    /// heaters' samples up to then come with it (for their plots).
+    #[error("{message}")]
+    Heater {
+        /// As the person reads it.
+        message: String,
+        /// Every node-driven heater's samples.
+        heaters: Vec<motet_host::heater_trace::HeaterTrace>,
+    },
 }
 
 /// What a run produced.
@@ -68,18 +79,22 @@ pub type Progress<'a> = &'a mut dyn FnMut(usize, usize);
 /// or on a thread of its own for a whole job
 /// ([`PlantLink`](crate::plant_thread::PlantLink)).
 pub struct SimMachine<P: PlantSink = Plant> {
-    machine: Machine,
+    pub(crate) machine: Machine,
     nodes: Vec<Node<NODE_QUEUE>>,
     dist: Distributor,
     plant: P,
     frame: f64,
-    now: f64,
+    pub(crate) now: f64,
     buf: [u8; MAX_MESSAGE],
     stats: Stats,
     /// Each node's servo motors and sensors.
     servos: Vec<ServoPlants>,
     /// What the nodes' loops sent: samples kept per source, the first fault.
     loops: crate::loops::LoopWatch,
+    /// Each node's simulated heaters.
+    pub(crate) heat: Vec<crate::heaters::NodeHeat>,
+    /// What the host knows of them.
+    pub(crate) heaters: crate::heaters::HeaterWatch,
 }
 
 #[derive(Default)]
@@ -154,6 +169,10 @@ impl<P: PlantSink> SimMachine<P> {
                 .map(|k| ServoPlants::of_node(machine, k, &machine.start, 0.0))
                 .collect(),
             loops: crate::loops::LoopWatch::new(machine),
+            heat: (0..machine.nodes.len())
+                .map(|k| crate::heaters::NodeHeat::of_node(machine, k))
+                .collect(),
+            heaters: crate::heaters::HeaterWatch::new(machine),
             stats: Stats {
                 axes: machine
                     .axes
@@ -176,6 +195,13 @@ impl<P: PlantSink> SimMachine<P> {
             for msg in msgs {
                 sim.send(k, &msg)?;
             }
+        }
+        if motet_host::heater_loop::any(machine) {
+            // Every heater reads its sensor at its first tick, at 0: one
+            // that does not report stops the run before anything moves.
+            let until = sim.frame_after(0.0);
+            sim.poll_all(until);
+            sim.heater_fault()?;
         }
         Ok(sim)
     }
@@ -204,7 +230,7 @@ impl<P: PlantSink> SimMachine<P> {
 
     /// Sends every batch still being filled: before time passes for the
     /// caller, so no node waits for segments the host holds.
-    fn flush_all(&mut self) {
+    pub(crate) fn flush_all(&mut self) {
         for k in 0..self.nodes.len() {
             if let Some(out) = self.dist.flush(k) {
                 self.make_room(k, out.segments);
@@ -302,6 +328,7 @@ impl<P: PlantSink> SimMachine<P> {
                 .fold(0.0, f64::max),
             actuators,
             underruns: self.underruns(),
+            heaters: self.heaters.report(&self.machine),
             clamped_moves: 0,
             max_clamp_mm: 0.0,
             wall_s: wall,
@@ -360,7 +387,7 @@ impl<P: PlantSink> SimMachine<P> {
     /// be finer than an `f64` resolves there; then the next representable
     /// time, so that the clock always moves on and whatever is due at `t`
     /// runs.
-    fn frame_after(&self, t: f64) -> f64 {
+    pub(crate) fn frame_after(&self, t: f64) -> f64 {
         let f = ((t / self.frame).floor() + 1.0) * self.frame;
         if f > t || !t.is_finite() {
             f
@@ -371,7 +398,20 @@ impl<P: PlantSink> SimMachine<P> {
     }
 
     /// Runs every node up to `until` and applies their outputs to the plant.
-    fn poll_all(&mut self, until: f64) {
+    pub(crate) fn poll_all(&mut self, until: f64) {
+        if self.heaters.any() {
+            // A node holds four messages upstream and its heaters send a
+            // batch about every second: the host takes them at least as
+            // often, as a link would.
+            while until - self.now > crate::heaters::TAKE_EVERY_US {
+                let t = self.now + crate::heaters::TAKE_EVERY_US;
+                self.poll_once(t);
+            }
+        }
+        self.poll_once(until);
+    }
+
+    fn poll_once(&mut self, until: f64) {
         if until <= self.now {
             return;
         }
@@ -383,6 +423,7 @@ impl<P: PlantSink> SimMachine<P> {
                 tools: &spec.tools,
                 plant: &mut self.plant,
                 servos: &mut self.servos[k],
+                heat: &mut self.heat[k],
                 single,
             };
             // The plant takes every node's outputs up to `until` together
@@ -391,7 +432,10 @@ impl<P: PlantSink> SimMachine<P> {
             // A node with loops is polled a quarter second at a time, so
             // that what they send never waits in its short queue for
             // longer (the outputs are the same: each carries its time).
-            let chunk = if c.servos.any() || !spec.sensors.is_empty() {
+            let loops = c.servos.any()
+                || !spec.sensors.is_empty()
+                || !c.heat.is_empty();
+            let chunk = if loops {
                 LOOP_CHUNK_US
             } else {
                 f64::INFINITY
@@ -403,7 +447,13 @@ impl<P: PlantSink> SimMachine<P> {
                 while let Some(m) = node.take_upstream() {
                     if let Ok(bytes) = encode(&m, &mut self.buf) {
                         if let Ok(m) = motet_wire::decode::<NodeMessage>(bytes) {
-                            self.loops.take(&self.machine, k, m, node.time());
+                            // A heater's messages to the heaters' watch
+                            // (its trip says what the runaway watch saw).
+                            if crate::heaters::is_heaters(&m) {
+                                self.heaters.take(&self.machine, k, &m);
+                            } else {
+                                self.loops.take(&self.machine, k, m, node.time());
+                            }
                         }
                     }
                 }
@@ -487,6 +537,7 @@ impl<P: PlantSink> SimMachine<P> {
         if let Some(f) = self.fault() {
             return Err(SimError::Fault(f.to_string()));
         }
+        self.heater_fault()?;
         // The nodes run the quantized trajectory the batches carry: that is
         // the record every output is checked against.
         let planned = item;
@@ -509,7 +560,15 @@ impl<P: PlantSink> SimMachine<P> {
                     self.stats.tool_on = e.value > 0.0;
                 }
             }
-            Planned::Aux(_) => self.stats.aux_events += 1,
+            Planned::Aux(a) => {
+                self.stats.aux_events += 1;
+                if a.channel == motet_planner::AuxChannel::Fan(0) {
+                    // The part-cooling fan blows on the hot ends.
+                    for h in self.heat.iter_mut() {
+                        h.fan_at(a.time, a.value as f64);
+                    }
+                }
+            }
             // The simulated operator resumes at once.
             Planned::Pause { .. } => self.stats.pauses += 1,
         }
@@ -653,6 +712,8 @@ pub struct StreamRun {
     /// What the nodes' loops sent (samples per source), and each sensor's
     /// planned acceleration.
     pub loops: crate::loops::LoopWatch,
+    /// The samples of every heater a node drives, for their plots.
+    pub heaters: Vec<motet_host::heater_trace::HeaterTrace>,
 }
 
 /// Plans and executes a job read as it runs: `commands` is consumed one
@@ -691,6 +752,7 @@ where
                 ..run.held
             },
             loops: std::mem::take(&mut sim.loops),
+            heaters: sim.heaters().traces().cloned().collect(),
         })
     })
 }
@@ -706,7 +768,8 @@ fn run_commands<P: PlantSink, E>(
 where
     E: std::error::Error + Send + Sync + 'static,
 {
-    let mut planner = Planner::new(sim.machine.limits(), sim.machine.start, 0.0);
+    // From the host's time: past the heaters' first check, if any.
+    let mut planner = Planner::new(sim.machine.limits(), sim.machine.start, sim.now());
     let mut node_segments = 0;
     let mut n = 0usize;
     for c in commands {
@@ -714,9 +777,7 @@ where
         planner
             .push(&c.item)
             .map_err(|error| SimError::Plan { loc: c.loc, error })?;
-        while let Some(item) = planner.pop() {
-            sim.submit(item)?;
-        }
+        crate::heaters::submit_planned(sim, &mut planner, c.loc, &mut |_| {})?;
         node_segments = node_segments.max(sim.node_segments());
         if n.is_multiple_of(1024) {
             progress(n, total);
@@ -734,6 +795,7 @@ where
     if let Some(f) = sim.fault() {
         return Err(SimError::Fault(f.to_string()));
     }
+    sim.heater_fault()?;
     node_segments = node_segments.max(sim.node_segments());
     progress(n, total.max(n));
     Ok((n, end, node_segments))

@@ -203,8 +203,14 @@ pub enum FaultKind {
     /// A limit switch opened (tripped, or its wire broke).
     Limit,
     /// A sensor gave no reading (the encoder of a servo, the reading of a
-    /// sensor or heater).
+    /// sensor or heater), or a heater's reading out of what a working
+    /// sensor gives (below its `min_c`, above its `max_c` by
+    /// `heater::OVER_MAX_C`; its value: the reading, NaN for none).
     SensorLost,
+    /// A heater did not heat as its model says for the power applied, or
+    /// fell away from a target it had reached (its value: the reading,
+    /// °C). Every heater of the node is switched off.
+    Runaway,
 }
 
 /// One servo sample: where the motor was at the window's end, and the

@@ -12,6 +12,7 @@ pub mod control;
 pub mod describe;
 pub mod frame;
 pub mod group;
+pub mod heater;
 pub mod image;
 pub mod link;
 pub mod message;

@@ -3,6 +3,7 @@
 use crate::control::{
     FaultKind, SampleBatch, SampleSource, SensorConfig, ServoConfig, ServoGains, ServoTest,
 };
+use crate::heater::HeaterConfig;
 use crate::stream::{SegmentBatch, StreamConfig};
 use heapless::Vec;
 use motet_trajectory::{JointMap, Point, ProfileParams, MAX_AXES};
@@ -252,6 +253,11 @@ pub enum HostMessage {
         /// The test.
         test: ServoTest,
     },
+    /// Set up (or replace, by `heater` index) a heater channel, switched
+    /// off until an event on its track sets a target (`BadConfig`: a value
+    /// out of range, a drive output a servo or another heater has, no room,
+    /// or segments queued).
+    ConfigureHeater(HeaterConfig),
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -376,6 +382,17 @@ pub enum NodeMessage {
     },
     /// Samples of one source (sent unasked, see [`HostMessage::Sampling`]).
     Samples(SampleBatch),
+    /// A heater has been within its ready window of `target` for its
+    /// residency since the target was set (sent unasked, once a target): a
+    /// wait for it is over.
+    HeaterReady {
+        /// The heater's index.
+        heater: u8,
+        /// Host time of the tick that found it ready, µs.
+        at: f64,
+        /// The target it is ready at, °C.
+        target: f32,
+    },
 }
 
 /// Why a node refused a [`HostMessage`] (in [`NodeMessage::Refused`]); a

@@ -10,6 +10,7 @@ mod dance;
 mod elf;
 mod error_text;
 mod flags;
+mod heaters;
 mod machine_cmd;
 mod modules;
 mod netrun;
@@ -132,6 +133,11 @@ struct RunArgs {
     sync_ms: f64,
     #[command(flatten)]
     place: flags::PlacementFlags,
+    /// With --nodes sim: inject a fault into a heater a node drives, at a
+    /// time of the job (s): disconnected, sensor-lost or thermistor-off,
+    /// e.g. hotend=disconnected@60 (repeatable).
+    #[arg(long, value_name = "NAME=KIND@S", value_parser = heaters::parse_fault)]
+    heater_fault: Vec<(String, motet_host::heater_loop::HeaterFault)>,
 }
 
 #[derive(Subcommand)]
@@ -367,6 +373,7 @@ fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
                 placement,
             },
             a.quiet,
+            &a.heater_fault,
         ),
         // A stopped run resumes from the job file as it is: placing it
         // would need the placement kept with the journal.

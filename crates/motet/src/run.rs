@@ -139,8 +139,10 @@ pub fn run(
     out: Option<PathBuf>,
     opts: &JobOptions,
     quiet: bool,
+    heater_faults: &[(String, motet_host::heater_loop::HeaterFault)],
 ) -> Result<()> {
-    let machine = load_machine(machine_path)?;
+    let mut machine = load_machine(machine_path)?;
+    crate::heaters::inject(&mut machine, heater_faults)?;
     let scan_bar = bar(
         quiet,
         0,
@@ -206,13 +208,7 @@ pub fn run(
             }
         },
     )
-    .map_err(|e| match e {
-        // The job's own errors already name their file, a loop's fault its
-        // node and actuator.
-        motet_sim::SimError::Source(e) => anyhow::anyhow!("{e}"),
-        motet_sim::SimError::Fault(e) => anyhow::anyhow!("{e}"),
-        e => anyhow::anyhow!("{}:{e}", job_path.display()),
-    })?;
+    .map_err(|e| crate::heaters::sim_error(&machine, job_path, &out, e))?;
     run_bar.finish_and_clear();
     if let Some(e) = svg_error {
         return Err(e).with_context(|| format!("writing {}", svg_path.display()));
@@ -220,6 +216,7 @@ pub fn run(
     svg.finish()
         .with_context(|| format!("writing {}", svg_path.display()))?;
     let mut report = run.report;
+    crate::heaters::plot_into(&machine, &run.heaters, &out, &mut report)?;
     report.clamped_moves = scan.clamps.moves;
     report.max_clamp_mm = scan.clamps.max_mm;
     report.plots = motet_sim::plots::write_plots(&machine, &run.loops, &out)?;
@@ -246,6 +243,7 @@ pub fn run(
         }
         let mut files = vec!["path.png".to_string(), "path.svg".into()];
         files.extend(report.plots.iter().cloned());
+        files.extend(crate::heaters::plot_names(&report));
         files.push("report.json".into());
         println!("  wrote {}/{{{}}}", out.display(), files.join(", "));
     }

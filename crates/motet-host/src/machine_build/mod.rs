@@ -93,12 +93,13 @@ pub(crate) fn build(src: &Source, raw: MachineFile, file: &Path) -> Result<Machi
     let mut joints = joints::joints(src, &raw, kinematics, &axes)?;
     let actuators = actuators::actuators(src, &raw, &mut joints, &axes)?;
     let tools = tools::tools(src, &raw)?;
-    let heaters = heaters::heaters(src, &raw, &axes)?;
+    let mut heaters = heaters::heaters(src, &raw, &axes)?;
     let sensors = servo::sensors(src, &raw, &actuators)?;
     let nodes = nodes::nodes(src, &raw, &actuators, &tools, &sensors)?;
     let start = motion::start(src, m, &axes, kinematics, joints.kinematic_axes)?;
     let draw_feed = motion::draw_feed(src, m, &axes)?;
     let stop_horizon = motion::stop_horizon(src, m, &nodes)?;
+    heaters::heater_nodes(src, &raw, &mut heaters, &nodes)?;
     let modules = crate::module::record::records(src, &raw.modules, &nodes)?;
     Ok(Machine {
         name: raw.name,

@@ -23,6 +23,10 @@
 //! pace COMMAND S                                   the commands from COMMAND on were
 //!                                                  planned with moves of at least S
 //!                                                  seconds (the host fell behind)
+//! hold COMMAND S                                   after command COMMAND (a wait for a
+//!                                                  heater) the trajectory held at rest
+//!                                                  for S seconds more (one piece of the
+//!                                                  wait, planned as a dwell)
 //! ```
 //!
 //! The header carries what the plan depends on beyond the two files: where
@@ -216,6 +220,17 @@ pub enum BadRecord {
         /// The previous pace record's.
         last: usize,
     },
+    /// A `hold` record for an earlier command than the one before it, or a
+    /// hold that is not a positive number of seconds.
+    #[error(
+        "hold after command {command} for {seconds} s: holds go forward and last more than 0 s"
+    )]
+    BadHold {
+        /// Its command.
+        command: usize,
+        /// Its seconds.
+        seconds: f64,
+    },
     /// A seal with fewer segments done, or an earlier host time, than the
     /// seal before it.
     #[error("segments done or host time going back")]
@@ -278,6 +293,18 @@ pub struct JournalPace {
     pub command: usize,
     /// Shortest move time, s.
     pub min_move_s: f64,
+}
+
+/// The run held the trajectory at rest after command `command` (a wait for
+/// a heater a node drives) for `seconds` more: one piece of the wait,
+/// planned as a dwell, journaled before the seal that commits it so that a
+/// resume plans the same dwells at the same place.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JournalHold {
+    /// The waiting command.
+    pub command: usize,
+    /// The piece's length, s.
+    pub seconds: f64,
 }
 
 /// How a run stopped: the window and tail it stopped on, the segments every
@@ -395,6 +422,60 @@ mod tests {
         assert_eq!(j.done(), 4);
         assert_eq!(j.stop.as_ref().map(|s| s.lost.clone()), Some(vec![0, 2]));
         assert!(!j.torn_tail);
+    }
+
+    /// Hold records read back where the run wrote them, in their order
+    /// among pace records at the same place, and are written again so; one
+    /// for an earlier command, or of no time, is refused.
+    #[test]
+    fn hold_records_read_back_in_place() {
+        let dir = tempfile::Builder::new()
+            .prefix("motet-journal-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("journal");
+        let mut w = JournalWriter::create(&path).unwrap();
+        w.header(&header()).unwrap();
+        let hold = |command, seconds| JournalHold { command, seconds };
+        let segs = segs();
+        w.segment(&segs[0]).unwrap();
+        w.hold(&hold(1, 0.5)).unwrap();
+        w.pace(&JournalPace {
+            command: 2,
+            min_move_s: 0.01,
+        })
+        .unwrap();
+        w.hold(&hold(1, 0.25)).unwrap();
+        for s in &segs[1..3] {
+            w.segment(s).unwrap();
+        }
+        w.seal(JournalSeal {
+            end: 3,
+            tail: 1,
+            done: 0,
+            time: 10,
+        })
+        .unwrap();
+        drop(w);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let j = Journal::parse(&text, "j").unwrap();
+        assert_eq!(j.holds, vec![hold(1, 0.5), hold(1, 0.25)]);
+        assert_eq!(j.hold_after, vec![(1, 0), (1, 0)]);
+        assert_eq!(j.to_text(), text);
+        for (from, to, words) in [
+            ("hold 1 0.25", "hold 0 0.25", "hold after command 0"),
+            ("hold 1 0.25", "hold 1 0.0", "last more than 0 s"),
+        ] {
+            // Re-signed, so only the record's own check can refuse it.
+            let mut chain = 0;
+            let changed: String = text
+                .lines()
+                .map(|l| l.rsplit_once(" *").unwrap().0.replace(from, to))
+                .map(|l| text::signed(&mut chain, &l))
+                .collect();
+            let e = Journal::parse(&changed, "j").unwrap_err().to_string();
+            assert!(e.contains(words), "{e}");
+        }
     }
 
     /// Pace records where the run wrote them (before the first segment,

@@ -23,6 +23,12 @@ pub struct Journal {
     pub paces: Vec<JournalPace>,
     /// How many segment and seal records came before each `pace` record.
     pub pace_after: Vec<(usize, usize)>,
+    /// Every `hold` record, in order.
+    pub holds: Vec<JournalHold>,
+    /// How many segment and seal records came before each `hold` record.
+    pub hold_after: Vec<(usize, usize)>,
+    /// The order `pace` (false) and `hold` (true) records came in.
+    extras: Vec<bool>,
     /// Line of each segment record, for errors that name it.
     pub segment_lines: Vec<usize>,
     /// The file ended in a line cut short (the host died writing it). Only
@@ -62,6 +68,9 @@ impl Journal {
             stop: None,
             paces: Vec::new(),
             pace_after: Vec::new(),
+            holds: Vec::new(),
+            hold_after: Vec::new(),
+            extras: Vec::new(),
             segment_lines: Vec::new(),
             torn_tail,
         };
@@ -125,6 +134,13 @@ impl Journal {
                     let p = parse_pace(&mut words, j.paces.last()).map_err(|m| err(n, m))?;
                     j.paces.push(p);
                     j.pace_after.push((j.segments.len(), j.seals.len()));
+                    j.extras.push(false);
+                }
+                "hold" => {
+                    let h = parse_hold(&mut words, j.holds.last()).map_err(|m| err(n, m))?;
+                    j.holds.push(h);
+                    j.hold_after.push((j.segments.len(), j.seals.len()));
+                    j.extras.push(true);
                 }
                 "motet-journal" => return Err(err(n, BadRecord::SecondHeader)),
                 w => return Err(err(n, BadRecord::UnknownRecord(w.into()))),
@@ -143,11 +159,25 @@ impl Journal {
         };
         out += &signed(&mut chain, &header_text(h));
         let mut next = 0usize;
-        let mut paces = self.paces.iter().zip(&self.pace_after).peekable();
-        // The pace records written with `next` segments and `seals` seals before them.
+        let mut paces = self.paces.iter().zip(&self.pace_after);
+        let mut holds = self.holds.iter().zip(&self.hold_after);
+        // The pace and hold records, in the order they came, each with
+        // the segments and seals before it.
+        let mut extras = self
+            .extras
+            .iter()
+            .filter_map(|&hold| {
+                if hold {
+                    holds.next().map(|(h, at)| (hold_text(h), *at))
+                } else {
+                    paces.next().map(|(p, at)| (pace_text(p), *at))
+                }
+            })
+            .peekable();
+        // Those written with `next` segments and `seals` seals before them.
         let mut pace = |out: &mut String, chain: &mut u32, next: usize, seals: usize| {
-            while let Some((p, _)) = paces.next_if(|(_, &at)| at <= (next, seals)) {
-                *out += &signed(chain, &pace_text(p));
+            while let Some((text, _)) = extras.next_if(|(_, at)| *at <= (next, seals)) {
+                *out += &signed(chain, &text);
             }
         };
         for (k, seal) in self.seals.iter().enumerate() {
@@ -310,6 +340,21 @@ fn parse_pace<'a>(
         command,
         min_move_s,
     })
+}
+
+fn parse_hold<'a>(
+    words: &mut impl Iterator<Item = &'a str>,
+    last: Option<&JournalHold>,
+) -> Result<JournalHold, BadRecord> {
+    let command = num(words.next(), "command index")?;
+    let seconds = finite(words.next().ok_or(BadRecord::Missing("hold time"))?)?;
+    if let Some(w) = words.next() {
+        return Err(trailing(w, "hold"));
+    }
+    if command < last.map_or(0, |h| h.command) || seconds <= 0.0 {
+        return Err(BadRecord::BadHold { command, seconds });
+    }
+    Ok(JournalHold { command, seconds })
 }
 
 fn parse_seal<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<JournalSeal, BadRecord> {

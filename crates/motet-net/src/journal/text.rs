@@ -38,6 +38,10 @@ pub(super) fn pace_text(p: &JournalPace) -> String {
     format!("pace {} {:?}", p.command, p.min_move_s)
 }
 
+pub(super) fn hold_text(h: &JournalHold) -> String {
+    format!("hold {} {:?}", h.command, h.seconds)
+}
+
 pub(super) fn seal_text(kind: &str, s: &JournalSeal) -> String {
     format!("{kind} {} {} {} {}", s.end, s.tail, s.done, s.time)
 }

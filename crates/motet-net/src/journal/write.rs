@@ -54,6 +54,12 @@ impl JournalWriter {
         self.record(&pace_text(p))
     }
 
+    /// Appends a hold record (buffered: on disk with the next seal, before
+    /// the hold's segment is sent).
+    pub fn hold(&mut self, h: &JournalHold) -> Result<(), JournalError> {
+        self.record(&hold_text(h))
+    }
+
     /// Appends the stop record, the last; on disk when this returns.
     pub fn stop(&mut self, s: &JournalStop) -> Result<(), JournalError> {
         self.record(&stop_text(s))?;

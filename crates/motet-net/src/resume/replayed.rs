@@ -59,7 +59,8 @@ impl<'a> Replayed<'a> {
                         });
                     }
                 }
-                replan(m, r.run_commands(ev.job), h, &j.paces, j.segments.len() + 1)
+                let extras = (&j.paces[..], &j.holds[..]);
+                replan(m, r.run_commands(ev.job), h, extras, j.segments.len() + 1)
                     .map_err(|(loc, error)| ResumeError::Replan { loc, error })?
             }
         };

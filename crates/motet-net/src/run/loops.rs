@@ -9,6 +9,15 @@ use motet_wire::NodeMessage;
 impl NetRun {
     /// A fault or samples from node `k`.
     pub(super) fn on_loop_message(&mut self, k: usize, m: NodeMessage, now: u64) {
+        self.on_heater_message(k, &m, now);
+        if let NodeMessage::Fault {
+            source: motet_wire::control::SampleSource::Heater(_),
+            ..
+        } = m
+        {
+            // A heater's trip stopped the run already, naming it.
+            return;
+        }
         if let NodeMessage::Fault {
             source,
             kind,

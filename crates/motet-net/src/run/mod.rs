@@ -14,6 +14,7 @@
 mod clocks;
 mod figures;
 mod group;
+mod heaters;
 mod loops;
 mod pace;
 mod stop;
@@ -273,6 +274,8 @@ pub struct NetRun {
     samples: motet_host::samples::SampleStore,
     /// Service replies the run does not act on (a module watch's), by node.
     service_replies: VecDeque<(usize, motet_wire::ServiceReply)>,
+    /// The heaters its nodes drive: heard from, ready, tripped; a wait.
+    heat: heaters::Heat,
 }
 
 impl NetRun {
@@ -334,6 +337,7 @@ impl NetRun {
             pace: pace::Pace::new(cfg.lead_max_us),
             samples: motet_host::samples::SampleStore::new(),
             service_replies: VecDeque::new(),
+            heat: heaters::Heat::default(),
         }
     }
 
@@ -619,9 +623,11 @@ impl NetRun {
                             }
                         }
                     }
-                    Incoming::Motion(m @ (NodeMessage::Fault { .. } | NodeMessage::Samples(_))) => {
-                        self.on_loop_message(k, m, now)
-                    }
+                    Incoming::Motion(
+                        m @ (NodeMessage::Fault { .. }
+                        | NodeMessage::Samples(_)
+                        | NodeMessage::HeaterReady { .. }),
+                    ) => self.on_loop_message(k, m, now),
                     Incoming::Service(r) => {
                         // Kept for whoever asked (a module watch), the
                         // newest few.
@@ -686,7 +692,8 @@ impl NetRun {
         let ready = self.peers.iter().all(|p| {
             p.sync.error_bound(now as f64) <= clock_target(&self.cfg, p) && p.backlog() == 0
         });
-        if ready {
+        // Nothing moves before every heater a node drives has reported.
+        if ready && self.heaters_heard()? {
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
             // The stop horizon keeps a window's tail inside the node's queue;

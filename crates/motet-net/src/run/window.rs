@@ -173,6 +173,9 @@ impl NetRun {
                 self.ask_room(now);
                 break;
             }
+            // A wait for a heater: one more piece of the hold, unless the
+            // heater is ready.
+            self.hold()?;
             let item = match self.next_item() {
                 Ok(Some(item)) => item,
                 Ok(None) => break,
@@ -216,7 +219,15 @@ impl NetRun {
                     self.route(&item.item)?;
                     self.pauses += 1;
                 }
-                Planned::Aux(_) => self.route(&item.item)?,
+                Planned::Aux(a) => {
+                    self.route(&item.item)?;
+                    // A temperature for a heater a node drives is an event
+                    // there, held like the others until the seal.
+                    if (0..self.peers.len()).any(|k| self.dist.takes_event(k, &item.item)) {
+                        self.pending_events += 1;
+                    }
+                    self.start_wait(&a);
+                }
             }
         }
         Ok(grew)

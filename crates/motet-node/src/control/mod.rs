@@ -11,6 +11,8 @@
 //! * `servo`: a servo channel (encoder, PID, drive, limit switches,
 //!   following-error watch, tuning tests);
 //! * `sensor`: a sensor channel (a reading at a fixed rate);
+//! * `heater`: a heater channel (temperature PID, target from an event
+//!   track, runaway watch against its thermal model);
 //! * `samples`: decimation into samples, batches, and the queue of
 //!   messages upstream (samples and faults).
 //!
@@ -19,6 +21,7 @@
 //! test for [`Control::deadline`], a `tick` in [`Control::tick`], and its
 //! samples and faults through the same [`Upstream`].
 
+pub mod heater;
 pub mod pid;
 pub mod samples;
 pub mod sensor;
@@ -26,6 +29,7 @@ pub mod servo;
 pub mod setpoint;
 pub mod ticker;
 
+pub use heater::Heater;
 pub use pid::{Pid, PidGains, PidTerms};
 pub use samples::{Sampler, Upstream, MAX_BATCH_AGE_US, UPSTREAM};
 pub use sensor::Sensor;
@@ -37,12 +41,15 @@ use crate::board::Board;
 use heapless::{Deque, Vec};
 use motet_trajectory::{Point, Segment};
 use motet_wire::control::{SampleSource, SensorConfig, ServoConfig, ServoGains, ServoTest};
+use motet_wire::heater::HeaterConfig;
 use motet_wire::{NodeMessage, Refusal};
 
 /// Most servo channels a node runs.
 pub const MAX_SERVOS: usize = 4;
 /// Most sensor channels a node runs.
 pub const MAX_SENSORS: usize = 2;
+/// Most heater channels a node runs.
+pub const MAX_HEATERS: usize = 4;
 
 /// A node's closed loops and what they send upstream.
 #[derive(Clone, Debug, Default)]
@@ -50,6 +57,10 @@ pub struct Control {
     servos: Vec<Servo, MAX_SERVOS>,
     sensors: Vec<Sensor, MAX_SENSORS>,
     upstream: Upstream,
+    heaters: Vec<Heater, MAX_HEATERS>,
+    /// Drive outputs of heaters a reset forgot, switched off at the next
+    /// poll.
+    drives_off: Vec<u8, MAX_HEATERS>,
 }
 
 impl Control {
@@ -59,6 +70,8 @@ impl Control {
             servos: Vec::new(),
             sensors: Vec::new(),
             upstream: Upstream::new(),
+            heaters: Vec::new(),
+            drives_off: Vec::new(),
         }
     }
 
@@ -139,7 +152,11 @@ impl Control {
                 .iter_mut()
                 .find(|s| s.config().sensor == i)
                 .map(|s| s.sampler_mut()),
-            SampleSource::Heater(_) => None,
+            SampleSource::Heater(i) => self
+                .heaters
+                .iter_mut()
+                .find(|h| h.config().heater == i)
+                .map(|h| h.sampler_mut()),
         };
         sampler.ok_or(Refusal::BadConfig)?.set_every(every, up);
         Ok(())
@@ -162,6 +179,9 @@ impl Control {
         for s in self.sensors.iter() {
             t = t.min(s.due(now));
         }
+        for h in self.heaters.iter() {
+            t = t.min(h.due(now));
+        }
         t
     }
 
@@ -175,6 +195,9 @@ impl Control {
         }
         for s in self.sensors.iter().filter(|s| s.active(moving)) {
             t = t.min(s.due(now));
+        }
+        for h in self.heaters.iter().filter(|h| h.active(moving)) {
+            t = t.min(h.due(now));
         }
         (t != f64::INFINITY).then_some(t)
     }
@@ -200,7 +223,20 @@ impl Control {
                 faulted |= s.tick(t, board, &mut self.upstream);
             }
         }
-        faulted
+        let mut tripped = false;
+        for h in self.heaters.iter_mut() {
+            if h.due(now) <= t {
+                tripped |= h.tick(t, board, &mut self.upstream);
+            }
+        }
+        if tripped {
+            // One heater ran away or lost its sensor: every heater of the
+            // node goes off with it.
+            for h in self.heaters.iter_mut() {
+                h.halt(t, board, &mut self.upstream);
+            }
+        }
+        faulted || tripped
     }
 
     /// Segments from the queue's head every servo is done with
@@ -228,5 +264,91 @@ impl Control {
     /// Messages waiting to go upstream.
     pub fn upstream_len(&self) -> usize {
         self.upstream.len()
+    }
+}
+
+impl Control {
+    /// The heater channels, in the order configured.
+    pub fn heaters(&self) -> &[Heater] {
+        &self.heaters
+    }
+
+    /// Whether `drive` is a heater's drive output.
+    pub fn has_heater_drive(&self, drive: u8) -> bool {
+        self.heaters.iter().any(|h| h.config().drive == drive)
+    }
+
+    /// Adds (or replaces, by index) a heater, off: its drive output
+    /// neither a servo's channel nor another heater's.
+    pub fn configure_heater(&mut self, c: HeaterConfig) -> Result<(), Refusal> {
+        let taken = self.has_servo(c.drive)
+            || self
+                .heaters
+                .iter()
+                .any(|h| h.config().heater != c.heater && h.config().drive == c.drive);
+        if !c.is_valid() || taken {
+            return Err(Refusal::BadConfig);
+        }
+        let heater = Heater::new(c);
+        match self
+            .heaters
+            .iter_mut()
+            .find(|h| h.config().heater == c.heater)
+        {
+            Some(h) => {
+                // The replaced heater's output is off until the new one
+                // drives it.
+                let _ = self.drives_off.push(h.config().drive);
+                *h = heater;
+            }
+            None => self.heaters.push(heater).map_err(|_| Refusal::BadConfig)?,
+        }
+        Ok(())
+    }
+
+    /// An event on `track` at host time `t`: a new target for each heater
+    /// on it.
+    pub fn set_target(&mut self, track: u8, value: f32) {
+        for h in self
+            .heaters
+            .iter_mut()
+            .filter(|h| h.config().track == track)
+        {
+            h.set_target(value);
+        }
+    }
+
+    /// Every heater off at host time `t` (the run stopped on its tail).
+    pub fn heaters_off<B: Board>(&mut self, t: f64, board: &mut B) {
+        for h in self.heaters.iter_mut() {
+            h.off(t, board);
+        }
+    }
+
+    /// The drive outputs of the heaters, for a node about to forget them
+    /// ([`Control::switch_off_later`] on the new state).
+    pub fn heater_drives(&self) -> Vec<u8, MAX_HEATERS> {
+        self.heaters
+            .iter()
+            .map(|h| h.config().drive)
+            .chain(self.drives_off.iter().copied())
+            .take(MAX_HEATERS)
+            .collect()
+    }
+
+    /// Drive outputs to switch off at the next poll.
+    pub fn switch_off_later(&mut self, drives: Vec<u8, MAX_HEATERS>) {
+        self.drives_off = drives;
+    }
+
+    /// Switches off the outputs of heaters forgotten or replaced, at host
+    /// time `t`.
+    pub fn forgotten_off<B: Board>(&mut self, t: f64, board: &mut B) {
+        for d in self.drives_off.iter() {
+            if !self.heaters.iter().any(|h| h.config().drive == *d) {
+                board.drive(*d, 0.0, t);
+            }
+        }
+        self.drives_off.clear();
     }
 }

@@ -71,6 +71,15 @@ impl Upstream {
         let _ = self.queue.push_back(m);
     }
 
+    /// Queues a message that must reach the host (a heater's readiness):
+    /// as a fault, it makes room by dropping the newest batch.
+    pub fn urgent(&mut self, m: NodeMessage) {
+        if self.queue.is_full() {
+            self.queue.pop_back();
+        }
+        let _ = self.queue.push_back(m);
+    }
+
     /// Queues a batch; false (nothing queued) when the queue is full.
     fn batch(&mut self, b: SampleBatch) -> bool {
         self.queue.push_back(NodeMessage::Samples(b)).is_ok()
@@ -262,6 +271,49 @@ impl Sampler {
         }
         self.bytes += 4;
         self.close_if_done(t, VALUE_SAMPLES, 4, up);
+    }
+
+    /// A heater's tick at host time `t`: its reading, target and power.
+    /// A sample is three values: the reading's and the power's means over
+    /// the window, and the target at its end.
+    pub fn heater(
+        &mut self,
+        t: f64,
+        period_us: f64,
+        reading: f32,
+        target: f32,
+        power: f32,
+        up: &mut Upstream,
+    ) {
+        if self.every == 0 {
+            return;
+        }
+        self.sum += reading;
+        // The window's power rides in `lo`, which heaters do not use.
+        self.lo = if self.n == 0 { power } else { self.lo + power };
+        self.n += 1;
+        if self.n < self.every {
+            return;
+        }
+        let n = self.n as f32;
+        let (mean, power) = (self.sum / n, self.lo / n);
+        self.n = 0;
+        self.reset_window();
+        if self.batch.is_none() {
+            let period = period_us * self.every as f64;
+            self.open(t, period, SampleData::Values(Vec::new()));
+        }
+        if let Some(SampleBatch {
+            data: SampleData::Values(values),
+            ..
+        }) = self.batch.as_mut()
+        {
+            let _ = values.push(mean);
+            let _ = values.push(target);
+            let _ = values.push(power);
+        }
+        self.bytes += 12;
+        self.close_if_done(t, VALUE_SAMPLES - 3, 12, up);
     }
 
     fn open(&mut self, t0: f64, period_us: f64, data: SampleData) {

@@ -19,9 +19,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         }
         let tally = self.tally.map(|_| StepTally::default());
         let fixed_time = self.fixed_time;
+        // A heater forgotten must not stay on: its output goes off at the
+        // next poll.
+        let heaters = self.control.heater_drives();
         *self = Self::new();
         self.tally = tally;
         self.fixed_time = fixed_time;
+        self.control.switch_off_later(heaters);
         Ok(())
     }
 
@@ -97,7 +101,8 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         let taken = self
             .channels
             .iter()
-            .any(|x| x.config().channel == c.channel);
+            .any(|x| x.config().channel == c.channel)
+            || self.control.has_heater_drive(c.channel);
         if !c.is_valid() || taken || !self.segments.is_empty() {
             return Err(Refusal::BadConfig);
         }
@@ -120,6 +125,17 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             return Err(Refusal::BadConfig);
         }
         self.control.configure_sensor(c)
+    }
+
+    /// A heater channel, off until its track sets a target; at rest.
+    pub(super) fn configure_heater(
+        &mut self,
+        c: motet_wire::heater::HeaterConfig,
+    ) -> Result<(), Refusal> {
+        if !self.segments.is_empty() {
+            return Err(Refusal::BadConfig);
+        }
+        self.control.configure_heater(c)
     }
 
     /// A tuning test on a servo, at rest.

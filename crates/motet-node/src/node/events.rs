@@ -93,6 +93,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             } else {
                 None
             };
+            self.control.set_target(e.track, e.value);
             for t in self.tools.iter_mut().filter(|t| t.config.track == e.track) {
                 let v = t.set(e.value, e.feed, e.time, speed);
                 board.set_tool(t.output(), v, e.time);

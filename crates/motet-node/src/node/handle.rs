@@ -99,6 +99,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             HostMessage::Sampling { source, every } => self.sampling(source, every),
             HostMessage::ConfigureSensor(c) => self.configure_sensor(c),
             HostMessage::ServoTest { channel, test } => self.servo_test(channel, test),
+            HostMessage::ConfigureHeater(c) => self.configure_heater(c),
         };
         done.map(|()| None)
     }

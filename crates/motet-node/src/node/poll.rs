@@ -8,6 +8,13 @@ use crate::board::Board;
 impl<const Q: usize, const T: usize> Node<Q, T> {
     pub(super) fn poll_outputs<B: Board>(&mut self, until: f64, board: &mut B) {
         let mut budget = MAX_OUTPUTS_PER_POLL;
+        // Heaters a reset forgot go off before anything else.
+        let at = if self.now.is_finite() {
+            self.now
+        } else {
+            until
+        };
+        self.control.forgotten_off(at, board);
         if let Some(ts) = self.tail_start.filter(|&t| t < until) {
             if !self.poll_until(ts, board, &mut budget) {
                 // Stopped short of the tail: the next poll gets there.

@@ -156,6 +156,7 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             t.set(0.0, 0.0, at, None);
             board.set_tool(t.output(), 0.0, at);
         }
+        self.control.heaters_off(at, board);
         self.tail_start = None;
         self.stopped = true;
     }
