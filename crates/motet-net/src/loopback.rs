@@ -140,6 +140,20 @@ impl Loopback {
         cfg: NetConfig,
         journal: Option<JournalWriter>,
     ) -> Loopback {
+        Loopback::on_bus_with(machine, commands, start, clocks, cfg, journal, &|t| t)
+    }
+
+    /// [`Loopback::on_bus`] with the host's transport to the bus passed
+    /// through `wrap` (a tap that counts its frames).
+    pub fn on_bus_with(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        clocks: &[Crystal],
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+        wrap: &dyn Fn(Box<dyn Transport + Send>) -> Box<dyn Transport + Send>,
+    ) -> Loopback {
         let bus_clock = SimClock::new();
         let bus = CanBus::timed(BusTiming::FD_1M_5M, Arc::new(bus_clock.clone()));
         let nodes = (0..machine.nodes.len())
@@ -162,7 +176,7 @@ impl Loopback {
             bus_clock,
         };
         let peers = lb
-            .bus_peers(machine, 0x1000)
+            .bus_peers(machine, 0x1000, wrap)
             .expect("a host identifier on a new bus");
         lb.run = NetRun::new(machine, commands, peers, start, cfg, journal);
         let _ = lb.run.on_shared_medium();
@@ -171,7 +185,12 @@ impl Loopback {
 
     /// A new host on the bus, under the next host identifier: one peer per
     /// node, all through one transport.
-    fn bus_peers(&mut self, machine: &Machine, isn: u16) -> Option<Vec<Peer>> {
+    fn bus_peers(
+        &mut self,
+        machine: &Machine,
+        isn: u16,
+        wrap: &dyn Fn(Box<dyn Transport + Send>) -> Box<dyn Transport + Send>,
+    ) -> Option<Vec<Peer>> {
         let bus = self.bus.as_ref()?;
         // The host hears its own frames at their end of frame: the
         // instant every node heard them (reference broadcast).
@@ -179,7 +198,7 @@ impl Loopback {
             .attach_hearing_own(BUS_HOST_ID + self.hosts, false)
             .ok()?;
         self.hosts += 1;
-        let medium = Medium::new(Box::new(CanTransport::new(host, None)));
+        let medium = Medium::new(wrap(Box::new(CanTransport::new(host, None))));
         let peers = (0..self.nodes.len())
             .map(|k| {
                 let address = 2 + k as u16;
@@ -201,7 +220,7 @@ impl Loopback {
         journal: Option<JournalWriter>,
     ) {
         if self.bus.is_some() {
-            if let Some(peers) = self.bus_peers(machine, 0x2000) {
+            if let Some(peers) = self.bus_peers(machine, 0x2000, &|t| t) {
                 self.run = NetRun::new(machine, commands, peers, start, cfg, journal);
                 let _ = self.run.on_shared_medium();
                 self.host_alive = true;

@@ -210,15 +210,15 @@ impl NodeClock {
 
     /// The model to send at host time `now`, if the node needs one: its
     /// first, a slew toward the estimate when the model it runs is or will
-    /// soon be off by more than a quarter of `target_us`, or the estimate
-    /// itself once a slew has reached it. `delay_us` is how long the model
-    /// takes to reach the node. The host takes the model as the node's once
+    /// soon be off by more than `tolerance_us`, or the estimate itself once
+    /// a slew has reached it. `delay_us` is how long the model takes to
+    /// reach the node. The host takes the model as the node's once
     /// returned.
     /// A node `at_rest` takes the estimate at once, however far off.
     pub fn model_due(
         &mut self,
         now: u64,
-        target_us: f64,
+        tolerance_us: f64,
         delay_us: f64,
         at_rest: bool,
     ) -> Option<ClockModel> {
@@ -234,7 +234,7 @@ impl NodeClock {
         // Where the node will be when the model arrives.
         let at = now as f64 + delay_us;
         let off = |h: f64| est.local(h) - sent.local(h);
-        let quarter = 0.25 * target_us;
+        let quarter = tolerance_us;
         match self.slewing_until {
             // A slew runs to its end before anything else is sent.
             Some(until) if at < until => return None,
@@ -304,7 +304,7 @@ mod tests {
             c.add(exchange(h));
             h += 10_000;
         }
-        let first = c.model_due(h, 10.0, 100.0, false).expect("a first model");
+        let first = c.model_due(h, 2.5, 100.0, false).expect("a first model");
         // A model 30 µs off: what a node restarted on an old estimate runs.
         c.sent = Some(ClockModel {
             offset: first.offset + 30.0,
@@ -314,7 +314,7 @@ mod tests {
         for _ in 0..400 {
             h += 10_000;
             c.add(exchange(h));
-            if let Some(m) = c.model_due(h, 10.0, 100.0, false) {
+            if let Some(m) = c.model_due(h, 2.5, 100.0, false) {
                 models.push((h as f64 + 100.0, m));
             }
         }

@@ -41,7 +41,10 @@ impl NetRun {
             }
             // The model reaches the node about half a round trip later.
             let delay = 0.5 * p.link().stats().srtt_us as f64;
-            if let Some(m) = p.sync.model_due(now, target, delay, at_rest) {
+            if let Some(m) = p
+                .sync
+                .model_due(now, model_tolerance(target, p), delay, at_rest)
+            {
                 p.send_service(&ServiceRequest::TimeSet {
                     offset: m.offset,
                     skew: m.skew,
@@ -111,10 +114,26 @@ pub(super) fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
     cfg.clock_bound_us.max(slow)
 }
 
-/// The clock target of a node measured by reference samples, µs: its
-/// model is replaced once a quarter of this off, so the node keeps within
-/// about 2 µs of the host.
+/// The clock target of a node measured by reference samples, µs: they
+/// tell that much.
 const REFERENCE_TARGET_US: f64 = 5.0;
+
+/// How far the model a node runs may be from the estimate before a new
+/// one goes out, µs: a quarter of its target, and at most
+/// [`REFERENCE_MODEL_US`] for a node measured by reference samples.
+fn model_tolerance(target: f64, p: &Peer) -> f64 {
+    let quarter = 0.25 * target;
+    if p.references > 0 {
+        quarter.min(REFERENCE_MODEL_US)
+    } else {
+        quarter
+    }
+}
+
+/// A node measured by reference samples runs a model within this of the
+/// estimate, µs: their estimates are within about as much of the truth,
+/// so any two such nodes keep within about 2 µs of each other.
+const REFERENCE_MODEL_US: f64 = 0.5;
 
 impl NetRun {
     /// Why the run could not start in time: the first node without a link,

@@ -47,7 +47,9 @@ pub struct NetConfig {
     pub lead_min_us: u64,
     /// A node silent this long is lost, µs.
     pub node_timeout_us: u64,
-    /// Status requests to each node, µs apart.
+    /// Status requests to each node while the machine finishes, µs apart
+    /// (while windows stream, a seal's acknowledgement tells the host what
+    /// it needs, and a status is asked only when a queue looks full).
     pub status_interval_us: u64,
     /// Longest time between clock exchanges with a node, µs: they are as
     /// rare as the node's error bound allows, and no rarer than this (they
