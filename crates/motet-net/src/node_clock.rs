@@ -5,9 +5,10 @@
 //! Two rules keep the node's time trustworthy:
 //! - **Slew, never step.** A correction larger than a clock tick goes out as
 //!   a model that agrees with the node's current one where the node will
-//!   take it and reaches the estimate over a while, at most [`SLEW_RATE`]
-//!   faster or slower; the exact model follows once it has. The node's time
-//!   stays monotone and never jumps while it moves.
+//!   take it and reaches the estimate over a while, [`SLEW_RATE`] faster
+//!   or slower (a correction larger than a second of that within about a
+//!   second, at most [`MAX_SLEW_RATE`]); the exact model follows once it
+//!   has. The node's time stays monotone and never jumps while it moves.
 //! - **As few exchanges as the bound allows.** While the bound is above 80 %
 //!   of the target the host exchanges every [`FAST_US`]; then it exchanges
 //!   when the slope's uncertainty would carry the bound there, at
@@ -24,9 +25,17 @@ pub const MAX_CRYSTAL: f64 = 500e-6;
 const EXCHANGE_AT: f64 = 0.8;
 /// Exchanges this far apart while the estimate is not yet good enough, µs.
 pub const FAST_US: u64 = 10_000;
-/// The fastest a node's clock is slewed: it runs at most this much faster or
-/// slower than its estimate while a correction is taken up.
+/// How much faster or slower than its estimate a node's clock runs while a
+/// correction is taken up: a drift's corrections are far below a step's
+/// length.
 pub const SLEW_RATE: f64 = 50e-6;
+/// A correction is taken up within this long when [`SLEW_RATE`] would take
+/// longer, µs: a node off by much (its rate changed) comes back soon, its
+/// moves this much faster or slower meanwhile.
+const MAX_SLEW_US: f64 = 1_000_000.0;
+/// The fastest a node's clock is slewed: 0.1 % (a node found 2 ms off takes
+/// 2 s).
+pub const MAX_SLEW_RATE: f64 = 1e-3;
 /// A correction this small is sent as it is: below a clock tick.
 const STEP_US: f64 = 0.5;
 /// The shortest slew, µs: a correction is spread over at least this long.
@@ -120,6 +129,22 @@ impl NodeClock {
     /// [`ClockSync::feasible_skew`]).
     pub fn feasible_skew(&self) -> Option<(f64, f64)> {
         self.est.feasible_skew()
+    }
+
+    /// A step of the node's rate at its last change (see
+    /// [`ClockSync::rate_step`]).
+    pub fn rate_step(&self) -> Option<((f64, f64), (f64, f64))> {
+        self.est.rate_step()
+    }
+
+    /// How far the model the node runs is from the estimate at host time
+    /// `host`, µs, and how sure the estimate is (its own bound): a large
+    /// offset known surely is a node off the host's time, not a host in
+    /// doubt.
+    pub fn model_off(&self, host: f64) -> Option<(f64, f64)> {
+        let m = self.sent?;
+        let off = (m.local(host) - self.est.host_to_local(host)).abs();
+        Some((off, self.est.error_bound(host)))
     }
 
     /// Exchanges the estimate rests on.
@@ -250,7 +275,10 @@ impl NodeClock {
         }
         // A line through the node's current time at `at` that meets the
         // estimate `span` later.
-        let span = (delta.abs() / SLEW_RATE).max(MIN_SLEW_US);
+        let span = (delta.abs() / SLEW_RATE)
+            .min(MAX_SLEW_US)
+            .max(delta.abs() / MAX_SLEW_RATE)
+            .max(MIN_SLEW_US);
         let slope = (1.0 + est.skew) + delta / span;
         let m = ClockModel {
             offset: sent.local(at) - slope * at,

@@ -230,11 +230,15 @@ fn print_drift(lb: &Loopback, machine: &Machine) {
             continue;
         };
         let own = n.node.endpoint.services().status(0).drift;
+        let (taken, slow) = p.sync.counts();
         println!(
-            "  node {}: drift {:+.3} ppm true, {:+.3} ppm the host's estimate, {}",
+            "  node {}: drift {:+.3} ppm true, {:+.3} ppm the host's estimate ({} exchanges taken, {} too slow, {} rate changes found), {}",
             node.name,
             n.ppm,
             p.sync.model().skew * 1e6,
+            taken,
+            slow,
+            p.sync.changes(),
             own.map_or("no measure of its own yet".to_string(), |d| format!(
                 "{:+.3} ppm its own measure over {} s",
                 d.ppb as f64 * 1e-3,

@@ -267,6 +267,8 @@ pub struct NetRun {
     group: Option<group::Group>,
     /// How late the host runs, and the lead that covers it.
     pace: pace::Pace,
+    /// Nodes whose clock the host was in doubt of (said once).
+    doubted: Vec<usize>,
 }
 
 impl NetRun {
@@ -326,6 +328,7 @@ impl NetRun {
             status: vec![None; n],
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
+            doubted: Vec::new(),
         }
     }
 
