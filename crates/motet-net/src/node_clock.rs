@@ -9,8 +9,9 @@
 //!   or slower (a correction larger than a second of that within about a
 //!   second, at most [`MAX_SLEW_RATE`]); the exact model follows once it
 //!   has. The node's time stays monotone and never jumps while it moves.
-//! - **As few exchanges as the bound allows.** While the bound is above 80 %
-//!   of the target the host exchanges every [`FAST_US`]; then it exchanges
+//! - **As few exchanges as the bound allows.** While the bound is above 70 %
+//!   of the target the host exchanges every [`FAST_US`] (four round trips
+//!   on a quicker link, at least [`FAST_MIN_US`]); then it exchanges
 //!   when the slope's uncertainty would carry the bound there, at
 //!   most [`crate::NetConfig::sync_interval_us`] apart. With a steady
 //!   crystal the slope's uncertainty keeps falling, and so does the rate.
@@ -21,10 +22,16 @@ use motet_wire::sync::{ClockFault, ClockModel, ClockSync, Exchange, SyncConfig};
 /// clock runs further off the host's is refused.
 pub const MAX_CRYSTAL: f64 = 500e-6;
 /// The estimate's bound is kept within this share of the target: the rest
-/// is for the model the node runs, replaced when off by a quarter.
-const EXCHANGE_AT: f64 = 0.8;
-/// Exchanges this far apart while the estimate is not yet good enough, µs.
+/// is for the model the node runs, replaced when off by a quarter, and a
+/// margin, so the node's bound stays within the target.
+pub const EXCHANGE_AT: f64 = 0.7;
+/// Exchanges at most this far apart while the estimate is not yet good
+/// enough, µs ...
 pub const FAST_US: u64 = 10_000;
+/// ... and this close on a quick link (four round trips apart): under
+/// jitter a bound falls with the number of exchanges, so a fast link
+/// starts sooner.
+pub const FAST_MIN_US: u64 = 1_000;
 /// How much faster or slower than its estimate a node's clock runs while a
 /// correction is taken up: a drift's corrections are far below a step's
 /// length.
@@ -62,6 +69,9 @@ pub struct NodeClock {
     last_sent: Option<u64>,
     /// Models sent, and how many of them slewed.
     pub models_sent: (u64, u64),
+    /// How far apart exchanges go while the bound is above its share of
+    /// the target, µs ([`NodeClock::set_link_rtt`]).
+    fast_us: u64,
 }
 
 impl Default for NodeClock {
@@ -75,6 +85,7 @@ impl Default for NodeClock {
             planned: 0,
             last_sent: None,
             models_sent: (0, 0),
+            fast_us: FAST_US,
         }
     }
 }
@@ -94,9 +105,21 @@ impl NodeClock {
             // The node's rate changed: the estimate starts again, and its
             // exchanges are fast again at once, not at the rare time the
             // old estimate had planned.
-            self.next_exchange = self.next_exchange.min(e.t4 + FAST_US);
+            self.next_exchange = self.next_exchange.min(e.t4 + self.fast_us);
             self.planned = self.planned.min(self.next_exchange);
         }
+    }
+
+    /// The link's least round trip, µs (0: none measured yet): fast
+    /// exchanges go four of them apart, within [`FAST_MIN_US`] and
+    /// [`FAST_US`] (a jittered path's least round trip is what it can
+    /// carry; its mean is the jitter).
+    pub fn set_link_rtt(&mut self, min_rtt_us: u64) {
+        self.fast_us = if min_rtt_us == 0 {
+            FAST_US
+        } else {
+            (4 * min_rtt_us).clamp(FAST_MIN_US, FAST_US)
+        };
     }
 
     /// The node answered an exchange no working clock produces: nothing may
@@ -177,28 +200,30 @@ impl NodeClock {
     }
 
     /// Whether an exchange is due at host time `now`; if so, plans the next
-    /// one: fast while the estimate's bound is above 80 % of `target_us`, then
+    /// one: fast while the estimate's bound is above 70 % of `target_us`, then
     /// as late as the slope's uncertainty allows, at most `max_us` later.
-    pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64) -> bool {
+    pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64, hurry: bool) -> bool {
         if now < self.next_exchange {
             return false;
         }
-        self.exchanged(now, target_us, max_us);
+        self.exchanged(now, target_us, max_us, hurry);
         true
     }
 
     /// An exchange went out at `now` (one this clock asked for, or a sync
     /// frame to every node): plans the next as [`NodeClock::exchange_due`]
-    /// does.
-    pub fn exchanged(&mut self, now: u64, target_us: f64, max_us: u64) {
+    /// does; `hurry` (a run that has not started: nothing moves, and the
+    /// sooner the bound is small the sooner it starts) plans it fast.
+    pub fn exchanged(&mut self, now: u64, target_us: f64, max_us: u64, hurry: bool) {
         let h = now as f64;
         let limit = EXCHANGE_AT * target_us;
         let bound = self.est.error_bound(h);
-        let interval = if !self.est.synced() || bound > limit {
-            FAST_US
+        let fast = self.fast_us;
+        let interval = if hurry || !self.est.synced() || bound > limit {
+            fast
         } else {
             let grow = self.est.skew_bound().max(1e-12);
-            (((limit - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
+            (((limit - bound) / grow) as u64).clamp(fast, max_us.max(fast))
         };
         self.next_exchange = now + interval;
         self.planned = self.next_exchange;

@@ -24,7 +24,16 @@ impl NetRun {
         for p in self.peers.iter_mut() {
             let target = clock_target(&self.cfg, p);
             p.sync.probe_after(p.last_heard, p.last_asked, quiet);
-            if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
+            // Exchanges under jitter need as many as the link carries;
+            // reference samples do not (each is exact), and on a bus each
+            // sync frame costs every node an answer.
+            if p.references == 0 {
+                p.sync.set_link_rtt(p.link().stats().min_rtt_us);
+            }
+            let hurry = at_rest && p.references == 0;
+            if p.sync
+                .exchange_due(now, target, self.cfg.sync_interval_us, hurry)
+            {
                 // A lost datagram is only a missing sample.
                 if shared {
                     to_all = true;
@@ -192,7 +201,7 @@ pub(super) fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
 
 /// The clock target of a node measured by reference samples, µs: they
 /// tell that much.
-const REFERENCE_TARGET_US: f64 = 5.0;
+const REFERENCE_TARGET_US: f64 = 6.0;
 
 /// How far the model a node runs may be from the estimate before a new
 /// one goes out, µs: a quarter of its target, and at most

@@ -173,9 +173,14 @@ impl NetRun {
         };
         // A lost datagram is only a missing sample.
         let _ = self.peers[k].send_time_to_all(now);
+        let starting = matches!(self.phase, Phase::Starting);
         for p in self.peers.iter_mut() {
             let target = super::clocks::clock_target(&self.cfg, p);
-            p.sync.exchanged(now, target, self.cfg.sync_interval_us);
+            // A start hurries exchanges under jitter; reference samples
+            // are exact, and each sync frame costs every node an answer.
+            let hurry = starting && p.references == 0;
+            p.sync
+                .exchanged(now, target, self.cfg.sync_interval_us, hurry);
             p.asked(now);
         }
     }

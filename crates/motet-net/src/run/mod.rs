@@ -24,6 +24,7 @@ pub use stop::{LostNode, StopInfo};
 
 use crate::digest::Digest;
 use crate::journal::{JournalHeader, JournalWriter};
+use crate::node_clock::EXCHANGE_AT;
 use crate::peer::{Incoming, Peer};
 use crate::plan_feed::{run_limits, CommandSource, PlanFeed};
 use clocks::clock_target;
@@ -38,6 +39,10 @@ use window::Committed;
 /// A start whose clocks are within this many times their targets when the
 /// connect timeout passes may wait as long again.
 const CLOSE_ENOUGH: f64 = 3.0;
+
+/// Nothing moves before every node's clock bound stays within its target
+/// this long with no exchange more, µs.
+const START_HORIZON_US: f64 = 1_000_000.0;
 
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -662,8 +667,16 @@ impl NetRun {
             }
             self.configured = true;
         }
+        // Within the share of the target the exchanges keep while
+        // streaming (the rest is for the model and a margin), and within
+        // the target a while on with no exchange more: a slope still
+        // unsure would carry the bound past it.
         let ready = self.peers.iter().all(|p| {
-            p.sync.error_bound(now as f64) <= clock_target(&self.cfg, p) && p.backlog() == 0
+            let target = clock_target(&self.cfg, p);
+            let later = now as f64 + START_HORIZON_US;
+            p.sync.error_bound(now as f64) <= EXCHANGE_AT * target
+                && p.sync.error_bound(later) <= target
+                && p.backlog() == 0
         });
         if ready {
             let lead = self.lead_us();

@@ -503,12 +503,16 @@ impl ClockSync {
         let gap = |b: f64| c_f(b) - c_r(b);
         // The exchanges' host times, split at their median: each half's
         // edges are measured apart, as a slope is only as sure as the
-        // thinner end it rests on.
+        // thinner end it rests on. When that puts the halves' centres
+        // within a quarter of the exchanges' span (a burst of them: both
+        // halves in one moment, the slope seeming unknown however long
+        // they span), at the middle of the span instead.
         let mut xs = [0.0f64; CAPACITY];
         for (x, p) in xs.iter_mut().zip(s) {
             *x = 0.5 * (p.xf + p.xr);
         }
-        let cut = kth_smallest(&mut xs[..n], n.div_ceil(2));
+        let median = kth_smallest(&mut xs[..n], n.div_ceil(2));
+        let cut = span_cut(&xs[..n], median);
         let seen = self.seen.max(1) as f64;
         let edges = |b: f64| {
             let (cf, cr) = (c_f(b), c_r(b));
@@ -669,6 +673,31 @@ impl ClockSync {
         TICK_US
             + 0.5 * near.edge * self.cfg.confidence
             + self.fit.skew_bound * (x - near.centre).abs()
+    }
+}
+
+/// Where to split exchanges at host times `xs` into two halves: at their
+/// `median`, unless the halves' centres would lie within a quarter of the
+/// span, then at the span's middle (when it leaves exchanges either side).
+fn span_cut(xs: &[f64], median: f64) -> f64 {
+    let (first, last) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let centre = |late: bool| {
+        let (sum, n) = xs
+            .iter()
+            .filter(|&&x| (x > median) == late)
+            .fold((0.0, 0usize), |(s, n), &x| (s + x, n + 1));
+        sum / n.max(1) as f64
+    };
+    let middle = 0.5 * (first + last);
+    let either_side = xs.iter().any(|&x| x > middle) && xs.iter().any(|&x| x <= middle);
+    if centre(true) - centre(false) < 0.25 * (last - first) && either_side {
+        middle
+    } else {
+        median
     }
 }
 
