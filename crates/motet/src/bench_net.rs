@@ -75,6 +75,9 @@ pub struct Args {
 pub enum Bus {
     /// A simulated CAN-FD bus with arbitration.
     Can,
+    /// A UDP multicast group on this computer's loopback, real sockets;
+    /// the simulated clock waits for every frame to reach every member.
+    Udp,
 }
 
 /// Wire size of a datagram carrying `m`.
@@ -136,13 +139,21 @@ pub fn bench_net(args: Args) -> Result<()> {
         None => None,
     };
     let identity = RunIdentity::new(Digest::of(loaded.text.as_bytes()), Digest::of(&loaded.data));
+    if args.bus.is_some() && (args.jitter_us > 0 || args.faults > 0.0) {
+        bail!("--bus takes no --jitter-us or --faults: the shared medium loses nothing");
+    }
     let mut lb = match args.bus {
+        Some(Bus::Udp) => Loopback::on_udp_group(
+            machine,
+            loaded.commands.clone(),
+            machine.start,
+            &clocks,
+            cfg,
+            journal,
+            &tap,
+        )
+        .context("joining a UDP multicast group on 127.0.0.1")?,
         Some(Bus::Can) => {
-            if args.jitter_us > 0 || args.faults > 0.0 {
-                bail!(
-                    "--bus can takes no --jitter-us or --faults: the simulated bus loses nothing"
-                );
-            }
             Loopback::on_bus_with(
                 machine,
                 loaded.commands.clone(),
