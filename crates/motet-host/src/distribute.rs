@@ -99,9 +99,10 @@ impl Distributor {
             .iter()
             .zip(&self.subscriptions)
             .map(|(n, sub)| {
-                // A quarter of the node's queue: a node always holds three
-                // quarters while the next batch fills.
-                let most = (n.queue / 4).max(1);
+                // Half the node's queue: a batch is bounded by its bytes
+                // first (a print's 25 segments fill one), and a node still
+                // holds half its queue while the next fills.
+                let most = (n.queue / 2).max(1);
                 BatchEncoder::new(self.stream, sub.axes, *start, 0, most)
             })
             .collect();
@@ -186,6 +187,16 @@ impl Distributor {
             Planned::Pause { .. } => out.extend(self.flush(node)),
         }
         Ok(out)
+    }
+
+    /// Every node that takes segments has its open batch nearly full (or
+    /// none open): a window that ends here goes out in full frames.
+    pub fn batches_nearly_full(&self) -> bool {
+        self.encoders
+            .iter()
+            .zip(&self.subscriptions)
+            .filter(|(_, s)| s.axes != 0)
+            .all(|(e, _)| e.pending() == 0 || e.nearly_full())
     }
 
     /// The batch node `node` has waiting, if any.

@@ -24,6 +24,7 @@ pub mod slcan;
 pub mod slcan_port;
 pub mod spec;
 pub mod udp;
+pub mod udp_group;
 
 pub use can::{BusTiming, CanBus, CanNode, CanTransport, Received};
 pub use clock::{Clock, Crystal, SimClock, WallClock};
@@ -34,6 +35,7 @@ pub use serial::SerialTransport;
 pub use slcan_port::{SlcanConfig, SlcanTransport};
 pub use spec::{open, LinkSpec, OpenError, SpecError};
 pub use udp::UdpTransport;
+pub use udp_group::{GroupTally, UdpGroup};
 
 /// Traffic counters of one transport: frames and bytes as they crossed it.
 /// Link-level figures (CRC errors, retransmits, round-trip time) belong to

@@ -7,6 +7,7 @@
 //! | `udp-listen:HOST:PORT` | UDP bound to HOST:PORT (a node; port 0 takes any free one), answering its latest sender |
 //! | `serial:PATH[@BAUD]` | COBS stream on a serial port, BAUD default 115200 |
 //! | `slcan:PATH[@BITRATE]` | CAN-FD through an slcan adapter, BITRATE default 500k (`500000`, `500k`, `1M`) |
+//! | `udp-group:GROUP:PORT[@IFACE]` | UDP multicast to the group GROUP:PORT (224.0.0.0/4) on the interface of address IFACE, default 127.0.0.1: every member hears every frame, as on a bus |
 //!
 //! HOST is a name, an IPv4 address or a bracketed IPv6 address (`[::1]`).
 
@@ -44,6 +45,15 @@ pub enum LinkSpec {
         /// Baud rate, [`DEFAULT_BAUD`] if not given.
         baud: u32,
     },
+    /// `udp-group:GROUP:PORT[@IFACE]`.
+    UdpGroup {
+        /// The group's multicast address.
+        group: std::net::Ipv4Addr,
+        /// The group's port, 1-65535.
+        port: u16,
+        /// The address of the interface to join it on.
+        iface: std::net::Ipv4Addr,
+    },
     /// `slcan:PATH[@BITRATE]`.
     Slcan {
         /// The adapter's serial device.
@@ -61,10 +71,12 @@ pub enum SpecError {
     #[error("empty link spec")]
     Empty,
     /// No `scheme:` before the address (the spec given).
-    #[error("link spec {0:?} has no scheme (expected udp:, udp-listen:, serial: or slcan:)")]
+    #[error(
+        "link spec {0:?} has no scheme (expected udp:, udp-listen:, udp-group:, serial: or slcan:)"
+    )]
     NoScheme(String),
     /// A scheme motet has no transport for.
-    #[error("unknown link scheme {0:?} (expected udp, udp-listen, serial or slcan)")]
+    #[error("unknown link scheme {0:?} (expected udp, udp-listen, udp-group, serial or slcan)")]
     UnknownScheme(String),
     /// `HOST:PORT` with an empty host.
     #[error("missing host in {0:?} (expected HOST:PORT)")]
@@ -84,6 +96,17 @@ pub enum SpecError {
     /// `@BAUD` that is not a positive integer.
     #[error("bad baud rate {0:?} (expected a positive integer)")]
     BadBaud(String),
+    /// A group that is not an IPv4 multicast address, or an interface that
+    /// is not an IPv4 address.
+    #[error("bad {what} {given:?} (expected {expected})")]
+    BadGroup {
+        /// Which part: the group or the interface.
+        what: &'static str,
+        /// The text given.
+        given: String,
+        /// What was expected.
+        expected: &'static str,
+    },
     /// `@BITRATE` that is not one of the rates slcan can select.
     #[error("bad CAN bit rate {0:?} (expected one of 10k 20k 50k 100k 125k 250k 500k 800k 1M)")]
     BadBitrate(String),
@@ -198,6 +221,32 @@ impl LinkSpec {
                 };
                 Ok(LinkSpec::Serial { path, baud })
             }
+            "udp-group" => {
+                let (addr, iface) = match rest.rsplit_once('@') {
+                    Some((a, i)) => (a, Some(i)),
+                    None => (rest, None),
+                };
+                let (group, port) = host_port(addr, false)?;
+                let group = match group.parse::<std::net::Ipv4Addr>() {
+                    Ok(g) if g.is_multicast() => g,
+                    _ => {
+                        return Err(SpecError::BadGroup {
+                            what: "multicast group",
+                            given: group,
+                            expected: "an IPv4 address in 224.0.0.0/4",
+                        })
+                    }
+                };
+                let iface = match iface {
+                    None => std::net::Ipv4Addr::LOCALHOST,
+                    Some(i) => i.parse().map_err(|_| SpecError::BadGroup {
+                        what: "interface",
+                        given: i.to_owned(),
+                        expected: "the IPv4 address of an interface",
+                    })?,
+                };
+                Ok(LinkSpec::UdpGroup { group, port, iface })
+            }
             "slcan" => {
                 let (path, arg) = path_and(rest)?;
                 let bitrate = arg.map_or(Ok(DEFAULT_BITRATE), parse_bitrate)?;
@@ -234,6 +283,10 @@ impl LinkSpec {
             LinkSpec::Serial { path, baud } => {
                 Box::new(SerialTransport::open(path, *baud).map_err(io_err)?)
             }
+            LinkSpec::UdpGroup { group, port, iface } => {
+                let group = std::net::SocketAddrV4::new(*group, *port);
+                Box::new(crate::UdpGroup::join(group, *iface).map_err(io_err)?)
+            }
             LinkSpec::Slcan { path, bitrate } => {
                 let cfg = SlcanConfig {
                     bitrate: *bitrate,
@@ -252,6 +305,9 @@ impl std::fmt::Display for LinkSpec {
             LinkSpec::UdpListen { host, port } => write!(f, "udp-listen:{host}:{port}"),
             LinkSpec::Serial { path, baud } => write!(f, "serial:{path}@{baud}"),
             LinkSpec::Slcan { path, bitrate } => write!(f, "slcan:{path}@{bitrate}"),
+            LinkSpec::UdpGroup { group, port, iface } => {
+                write!(f, "udp-group:{group}:{port}@{iface}")
+            }
         }
     }
 }
@@ -297,6 +353,22 @@ mod tests {
                 LinkSpec::Udp {
                     host: s("[::1]"),
                     port: 4000,
+                },
+            ),
+            (
+                "udp-group:239.255.77.1:47100",
+                LinkSpec::UdpGroup {
+                    group: std::net::Ipv4Addr::new(239, 255, 77, 1),
+                    port: 47100,
+                    iface: std::net::Ipv4Addr::LOCALHOST,
+                },
+            ),
+            (
+                "udp-group:239.255.77.1:47100@192.168.1.10",
+                LinkSpec::UdpGroup {
+                    group: std::net::Ipv4Addr::new(239, 255, 77, 1),
+                    port: 47100,
+                    iface: std::net::Ipv4Addr::new(192, 168, 1, 10),
                 },
             ),
             (
@@ -377,6 +449,23 @@ mod tests {
             ("udp:::1:4000", SpecError::BadHost(s("::1"))),
             ("udp:[::1:4000", SpecError::BadHost(s("[::1"))),
             ("udp-listen:h:x", SpecError::BadPort(s("x"))),
+            (
+                "udp-group:10.0.0.1:4000",
+                SpecError::BadGroup {
+                    what: "multicast group",
+                    given: s("10.0.0.1"),
+                    expected: "an IPv4 address in 224.0.0.0/4",
+                },
+            ),
+            (
+                "udp-group:239.1.2.3:4000@lo",
+                SpecError::BadGroup {
+                    what: "interface",
+                    given: s("lo"),
+                    expected: "the IPv4 address of an interface",
+                },
+            ),
+            ("udp-group:239.1.2.3:0", SpecError::BadPort(s("0"))),
             ("serial:", SpecError::MissingPath),
             ("serial:@9600", SpecError::MissingPath),
             ("serial:/dev/x@", SpecError::BadBaud(s(""))),
@@ -428,7 +517,7 @@ mod tests {
 
         #[test]
         fn parse_never_panics_near_valid(
-            scheme in prop::sample::select(vec!["udp", "udp-listen", "serial", "slcan", "x"]),
+            scheme in prop::sample::select(vec!["udp", "udp-listen", "udp-group", "serial", "slcan", "x"]),
             rest in "[\\[\\]:@a-zA-Z0-9./kM+-]{0,24}",
         ) {
             if let Ok(spec) = LinkSpec::parse(&format!("{scheme}:{rest}")) {

@@ -10,10 +10,12 @@ use crate::peer::Peer;
 use crate::run::{NetConfig, NetError, NetRun, Phase};
 use crate::sim_node::{sim_config, SimNode};
 use motet_host::Machine;
+use motet_link::udp_group::{self, GroupTally, UdpGroup};
 use motet_link::{BusTiming, CanBus, CanTransport, SimClock, Transport};
 use motet_node::storage::{Persisted, RamStore};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
+use std::net::{Ipv4Addr, SocketAddrV4};
 use std::sync::Arc;
 
 /// One simulated node and its clock.
@@ -70,6 +72,10 @@ pub struct Loopback {
     /// The host's end of the bus, for what comes from addresses the run
     /// does not know ([`Medium::take_strangers`]).
     pub medium: Option<Medium>,
+    /// The UDP multicast group every node and the host joined, for a run on
+    /// one medium over real sockets ([`Loopback::on_udp_group`]), and the
+    /// tally that waits for every frame to reach every member.
+    pub group: Option<(SocketAddrV4, Arc<GroupTally>)>,
     /// Hosts started on the bus so far (each takes its own identifier).
     hosts: u32,
     /// The bus's clock: host time.
@@ -81,6 +87,9 @@ pub struct Loopback {
 pub const BUS_HOST_ID: u32 = 0x010;
 /// The CAN identifier of machine node `k` on a loopback bus is this plus `k`.
 pub const BUS_NODE_ID: u32 = 0x100;
+/// The multicast group of a loopback run on UDP ([`Loopback::on_udp_group`]),
+/// on a port of its own.
+pub const LOOPBACK_GROUP: Ipv4Addr = Ipv4Addr::new(239, 255, 77, 77);
 
 impl Loopback {
     /// A run of `commands` on `machine` from `start`; `links[k]` joins the
@@ -129,6 +138,7 @@ impl Loopback {
             max_step_us: 1_000,
             bus: None,
             medium: None,
+            group: None,
             hosts: 0,
             bus_clock: SimClock::new(),
         }
@@ -145,6 +155,20 @@ impl Loopback {
         clocks: &[Crystal],
         cfg: NetConfig,
         journal: Option<JournalWriter>,
+    ) -> Loopback {
+        Loopback::on_bus_with(machine, commands, start, clocks, cfg, journal, &|t| t)
+    }
+
+    /// [`Loopback::on_bus`] with the host's transport to the bus passed
+    /// through `wrap` (a tap that counts its frames).
+    pub fn on_bus_with(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        clocks: &[Crystal],
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+        wrap: &dyn Fn(Box<dyn Transport + Send>) -> Box<dyn Transport + Send>,
     ) -> Loopback {
         let bus_clock = SimClock::new();
         let bus = CanBus::timed(BusTiming::FD_1M_5M, Arc::new(bus_clock.clone()));
@@ -167,28 +191,96 @@ impl Loopback {
             max_step_us: 1_000,
             bus: Some(bus),
             medium: None,
+            group: None,
             hosts: 0,
             bus_clock,
         };
         let peers = lb
-            .bus_peers(machine, 0x1000)
+            .bus_peers(machine, 0x1000, wrap)
             .expect("a host identifier on a new bus");
         lb.run = NetRun::new(machine, commands, peers, start, cfg, journal);
         let _ = lb.run.on_shared_medium();
         lb
     }
 
-    /// A new host on the bus, under the next host identifier: one peer per
-    /// node, all through one transport.
-    fn bus_peers(&mut self, machine: &Machine, isn: u16) -> Option<Vec<Peer>> {
-        let bus = self.bus.as_ref()?;
-        // The host hears its own frames at their end of frame: the
-        // instant every node heard them (reference broadcast).
-        let host = bus
-            .attach_hearing_own(BUS_HOST_ID + self.hosts, false)
-            .ok()?;
-        self.hosts += 1;
-        let medium = Medium::new(Box::new(CanTransport::new(host, None)));
+    /// [`Loopback::on_bus`] with the host and every node members of one UDP
+    /// multicast group on this computer's loopback (a port of its own, so
+    /// runs side by side do not meet), over real sockets; the run waits
+    /// for every frame to reach every member before time moves on, and
+    /// each stamps it then, so the host's own sync frames heard back are
+    /// reference samples as on the bus. `wrap` as for
+    /// [`Loopback::on_bus_with`].
+    pub fn on_udp_group(
+        machine: &Machine,
+        commands: Vec<Located<Command>>,
+        start: Point,
+        clocks: &[Crystal],
+        cfg: NetConfig,
+        journal: Option<JournalWriter>,
+        wrap: &dyn Fn(Box<dyn Transport + Send>) -> Box<dyn Transport + Send>,
+    ) -> std::io::Result<Loopback> {
+        let bus_clock = SimClock::new();
+        let group = SocketAddrV4::new(LOOPBACK_GROUP, udp_group::free_port()?);
+        let tally = GroupTally::new();
+        let clock: Arc<dyn motet_link::Clock + Send + Sync> = Arc::new(bus_clock.clone());
+        let mut nodes = Vec::new();
+        for k in 0..machine.nodes.len() {
+            let crystal = clocks.get(k).copied().unwrap_or_default();
+            let t = UdpGroup::join(group, Ipv4Addr::LOCALHOST)?
+                .stamping(clock.clone(), crystal)
+                .counted(&tally);
+            nodes.push(loopback_node(k, Box::new(t), clocks));
+        }
+        let mut lb = Loopback {
+            run: NetRun::new(machine, Vec::new(), Vec::new(), start, cfg, None),
+            nodes,
+            now: 0,
+            host_alive: true,
+            max_step_us: 1_000,
+            bus: None,
+            medium: None,
+            group: Some((group, tally)),
+            hosts: 0,
+            bus_clock,
+        };
+        let peers = lb
+            .bus_peers(machine, 0x1000, wrap)
+            .ok_or_else(|| std::io::Error::other("the host could not join the group"))?;
+        lb.run = NetRun::new(machine, commands, peers, start, cfg, journal);
+        let _ = lb.run.on_shared_medium();
+        Ok(lb)
+    }
+
+    /// The host's transport onto the shared medium: it hears its own
+    /// frames at the instant every node heard them (reference broadcast).
+    fn host_on_medium(&mut self) -> Option<Box<dyn Transport + Send>> {
+        if let Some(bus) = self.bus.as_ref() {
+            let host = bus
+                .attach_hearing_own(BUS_HOST_ID + self.hosts, false)
+                .ok()?;
+            self.hosts += 1;
+            return Some(Box::new(CanTransport::new(host, None)));
+        }
+        let (group, tally) = self.group.as_ref()?;
+        let clock: Arc<dyn motet_link::Clock + Send + Sync> = Arc::new(self.bus_clock.clone());
+        let host = UdpGroup::join(*group, Ipv4Addr::LOCALHOST)
+            .ok()?
+            .stamping(clock, Crystal::default())
+            .hearing_own()
+            .counted(tally);
+        Some(Box::new(host))
+    }
+
+    /// A new host on the shared medium (under the next host identifier on
+    /// a bus): one peer per node, all through one transport.
+    fn bus_peers(
+        &mut self,
+        machine: &Machine,
+        isn: u16,
+        wrap: &dyn Fn(Box<dyn Transport + Send>) -> Box<dyn Transport + Send>,
+    ) -> Option<Vec<Peer>> {
+        let host = self.host_on_medium()?;
+        let medium = Medium::new(wrap(host));
         self.medium = Some(medium.clone());
         let peers = (0..self.nodes.len())
             .map(|k| {
@@ -210,8 +302,8 @@ impl Loopback {
         cfg: NetConfig,
         journal: Option<JournalWriter>,
     ) {
-        if self.bus.is_some() {
-            if let Some(peers) = self.bus_peers(machine, 0x2000) {
+        if self.bus.is_some() || self.group.is_some() {
+            if let Some(peers) = self.bus_peers(machine, 0x2000, &|t| t) {
                 self.run = NetRun::new(machine, commands, peers, start, cfg, journal);
                 let _ = self.run.on_shared_medium();
                 self.host_alive = true;
@@ -312,6 +404,7 @@ impl Loopback {
         if self.host_alive {
             self.run.poll(self.now)?;
         }
+        self.settle_group();
         let mut next = if self.host_alive {
             self.run.next_wakeup(self.now)
         } else {
@@ -324,14 +417,28 @@ impl Loopback {
                 next = next.min(n.host(w));
             }
         }
+        self.settle_group();
         if self.host_alive {
             self.run.poll(self.now)?;
             next = next.min(self.run.next_wakeup(self.now));
         }
+        self.settle_group();
         if let Some(t) = self.bus.as_ref().and_then(CanBus::next_event_us) {
             next = next.min(t.max(self.now));
         }
         Ok(next)
+    }
+
+    /// On a UDP group: waits (real time) until every frame sent reaches
+    /// every member, each stamping it now, as a bus delivers a frame to
+    /// every node at its end.
+    fn settle_group(&self) {
+        if let Some((_, tally)) = &self.group {
+            // On this computer's loopback a datagram arrives in µs; a
+            // member that never gets one (its socket gone) holds no one up
+            // for long.
+            let _ = tally.settle(std::time::Duration::from_millis(200));
+        }
     }
 
     /// Steps until the run is done or stopped, the host is dead and the nodes

@@ -5,11 +5,13 @@
 //! Two rules keep the node's time trustworthy:
 //! - **Slew, never step.** A correction larger than a clock tick goes out as
 //!   a model that agrees with the node's current one where the node will
-//!   take it and reaches the estimate over a while, at most [`SLEW_RATE`]
-//!   faster or slower; the exact model follows once it has. The node's time
-//!   stays monotone and never jumps while it moves.
-//! - **As few exchanges as the bound allows.** While the bound is above 80 %
-//!   of the target the host exchanges every [`FAST_US`]; then it exchanges
+//!   take it and reaches the estimate over a while, [`SLEW_RATE`] faster
+//!   or slower (a correction larger than a second of that within about a
+//!   second, at most [`MAX_SLEW_RATE`]); the exact model follows once it
+//!   has. The node's time stays monotone and never jumps while it moves.
+//! - **As few exchanges as the bound allows.** While the bound is above 70 %
+//!   of the target the host exchanges every [`FAST_US`] (four round trips
+//!   on a quicker link, at least [`FAST_MIN_US`]); then it exchanges
 //!   when the slope's uncertainty would carry the bound there, at
 //!   most [`crate::NetConfig::sync_interval_us`] apart. With a steady
 //!   crystal the slope's uncertainty keeps falling, and so does the rate.
@@ -20,13 +22,27 @@ use motet_wire::sync::{ClockFault, ClockModel, ClockSync, Exchange, SyncConfig};
 /// clock runs further off the host's is refused.
 pub const MAX_CRYSTAL: f64 = 500e-6;
 /// The estimate's bound is kept within this share of the target: the rest
-/// is for the model the node runs, replaced when off by a quarter.
-const EXCHANGE_AT: f64 = 0.8;
-/// Exchanges this far apart while the estimate is not yet good enough, µs.
+/// is for the model the node runs, replaced when off by a quarter, and a
+/// margin, so the node's bound stays within the target.
+pub const EXCHANGE_AT: f64 = 0.7;
+/// Exchanges at most this far apart while the estimate is not yet good
+/// enough, µs ...
 pub const FAST_US: u64 = 10_000;
-/// The fastest a node's clock is slewed: it runs at most this much faster or
-/// slower than its estimate while a correction is taken up.
+/// ... and this close on a quick link (four round trips apart): under
+/// jitter a bound falls with the number of exchanges, so a fast link
+/// starts sooner.
+pub const FAST_MIN_US: u64 = 1_000;
+/// How much faster or slower than its estimate a node's clock runs while a
+/// correction is taken up: a drift's corrections are far below a step's
+/// length.
 pub const SLEW_RATE: f64 = 50e-6;
+/// A correction is taken up within this long when [`SLEW_RATE`] would take
+/// longer, µs: a node off by much (its rate changed) comes back soon, its
+/// moves this much faster or slower meanwhile.
+const MAX_SLEW_US: f64 = 1_000_000.0;
+/// The fastest a node's clock is slewed: 0.1 % (a node found 2 ms off takes
+/// 2 s).
+pub const MAX_SLEW_RATE: f64 = 1e-3;
 /// A correction this small is sent as it is: below a clock tick.
 const STEP_US: f64 = 0.5;
 /// The shortest slew, µs: a correction is spread over at least this long.
@@ -53,6 +69,9 @@ pub struct NodeClock {
     last_sent: Option<u64>,
     /// Models sent, and how many of them slewed.
     pub models_sent: (u64, u64),
+    /// How far apart exchanges go while the bound is above its share of
+    /// the target, µs ([`NodeClock::set_link_rtt`]).
+    fast_us: u64,
 }
 
 impl Default for NodeClock {
@@ -66,6 +85,7 @@ impl Default for NodeClock {
             planned: 0,
             last_sent: None,
             models_sent: (0, 0),
+            fast_us: FAST_US,
         }
     }
 }
@@ -85,9 +105,21 @@ impl NodeClock {
             // The node's rate changed: the estimate starts again, and its
             // exchanges are fast again at once, not at the rare time the
             // old estimate had planned.
-            self.next_exchange = self.next_exchange.min(e.t4 + FAST_US);
+            self.next_exchange = self.next_exchange.min(e.t4 + self.fast_us);
             self.planned = self.planned.min(self.next_exchange);
         }
+    }
+
+    /// The link's least round trip, µs (0: none measured yet): fast
+    /// exchanges go four of them apart, within [`FAST_MIN_US`] and
+    /// [`FAST_US`] (a jittered path's least round trip is what it can
+    /// carry; its mean is the jitter).
+    pub fn set_link_rtt(&mut self, min_rtt_us: u64) {
+        self.fast_us = if min_rtt_us == 0 {
+            FAST_US
+        } else {
+            (4 * min_rtt_us).clamp(FAST_MIN_US, FAST_US)
+        };
     }
 
     /// The node answered an exchange no working clock produces: nothing may
@@ -122,6 +154,22 @@ impl NodeClock {
         self.est.feasible_skew()
     }
 
+    /// A step of the node's rate at its last change (see
+    /// [`ClockSync::rate_step`]).
+    pub fn rate_step(&self) -> Option<((f64, f64), (f64, f64))> {
+        self.est.rate_step()
+    }
+
+    /// How far the model the node runs is from the estimate at host time
+    /// `host`, µs, and how sure the estimate is (its own bound): a large
+    /// offset known surely is a node off the host's time, not a host in
+    /// doubt.
+    pub fn model_off(&self, host: f64) -> Option<(f64, f64)> {
+        let m = self.sent?;
+        let off = (m.local(host) - self.est.host_to_local(host)).abs();
+        Some((off, self.est.error_bound(host)))
+    }
+
     /// Exchanges the estimate rests on.
     pub fn points(&self) -> u32 {
         self.est.points()
@@ -152,28 +200,30 @@ impl NodeClock {
     }
 
     /// Whether an exchange is due at host time `now`; if so, plans the next
-    /// one: fast while the estimate's bound is above 80 % of `target_us`, then
+    /// one: fast while the estimate's bound is above 70 % of `target_us`, then
     /// as late as the slope's uncertainty allows, at most `max_us` later.
-    pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64) -> bool {
+    pub fn exchange_due(&mut self, now: u64, target_us: f64, max_us: u64, hurry: bool) -> bool {
         if now < self.next_exchange {
             return false;
         }
-        self.exchanged(now, target_us, max_us);
+        self.exchanged(now, target_us, max_us, hurry);
         true
     }
 
     /// An exchange went out at `now` (one this clock asked for, or a sync
     /// frame to every node): plans the next as [`NodeClock::exchange_due`]
-    /// does.
-    pub fn exchanged(&mut self, now: u64, target_us: f64, max_us: u64) {
+    /// does; `hurry` (a run that has not started: nothing moves, and the
+    /// sooner the bound is small the sooner it starts) plans it fast.
+    pub fn exchanged(&mut self, now: u64, target_us: f64, max_us: u64, hurry: bool) {
         let h = now as f64;
         let limit = EXCHANGE_AT * target_us;
         let bound = self.est.error_bound(h);
-        let interval = if !self.est.synced() || bound > limit {
-            FAST_US
+        let fast = self.fast_us;
+        let interval = if hurry || !self.est.synced() || bound > limit {
+            fast
         } else {
             let grow = self.est.skew_bound().max(1e-12);
-            (((limit - bound) / grow) as u64).clamp(FAST_US, max_us.max(FAST_US))
+            (((limit - bound) / grow) as u64).clamp(fast, max_us.max(fast))
         };
         self.next_exchange = now + interval;
         self.planned = self.next_exchange;
@@ -210,15 +260,15 @@ impl NodeClock {
 
     /// The model to send at host time `now`, if the node needs one: its
     /// first, a slew toward the estimate when the model it runs is or will
-    /// soon be off by more than a quarter of `target_us`, or the estimate
-    /// itself once a slew has reached it. `delay_us` is how long the model
-    /// takes to reach the node. The host takes the model as the node's once
+    /// soon be off by more than `tolerance_us`, or the estimate itself once
+    /// a slew has reached it. `delay_us` is how long the model takes to
+    /// reach the node. The host takes the model as the node's once
     /// returned.
     /// A node `at_rest` takes the estimate at once, however far off.
     pub fn model_due(
         &mut self,
         now: u64,
-        target_us: f64,
+        tolerance_us: f64,
         delay_us: f64,
         at_rest: bool,
     ) -> Option<ClockModel> {
@@ -234,7 +284,7 @@ impl NodeClock {
         // Where the node will be when the model arrives.
         let at = now as f64 + delay_us;
         let off = |h: f64| est.local(h) - sent.local(h);
-        let quarter = 0.25 * target_us;
+        let quarter = tolerance_us;
         match self.slewing_until {
             // A slew runs to its end before anything else is sent.
             Some(until) if at < until => return None,
@@ -250,7 +300,10 @@ impl NodeClock {
         }
         // A line through the node's current time at `at` that meets the
         // estimate `span` later.
-        let span = (delta.abs() / SLEW_RATE).max(MIN_SLEW_US);
+        let span = (delta.abs() / SLEW_RATE)
+            .min(MAX_SLEW_US)
+            .max(delta.abs() / MAX_SLEW_RATE)
+            .max(MIN_SLEW_US);
         let slope = (1.0 + est.skew) + delta / span;
         let m = ClockModel {
             offset: sent.local(at) - slope * at,
@@ -304,7 +357,7 @@ mod tests {
             c.add(exchange(h));
             h += 10_000;
         }
-        let first = c.model_due(h, 10.0, 100.0, false).expect("a first model");
+        let first = c.model_due(h, 2.5, 100.0, false).expect("a first model");
         // A model 30 µs off: what a node restarted on an old estimate runs.
         c.sent = Some(ClockModel {
             offset: first.offset + 30.0,
@@ -314,7 +367,7 @@ mod tests {
         for _ in 0..400 {
             h += 10_000;
             c.add(exchange(h));
-            if let Some(m) = c.model_due(h, 10.0, 100.0, false) {
+            if let Some(m) = c.model_due(h, 2.5, 100.0, false) {
                 models.push((h as f64 + 100.0, m));
             }
         }

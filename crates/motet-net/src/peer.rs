@@ -4,6 +4,7 @@
 use crate::node_clock::NodeClock;
 use motet_link::Transport;
 use motet_wire::frame::{self, Flags, Header, MAX_FRAME, MAX_RAW};
+use motet_wire::group::GroupMessage;
 use motet_wire::link::{Config as LinkConfig, Link, State};
 use motet_wire::service::{port, ServiceReply, ServiceRequest};
 use motet_wire::sync::Exchange;
@@ -46,8 +47,9 @@ pub enum Incoming {
 struct Outgoing {
     port: u8,
     bytes: Vec<u8>,
-    /// A seal: the messages before it are a committed window.
-    seal: bool,
+    /// A seal, with the node's sequence end it commits: the messages
+    /// before it are a committed window.
+    seal: Option<u32>,
 }
 
 /// The host's end of the link to one node: the reliable link, the frames
@@ -92,6 +94,15 @@ pub struct Peer {
     /// (another device on its link: a module replaced or plugged in), the
     /// newest few, with their source.
     strangers: VecDeque<(u16, ServiceReply)>,
+    /// Payloads handed to the link and not yet acknowledged, oldest
+    /// first: the sequence end of each one that seals.
+    in_link: VecDeque<Option<u32>>,
+    /// The sequence end of the last seal the node's link acknowledged: the
+    /// node acted on it (a refusal comes back as a message).
+    pub sealed: Option<u32>,
+    /// The node's last heartbeat on a shared medium: its run and committed
+    /// end (how it confirms a group seal).
+    pub beat: Option<(u32, u32)>,
 }
 
 /// Service datagrams from other addresses kept.
@@ -129,6 +140,9 @@ impl Peer {
             asked: VecDeque::new(),
             unasked: 0,
             strangers: VecDeque::new(),
+            in_link: VecDeque::new(),
+            sealed: None,
+            beat: None,
         }
     }
 
@@ -151,19 +165,37 @@ impl Peer {
 
     /// Queues a motion message on the reliable link.
     pub fn send_motion(&mut self, msg: &HostMessage) {
-        self.queue(
-            motet_wire::link::DATA_PORT,
-            msg,
-            matches!(msg, HostMessage::Seal { .. }),
-        );
+        let seal = match msg {
+            HostMessage::Seal { next_seq } => Some(*next_seq),
+            _ => None,
+        };
+        self.queue(motet_wire::link::DATA_PORT, msg, seal);
+    }
+
+    /// Queues the seal of a window ending at `next_seq`: in the window's
+    /// last segment batch when that is the last message queued and still
+    /// waits for the link (one frame instead of two), else on its own.
+    pub fn send_seal(&mut self, next_seq: u32) {
+        let last = self
+            .outbox
+            .back()
+            .filter(|o| o.port == motet_wire::link::DATA_PORT && o.seal.is_none())
+            .and_then(|o| decode::<HostMessage>(&o.bytes).ok());
+        if let Some(HostMessage::Segments(batch)) = last {
+            self.outbox.pop_back();
+            let msg = HostMessage::SegmentsSealed(batch);
+            self.queue(motet_wire::link::DATA_PORT, &msg, Some(next_seq));
+        } else {
+            self.send_motion(&HostMessage::Seal { next_seq });
+        }
     }
 
     /// Queues a service request on the reliable link.
     pub fn send_service(&mut self, req: &ServiceRequest) {
-        self.queue(req.port(), req, false);
+        self.queue(req.port(), req, None);
     }
 
-    fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, seal: bool) {
+    fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, seal: Option<u32>) {
         let mut buf = [0u8; MAX_MESSAGE];
         let bytes = encode(msg, &mut buf).expect("host messages fit MAX_MESSAGE");
         self.outbox.push_back(Outgoing {
@@ -176,7 +208,7 @@ impl Peer {
     /// Drops every queued message after the last queued seal: a window that
     /// was not sealed must never reach the node, a seal already queued must.
     pub fn drop_unsealed(&mut self) {
-        match self.outbox.iter().rposition(|o| o.seal) {
+        match self.outbox.iter().rposition(|o| o.seal.is_some()) {
             Some(i) => self.outbox.truncate(i + 1),
             None => self.outbox.clear(),
         }
@@ -184,7 +216,7 @@ impl Peer {
 
     /// A seal queued or sent and not yet acknowledged.
     pub fn seal_in_flight(&self) -> bool {
-        self.outbox.iter().any(|o| o.seal) || self.seal_sent
+        self.outbox.iter().any(|o| o.seal.is_some()) || self.seal_sent
     }
 
     /// Payloads queued or in flight, not yet acknowledged.
@@ -222,7 +254,7 @@ impl Peer {
 
     /// Sends a message to every node as one datagram (on a shared medium
     /// every node hears it, whichever peer sends it).
-    pub fn broadcast(&mut self, msg: &motet_wire::group::GroupMessage) -> std::io::Result<()> {
+    pub fn broadcast(&mut self, msg: &GroupMessage) -> std::io::Result<()> {
         let mut buf = [0u8; MAX_MESSAGE];
         let payload = encode(msg, &mut buf).expect("group messages fit MAX_MESSAGE");
         let header = Header {
@@ -248,6 +280,7 @@ impl Peer {
             let stamp = self.transport.last_stamp();
             self.on_frame(&bytes, now, stamp);
         }
+        self.acknowledged();
         Ok(())
     }
 
@@ -299,9 +332,17 @@ impl Peer {
             }
         };
         if f.header.dst != HOST_ADDRESS {
-            // A node's heartbeat to every node says it is alive.
+            // A node's heartbeat to every node says it is alive, and
+            // what it committed.
             if f.header.dst == frame::BROADCAST && f.header.src == self.address {
                 self.last_heard = Some(now);
+                if f.header.port == port::GROUP {
+                    if let Ok(GroupMessage::Heartbeat { run, committed }) =
+                        decode::<GroupMessage>(f.payload)
+                    {
+                        self.beat = Some((run, committed));
+                    }
+                }
             }
             // The host's own sync frame to every node, heard back at the
             // instant every node heard it.
@@ -374,7 +415,8 @@ impl Peer {
             match self.link.send_port(o.port, &o.bytes, now) {
                 Ok(()) => {
                     // The seal is acknowledged once nothing is unacked.
-                    self.seal_sent |= o.seal;
+                    self.seal_sent |= o.seal.is_some();
+                    self.in_link.push_back(o.seal);
                     self.outbox.pop_front();
                 }
                 Err(_) => break,
@@ -384,10 +426,21 @@ impl Peer {
         while let Some(f) = self.link.poll(now, &mut out) {
             self.transport.send(f)?;
         }
+        self.acknowledged();
+        Ok(())
+    }
+
+    /// Takes what the link's acknowledgements say: the last seal the node
+    /// acted on.
+    fn acknowledged(&mut self) {
+        while self.in_link.len() > self.link.unacked() {
+            if let Some(Some(end)) = self.in_link.pop_front() {
+                self.sealed = Some(end);
+            }
+        }
         if self.link.unacked() == 0 {
             self.seal_sent = false;
         }
-        Ok(())
     }
 
     /// When the link wants to be polled again.
@@ -396,5 +449,51 @@ impl Peer {
             return Some(0);
         }
         self.link.next_timeout()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motet_wire::SegmentBatch;
+
+    fn queued(p: &Peer) -> Vec<(HostMessage, Option<u32>)> {
+        p.outbox
+            .iter()
+            .map(|o| (decode::<HostMessage>(&o.bytes).unwrap(), o.seal))
+            .collect()
+    }
+
+    #[test]
+    fn a_seal_rides_in_the_last_batch_when_it_can() {
+        let (a, _b) = motet_link::pair("host", "node");
+        let mut p = Peer::new("n", 2, Box::new(a), 1);
+        let batch = SegmentBatch {
+            bytes: heapless::Vec::from_slice(&[4, 0x21, 7]).unwrap(),
+        };
+        p.send_motion(&HostMessage::Segments(batch.clone()));
+        p.send_seal(5);
+        assert_eq!(
+            queued(&p),
+            vec![(HostMessage::SegmentsSealed(batch.clone()), Some(5))]
+        );
+        assert!(p.seal_in_flight());
+        // An event after the batch: the seal goes on its own, after it.
+        let event = HostMessage::Event {
+            track: 0,
+            time: 1.0,
+            value: 0.5,
+        };
+        p.send_motion(&HostMessage::Segments(batch.clone()));
+        p.send_motion(&event);
+        p.send_seal(9);
+        let q = queued(&p);
+        assert_eq!(q.len(), 4);
+        assert_eq!(q[1], (HostMessage::Segments(batch), None));
+        assert_eq!(q[3], (HostMessage::Seal { next_seq: 9 }, Some(9)));
+        // What was not sealed never goes.
+        p.send_motion(&event);
+        p.drop_unsealed();
+        assert_eq!(queued(&p).len(), 4);
     }
 }

@@ -24,7 +24,7 @@ use motet_wire::frame::{self, is_multicast, Flags, Header, BROADCAST, MAX_RAW};
 use motet_wire::group::{self, GroupError, GroupMessage};
 use motet_wire::link::{Config as LinkConfig, Link, State, WINDOW};
 use motet_wire::service::{port, NodeState, ServiceReply, HOST_ADDRESS};
-use motet_wire::{encode, MAX_MESSAGE};
+use motet_wire::{encode, NodeMessage, MAX_MESSAGE};
 
 /// A jump back in host time larger than this is a new host's time base.
 const NEW_TIME_BASE_US: f64 = 1e6;
@@ -323,8 +323,11 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
         match &msg {
             GroupMessage::Seal { members, .. } => {
                 self.group.join(run, me, members, now);
-                let reply = self.node.group_seal(next_seq);
-                self.push(None, port::MOTION, &reply);
+                match self.node.group_seal(next_seq) {
+                    // The heartbeat, at once, carries the committed end.
+                    Ok(()) => self.group.confirm(),
+                    Err(reason) => self.push(None, port::MOTION, &NodeMessage::Refused { reason }),
+                }
             }
             GroupMessage::Stop { .. } => {
                 self.node.close(Some(next_seq));
@@ -353,9 +356,11 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
     }
 
     /// This node's heartbeat to every node, when one is due, encoded into
-    /// `out`: its length.
+    /// `out`: its length. Due when it confirms a group seal, or while the
+    /// node moves and has sent nothing else for a while.
     fn heartbeat(&mut self, now: u64, out: &mut [u8]) -> Option<usize> {
-        if self.group.run() != self.node.run() || !self.node.moving() || !self.group.beat_due(now) {
+        let wanted = self.node.moving() || self.group.confirming();
+        if self.group.run() != self.node.run() || !wanted || !self.group.beat_due(now) {
             return None;
         }
         let msg = GroupMessage::Heartbeat {
@@ -472,6 +477,16 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
     /// The next frame to transmit, encoded into `out` (at least
     /// `frame::MAX_FRAME` bytes). Call until `None`.
     pub fn transmit<'o>(&mut self, now: u64, out: &'o mut [u8]) -> Option<&'o [u8]> {
+        let (n, beat) = self.next_frame(now, out)?;
+        // On a shared medium every frame tells the others this node is
+        // there: the heartbeat waits for a silence.
+        self.group.sent(now, beat);
+        Some(&out[..n])
+    }
+
+    /// The next frame to transmit into `out`: its length, and whether it
+    /// is the heartbeat.
+    fn next_frame(&mut self, now: u64, out: &mut [u8]) -> Option<(usize, bool)> {
         // Link replies move into the link's window in order.
         while let Some(r) = self.outbox.front() {
             let Some(link) = self.link.as_mut() else {
@@ -484,7 +499,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
             self.outbox.pop_front();
         }
         if let Some(n) = self.heartbeat(now, out) {
-            return Some(&out[..n]);
+            return Some((n, true));
         }
         if let Some(mut r) = self.datagrams.pop_front() {
             let (dst, src) = r
@@ -500,14 +515,15 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
                 ack: 0,
             };
             let n = frame::encode(&header, &r.bytes, out).ok()?;
-            return Some(&out[..n]);
+            return Some((n, false));
         }
-        self.link.as_mut()?.poll(now, out)
+        let n = self.link.as_mut()?.poll(now, out)?.len();
+        Some((n, false))
     }
 
     /// The earliest local time at which the endpoint has something to do.
     pub fn next_wakeup(&mut self, now: u64) -> Option<u64> {
-        if !self.datagrams.is_empty() {
+        if !self.datagrams.is_empty() || self.group.confirming() {
             return Some(now);
         }
         let mut best = self.link.as_ref().and_then(|l| l.next_timeout());

@@ -17,8 +17,10 @@ pub struct GroupWatch {
     run: u32,
     /// (address, local time last heard, µs): the host and the other nodes.
     members: Vec<(u16, u64), { MAX_GROUP + 1 }>,
-    /// Local time the next heartbeat is due, µs.
+    /// Local time the next heartbeat is due if nothing else is sent, µs.
     next_beat: u64,
+    /// A heartbeat is due at once: it confirms a group seal.
+    confirm: bool,
 }
 
 impl GroupWatch {
@@ -65,13 +67,29 @@ impl GroupWatch {
         self.members.iter().map(|m| m.1 + SILENCE_US + 1).min()
     }
 
-    /// Whether a heartbeat is due at `now`; if so, the next is scheduled.
-    pub fn beat_due(&mut self, now: u64) -> bool {
-        if self.run == 0 || now < self.next_beat {
-            return false;
-        }
+    /// Whether a heartbeat is due at `now`: one confirming a seal, or the
+    /// node has sent nothing for [`HEARTBEAT_US`]. Whatever goes out next
+    /// is reported with [`GroupWatch::sent`].
+    pub fn beat_due(&self, now: u64) -> bool {
+        self.run != 0 && (self.confirm || now >= self.next_beat)
+    }
+
+    /// A heartbeat goes out at once, whatever was sent lately: the
+    /// confirmation of a group seal.
+    pub fn confirm(&mut self) {
+        self.confirm = true;
+    }
+
+    /// A confirmation is waiting to go out.
+    pub fn confirming(&self) -> bool {
+        self.run != 0 && self.confirm
+    }
+
+    /// The node sent a frame at `now` (every member hears it); `beat`: it
+    /// was the heartbeat.
+    pub fn sent(&mut self, now: u64, beat: bool) {
         self.next_beat = now + HEARTBEAT_US;
-        true
+        self.confirm &= !beat;
     }
 
     /// When the next heartbeat is due, local µs (none without a group).
@@ -116,6 +134,17 @@ mod tests {
         // A new run starts a new group.
         w.join(10, 3, &members[..1], 900_000);
         assert_eq!(w.silent(900_000 + SILENCE_US), None);
-        assert!(w.beat_due(900_000) && !w.beat_due(900_001));
+        assert!(w.beat_due(900_000));
+        // Any frame sent puts the next heartbeat off; a confirmation goes
+        // at once.
+        w.sent(900_000, false);
+        assert!(!w.beat_due(900_000 + HEARTBEAT_US - 1));
+        assert!(w.beat_due(900_000 + HEARTBEAT_US));
+        w.confirm();
+        assert!(w.beat_due(900_001));
+        w.sent(900_001, false);
+        assert!(w.beat_due(900_002), "only the heartbeat confirms");
+        w.sent(900_002, true);
+        assert!(!w.beat_due(900_003));
     }
 }

@@ -55,13 +55,10 @@ fn batches(cfg: StreamConfig, n: usize, per_batch: usize) -> Vec<Batch> {
     out
 }
 
-#[test]
-fn batches_are_taken_whole_or_not_at_all() {
-    let cfg = StreamConfig {
-        path_mask: 0b11,
-        ..StreamConfig::default()
-    };
-    let mut node: Node<8> = Node::new();
+/// A node with two linear channels, configured for batches on `cfg`, at
+/// rest at the origin.
+fn configured<const Q: usize>(cfg: StreamConfig) -> Node<Q> {
+    let mut node: Node<Q> = Node::new();
     for (ch, axis) in [(0u8, 0usize), (1, 1)] {
         let mut coeffs = [0.0; 6];
         coeffs[axis] = 1.0;
@@ -79,6 +76,16 @@ fn batches_are_taken_whole_or_not_at_all() {
         send(&mut node, &HostMessage::SetPosition { position: [0.0; 6] }),
         None
     );
+    node
+}
+
+#[test]
+fn batches_are_taken_whole_or_not_at_all() {
+    let cfg = StreamConfig {
+        path_mask: 0b11,
+        ..StreamConfig::default()
+    };
+    let mut node: Node<8> = configured(cfg);
     let b = batches(cfg, 20, 6);
     assert!(b.len() >= 3 && b[0].segments == 6);
     // Out of order: the second batch first.
@@ -115,4 +122,50 @@ fn batches_are_taken_whole_or_not_at_all() {
         })
     );
     assert_eq!(node.status(), before);
+}
+
+/// A window's last batch with its seal commits the batch's segments as a
+/// `Segments` and a `Seal` would, with no answer (the link's
+/// acknowledgement confirms it); a node that takes no seal refuses it and
+/// takes none of its segments.
+#[test]
+fn a_batch_with_its_seal_commits_its_window_or_changes_nothing() {
+    let cfg = StreamConfig {
+        path_mask: 0b11,
+        ..StreamConfig::default()
+    };
+    let mut node: Node<16> = configured(cfg);
+    let b = batches(cfg, 20, 6);
+    let sealed = |b: &Batch| HostMessage::SegmentsSealed(b.batch.clone());
+    // Not windowed: no seal, so not the batch either.
+    let before = node.status();
+    assert_eq!(
+        send(&mut node, &sealed(&b[0])),
+        Some(NodeMessage::Refused {
+            reason: Refusal::BadConfig
+        })
+    );
+    assert_eq!(node.status(), before);
+    assert_eq!(send(&mut node, &HostMessage::Windowed { run: 3 }), None);
+    assert_eq!(send(&mut node, &sealed(&b[0])), None);
+    let s = node.status();
+    assert_eq!((s.next_seq, s.committed, node.queued()), (6, 6, 6));
+    // The same as two messages, and a seal answers nothing.
+    assert_eq!(
+        send(&mut node, &HostMessage::Segments(b[1].batch.clone())),
+        None
+    );
+    assert_eq!(node.status().committed, 6);
+    assert_eq!(send(&mut node, &HostMessage::Seal { next_seq: 12 }), None);
+    assert_eq!(node.status().committed, 12);
+    // Closed (a group stop): refused, nothing taken.
+    node.close(Some(12));
+    let before = node.status();
+    assert_eq!(
+        send(&mut node, &sealed(&b[2])),
+        Some(NodeMessage::Refused {
+            reason: Refusal::Closed
+        })
+    );
+    assert_eq!((node.status(), node.queued()), (before, 12));
 }

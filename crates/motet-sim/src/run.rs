@@ -432,14 +432,8 @@ impl<P: PlantSink> SimMachine<P> {
             // A node with loops is polled a quarter second at a time, so
             // that what they send never waits in its short queue for
             // longer (the outputs are the same: each carries its time).
-            let loops = c.servos.any()
-                || !spec.sensors.is_empty()
-                || !c.heat.is_empty();
-            let chunk = if loops {
-                LOOP_CHUNK_US
-            } else {
-                f64::INFINITY
-            };
+            let loops = c.servos.any() || !spec.sensors.is_empty() || !c.heat.is_empty();
+            let chunk = if loops { LOOP_CHUNK_US } else { f64::INFINITY };
             while node.time() < until {
                 let to = (node.time().max(self.now) + chunk).min(until);
                 node.poll(to, &mut c);

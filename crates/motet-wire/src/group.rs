@@ -21,14 +21,17 @@ use serde::{Deserialize, Serialize};
 /// 140 bytes in all, fit a message.
 pub const MAX_GROUP: usize = 16;
 
-/// A member sends a heartbeat at least this often, µs of its own clock.
-pub const HEARTBEAT_US: u64 = 50_000;
+/// A member that has sent nothing else for this long sends a heartbeat,
+/// µs of its own clock: every frame on a shared medium is heard by every
+/// member, so the heartbeat only fills silences.
+pub const HEARTBEAT_US: u64 = 500_000;
 
 /// A member (or the host) not heard for this long is taken as gone: a node
 /// with committed motion then takes no more seals and brakes on its
-/// committed window's tail, µs. Five heartbeats: one lost frame is not a
-/// death.
-pub const SILENCE_US: u64 = 5 * HEARTBEAT_US;
+/// committed window's tail, µs. Over two heartbeats: one frame lost is not
+/// a death; shorter than the host's node timeout (1.5 s), so the other
+/// nodes hear a node fall silent before the host gives it up.
+pub const SILENCE_US: u64 = 1_200_000;
 
 /// One node's part of a group seal or stop.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -45,8 +48,9 @@ pub struct Member {
 pub enum GroupMessage {
     /// Host → every node: commit the pending window; each listed node seals
     /// as `HostMessage::Seal { next_seq }` would, and confirms with its
-    /// `Status` through its link. The list is also the group: the nodes
-    /// that watch one another's heartbeats.
+    /// heartbeat (its committed end) at once; a refusal goes through its
+    /// link. The list is also the group: the nodes that watch one
+    /// another's heartbeats.
     Seal {
         /// The run (`Windowed { run }`); a node on another run ignores it.
         run: u32,

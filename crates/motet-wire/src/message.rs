@@ -208,7 +208,9 @@ pub enum HostMessage {
     /// Commit every pending segment and event. `next_seq` is the sequence
     /// number after the last pending segment; a mismatch is refused
     /// (`OutOfOrder`), as is a seal once the committed window's tail has
-    /// started (`TailStarted`).
+    /// started (`TailStarted`). Taken without a reply: the link's
+    /// acknowledgement of the frame that carried it is the host's
+    /// confirmation (a refusal comes back as one).
     Seal {
         /// The sequence number after the last pending segment: the node's `next_seq`.
         next_seq: u32,
@@ -258,6 +260,16 @@ pub enum HostMessage {
     /// out of range, a drive output a servo or another heater has, no room,
     /// or segments queued).
     ConfigureHeater(HeaterConfig),
+    /// A window's last segments and its seal in one message: the batch as
+    /// [`HostMessage::Segments`] takes it, then a [`HostMessage::Seal`] at
+    /// the node's `next_seq` after it (no sequence number of its own: it is
+    /// the batch's end). Refused before anything changes when the node
+    /// takes no seal (not windowed, stopped, closed) or the batch is
+    /// refused; a window whose tail should have started is refused
+    /// `TailStarted` with the batch left pending, as the two messages
+    /// would. Saves the seal's own frame: on a print every window is one
+    /// frame.
+    SegmentsSealed(SegmentBatch),
 }
 
 /// Most construction values a [`HostMessage::GraphAdd`] carries.
@@ -313,7 +325,7 @@ pub struct GraphKind(pub u8);
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum NodeMessage {
-    /// The node's queues and sequence numbers: the answer to `Status` and to a `Seal`.
+    /// The node's queues and sequence numbers: the answer to `Status`.
     Status {
         /// Free places in the segment queue.
         segment_space: u16,
@@ -522,6 +534,9 @@ mod tests {
             }),
             HostMessage::Where,
             HostMessage::TallyGet,
+            HostMessage::SegmentsSealed(SegmentBatch {
+                bytes: Vec::from_slice(&[9, 0x21, 7, 0x80, 1]).unwrap(),
+            }),
         ];
         let mut buf = [0u8; MAX_MESSAGE];
         for m in msgs {

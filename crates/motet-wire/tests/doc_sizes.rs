@@ -31,6 +31,18 @@ fn documented_sizes() {
             }),
             192,
         ),
+        (
+            HostMessage::SegmentsSealed(motet_wire::SegmentBatch {
+                bytes: heapless::Vec::from_slice(&[0; motet_wire::stream::BATCH_BYTES]).unwrap(),
+            }),
+            192,
+        ),
+        (
+            HostMessage::SegmentsSealed(motet_wire::SegmentBatch {
+                bytes: heapless::Vec::from_slice(&[0]).unwrap(),
+            }),
+            3,
+        ),
         (HostMessage::Reset, 1),
         (
             HostMessage::ConfigureChannel(motet_wire::ChannelConfig {

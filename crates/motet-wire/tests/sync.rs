@@ -367,3 +367,89 @@ enum Held {
     OneIn(u64),
     Bursts(u64),
 }
+
+/// A rate step is told from the exchanges alone: the rates every exchange
+/// before the change allowed and those every exchange since allows, hard
+/// limits both. A jump (a clock source gone bad) leaves them hundreds of
+/// ppm apart, a crystal warming by 50 ppm leaves them within it, and a
+/// steady crystal under jitter and stalls reports no step at all.
+#[test]
+fn a_rate_step_is_told_by_every_exchange() {
+    // (seed, skew before, skew after, jitter µs, least and most gap ppm)
+    let cases = [
+        (41, 150e-6, 450e-6, 0.0, 200.0, 300.0),
+        (42, 150e-6, -300e-6, 1_000.0, 100.0, 450.0),
+        (43, 200e-6, 150e-6, 20.0, -1e9, 50.0),
+    ];
+    for (seed, from, to, jitter, least, most) in cases {
+        let clock = Crystal {
+            offset: 3e6,
+            skews: vec![(0.0, from), (60.0 * S, to)],
+        };
+        let path = Path { jitter, ..PATH };
+        let (_, sync) = run(&clock, path, SyncConfig::default(), seed, 90.0 * S, 0.0);
+        let Some(((blo, bhi), (alo, ahi))) = sync.rate_step() else {
+            panic!("seed {seed}: no step told after {} changes", sync.changes())
+        };
+        assert!(
+            blo <= from && from <= bhi,
+            "seed {seed}: before [{blo}, {bhi}]"
+        );
+        assert!(alo <= to && to <= ahi, "seed {seed}: after [{alo}, {ahi}]");
+        let gap = (alo - bhi).max(blo - ahi) * 1e6;
+        assert!(least <= gap && gap <= most, "seed {seed}: gap {gap:.1} ppm");
+    }
+    // Steady, with jitter and stalls: no step, whatever the estimate did.
+    let clock = Crystal {
+        offset: 0.0,
+        skews: vec![(0.0, -120e-6)],
+    };
+    let mut sync = ClockSync::default();
+    let mut rng = Rng::new(44);
+    for i in 0..12_000u64 {
+        let t1 = 1_000.0 + i as f64 * 10_000.0;
+        let stall = if i % 37 == 0 {
+            8_000.0 * rng.unit()
+        } else {
+            0.0
+        };
+        let d1 = 50.0 + 2_000.0 * rng.unit() + stall;
+        let d2 = 50.0 + 2_000.0 * rng.unit();
+        sync.add(clock.exchange(t1, d1, 20.0, d2)).unwrap();
+        if let Some(((blo, bhi), (alo, ahi))) = sync.rate_step() {
+            let gap = (alo - bhi).max(blo - ahi);
+            assert!(gap <= 0.0, "exchange {i}: a step of {:.1} ppm", gap * 1e6);
+        }
+    }
+}
+
+/// A clock whose time jumps (its rate steady) is followed to its new time
+/// at once, not held halfway by the assumption that only its rate changed.
+#[test]
+fn a_jump_in_time_is_followed_at_the_old_rate() {
+    let (skew, jump) = (150e-6, 5_000.0);
+    let local = |h: f64| 7e6 + h * (1.0 + skew) + if h >= 30.0 * S { jump } else { 0.0 };
+    let mut sync = ClockSync::default();
+    let mut h = 1_000.0;
+    let mut worst_after = 0.0f64;
+    while h < 40.0 * S {
+        let t1 = h.floor();
+        let e = Exchange {
+            t1: t1 as u64,
+            t2: local(t1 + 50.0).floor() as u64,
+            t3: local(t1 + 70.0).floor() as u64,
+            t4: (t1 + 120.0) as u64,
+        };
+        sync.add(e).unwrap();
+        if h > 30.5 * S {
+            worst_after = worst_after.max((sync.host_to_local(h) - local(h)).abs());
+        }
+        h += if h < 30.0 * S { 1_000_000.0 } else { 10_000.0 };
+    }
+    assert!(sync.changes() >= 1);
+    assert!(
+        worst_after < 5.0,
+        "{worst_after:.1} µs off half a second after"
+    );
+    assert!((sync.model().skew - skew).abs() < 1e-6);
+}

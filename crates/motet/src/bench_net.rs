@@ -58,6 +58,16 @@ pub struct Args {
     /// frame to every node (to compare the two).
     #[arg(long, requires = "bus")]
     sync_each: bool,
+    /// Also print the host's traffic by what each frame carries (segment
+    /// batches, seals, status, clock exchanges, acknowledgements, group
+    /// frames), each way.
+    #[arg(long)]
+    traffic: bool,
+    /// Write each node's true clock error and the host's bound on it, every
+    /// 100 ms while streaming, to this CSV file (seconds, node, error µs,
+    /// bound µs).
+    #[arg(long, value_name = "FILE")]
+    clock_trace: Option<PathBuf>,
 }
 
 /// A shared medium for `--bus`.
@@ -65,6 +75,9 @@ pub struct Args {
 pub enum Bus {
     /// A simulated CAN-FD bus with arbitration.
     Can,
+    /// A UDP multicast group on this computer's loopback, real sockets;
+    /// the simulated clock waits for every frame to reach every member.
+    Udp,
 }
 
 /// Wire size of a datagram carrying `m`.
@@ -98,7 +111,18 @@ pub fn bench_net(args: Args) -> Result<()> {
     let machine = &loaded.machine;
     let n = machine.nodes.len();
     let clock = SimClock::new();
-    let links = faulty_links(n, &clock, &args);
+    let traffic = crate::bench_net_traffic::Traffic::default();
+    let tap = |t| {
+        if args.traffic {
+            traffic.tap(t)
+        } else {
+            t
+        }
+    };
+    let links = faulty_links(n, &clock, &args)
+        .into_iter()
+        .map(|(h, node)| (tap(h), node))
+        .collect();
     let clocks = node_clocks(n);
     let wall = std::time::Instant::now();
     let cfg = net_config(&args)?;
@@ -115,22 +139,29 @@ pub fn bench_net(args: Args) -> Result<()> {
         None => None,
     };
     let identity = RunIdentity::new(Digest::of(loaded.text.as_bytes()), Digest::of(&loaded.data));
+    if args.bus.is_some() && (args.jitter_us > 0 || args.faults > 0.0) {
+        bail!("--bus takes no --jitter-us or --faults: the shared medium loses nothing");
+    }
     let mut lb = match args.bus {
-        Some(Bus::Can) => {
-            if args.jitter_us > 0 || args.faults > 0.0 {
-                bail!(
-                    "--bus can takes no --jitter-us or --faults: the simulated bus loses nothing"
-                );
-            }
-            Loopback::on_bus(
-                machine,
-                loaded.commands.clone(),
-                machine.start,
-                &clocks,
-                cfg,
-                journal,
-            )
-        }
+        Some(Bus::Udp) => Loopback::on_udp_group(
+            machine,
+            loaded.commands.clone(),
+            machine.start,
+            &clocks,
+            cfg,
+            journal,
+            &tap,
+        )
+        .context("joining a UDP multicast group on 127.0.0.1")?,
+        Some(Bus::Can) => Loopback::on_bus_with(
+            machine,
+            loaded.commands.clone(),
+            machine.start,
+            &clocks,
+            cfg,
+            journal,
+            &tap,
+        ),
         None => Loopback::with_journal(
             machine,
             loaded.commands.clone(),
@@ -162,6 +193,9 @@ pub fn bench_net(args: Args) -> Result<()> {
         }
     );
     print_wire(&lb, n, motion, &cfg, streamed.bytes_at_start);
+    if args.traffic {
+        traffic.print(motion);
+    }
     if args.kill_host_at.is_some() {
         resume_figures(
             machine,
@@ -174,10 +208,27 @@ pub fn bench_net(args: Args) -> Result<()> {
         )?;
         let _ = std::fs::remove_dir_all(&scratch);
     }
+    if let Some(path) = &args.clock_trace {
+        write_trace(path, &streamed.samples, machine)?;
+    }
     print_clock_errors(&streamed.samples, machine, &clocks, args.jitter_us);
     print_agreement(&streamed.samples, machine);
     print_drift(&lb, machine);
     Ok(())
+}
+
+/// Writes every sample's clock errors and bounds as CSV.
+fn write_trace(path: &std::path::Path, samples: &[Sample], machine: &Machine) -> Result<()> {
+    let mut out = String::from("seconds,node,error_us,bound_us\n");
+    for (i, s) in samples.iter().enumerate() {
+        for (k, v) in s.nodes.iter().enumerate() {
+            if let Some((e, b)) = v {
+                let name = &machine.nodes[k].name;
+                out += &format!("{:.1},{name},{e:.3},{b:.3}\n", i as f64 * 0.1);
+            }
+        }
+    }
+    std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Prints each node's own measure of its drift (from the host's send times
@@ -188,11 +239,15 @@ fn print_drift(lb: &Loopback, machine: &Machine) {
             continue;
         };
         let own = n.node.endpoint.services().status(0).drift;
+        let (taken, slow) = p.sync.counts();
         println!(
-            "  node {}: drift {:+.3} ppm true, {:+.3} ppm the host's estimate, {}",
+            "  node {}: drift {:+.3} ppm true, {:+.3} ppm the host's estimate ({} exchanges taken, {} too slow, {} rate changes found), {}",
             node.name,
             n.ppm,
             p.sync.model().skew * 1e6,
+            taken,
+            slow,
+            p.sync.changes(),
             own.map_or("no measure of its own yet".to_string(), |d| format!(
                 "{:+.3} ppm its own measure over {} s",
                 d.ppb as f64 * 1e-3,

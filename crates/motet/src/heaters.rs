@@ -54,8 +54,8 @@ pub fn write_plots(
     for t in traces {
         let file = format!("heater-{}.png", t.name);
         let plot = motet_sim::heaters::heater_plot(machine, t);
-        let png = motet_render::plot::plot_png(&plot)
-            .with_context(|| format!("rendering {file}"))?;
+        let png =
+            motet_render::plot::plot_png(&plot).with_context(|| format!("rendering {file}"))?;
         let path = out.join(&file);
         std::fs::write(&path, png).with_context(|| format!("writing {}", path.display()))?;
         written.push((t.name.clone(), file));

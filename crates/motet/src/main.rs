@@ -5,6 +5,7 @@ mod bench;
 mod bench_instructions;
 mod bench_memory;
 mod bench_net;
+mod bench_net_traffic;
 mod bench_wire;
 mod dance;
 mod elf;

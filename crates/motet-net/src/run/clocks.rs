@@ -24,7 +24,16 @@ impl NetRun {
         for p in self.peers.iter_mut() {
             let target = clock_target(&self.cfg, p);
             p.sync.probe_after(p.last_heard, p.last_asked, quiet);
-            if p.sync.exchange_due(now, target, self.cfg.sync_interval_us) {
+            // Exchanges under jitter need as many as the link carries;
+            // reference samples do not (each is exact), and on a bus each
+            // sync frame costs every node an answer.
+            if p.references == 0 {
+                p.sync.set_link_rtt(p.link().stats().min_rtt_us);
+            }
+            let hurry = at_rest && p.references == 0;
+            if p.sync
+                .exchange_due(now, target, self.cfg.sync_interval_us, hurry)
+            {
                 // A lost datagram is only a missing sample.
                 if shared {
                     to_all = true;
@@ -41,7 +50,10 @@ impl NetRun {
             }
             // The model reaches the node about half a round trip later.
             let delay = 0.5 * p.link().stats().srtt_us as f64;
-            if let Some(m) = p.sync.model_due(now, target, delay, at_rest) {
+            if let Some(m) = p
+                .sync
+                .model_due(now, model_tolerance(target, p), delay, at_rest)
+            {
                 p.send_service(&ServiceRequest::TimeSet {
                     offset: m.offset,
                     skew: m.skew,
@@ -58,18 +70,94 @@ impl NetRun {
             }
             self.stop(&format!("node {node}: {message}"), now);
         }
-        // A crystal that leaves its range while the machine moves (a fault,
-        // a clock source gone bad) stops it as it would refuse the start.
-        // (Only a rate: a bound that grows, as an emulated board's does on
-        // a loaded computer, is the estimate's doubt, not the node's fault.)
+        // A clock gone bad while the machine moves stops it, as it would
+        // refuse the start.
         if matches!(self.phase, Phase::Streaming | Phase::Draining) {
-            if let Err(NetError::Node { node, message }) = self.check_rates() {
+            if let Err(NetError::Node { node, message }) = self.check_moving(now) {
                 self.stop(&format!("node {node}: {message}"), now);
             }
         }
         Ok(())
     }
+
+    /// The clocks of a moving machine, judged only on what the host knows
+    /// surely: a rate out of a crystal's range, a rate that stepped further
+    /// than a crystal drifts (hard limits both, which a host's or a node's
+    /// late stamps only widen), or a node known to run far off the host's
+    /// time. An estimate in doubt (an emulated board on a loaded computer
+    /// wanders, a busy path delays) is said once, not stopped on: the
+    /// machine may be right where it should be.
+    fn check_moving(&mut self, now: u64) -> Result<(), NetError> {
+        self.check_rates()?;
+        let h = now as f64;
+        for (k, p) in self.peers.iter().enumerate() {
+            if self.lost.iter().any(|l| l.node == k) {
+                continue;
+            }
+            let node = p.name.clone();
+            if let Some(((blo, bhi), (alo, ahi))) = p.sync.rate_step() {
+                let gap = (alo - bhi).max(blo - ahi);
+                if gap > MAX_RATE_STEP {
+                    let message = format!(
+                        "its clock's rate jumped from {:+.0} to {:+.0} ppm off the host's (every exchange since allows {:+.0} to {:+.0}, at least {:.0} ppm from before); a crystal drifts but does not jump so: its clock source is failing, and nothing moves on it",
+                        0.5 * (blo + bhi) * 1e6,
+                        now_rate(p.sync.model().skew, (alo, ahi)) * 1e6,
+                        alo * 1e6,
+                        ahi * 1e6,
+                        gap * 1e6
+                    );
+                    return Err(NetError::Node { node, message });
+                }
+            }
+            let limit = (OFF_TARGETS * clock_target(&self.cfg, p)).max(OFF_MIN_US);
+            if let Some((off, sure)) = p.sync.model_off(h) {
+                if off > limit && sure < 0.25 * limit {
+                    let message = format!(
+                        "its clock ran {off:.0} µs off the host's time (known to ±{sure:.1} µs), beyond the {limit:.0} µs the machine's path allows; nothing moves on it"
+                    );
+                    return Err(NetError::Node { node, message });
+                }
+            }
+        }
+        // Doubt, said once a node.
+        for k in 0..self.peers.len() {
+            let p = &self.peers[k];
+            let limit = (OFF_TARGETS * clock_target(&self.cfg, p)).max(OFF_MIN_US);
+            let bound = p.sync.error_bound(h);
+            if bound.is_finite() && bound > limit && !self.doubted.contains(&k) {
+                let note = format!(
+                    "node {}: its clock is known only to ±{bound:.0} µs (its exchanges are late or its rate wanders); the run goes on, as nothing says the node is off",
+                    p.name
+                );
+                self.doubted.push(k);
+                self.pace.note(note);
+            }
+        }
+        Ok(())
+    }
 }
+
+/// The rate a clock runs at now, for the person: the estimate's, when
+/// the exchanges since the change allow it, else the middle of what they
+/// allow.
+fn now_rate(estimate: f64, (lo, hi): (f64, f64)) -> f64 {
+    if (lo..=hi).contains(&estimate) {
+        estimate
+    } else {
+        0.5 * (lo + hi)
+    }
+}
+
+/// A rate step beyond this between the exchanges before a change and
+/// those after, surely, is a clock source gone bad: a crystal's rate moves
+/// by a few ppm with its temperature, a board swapped or a failing
+/// oscillator by far more.
+pub(super) const MAX_RATE_STEP: f64 = 100e-6;
+/// A node known to run this many times its clock target off the host's
+/// time stops the run ...
+const OFF_TARGETS: f64 = 100.0;
+/// ... and never for less than this, µs.
+const OFF_MIN_US: f64 = 1_000.0;
 
 impl NetRun {
     /// How long a node may stay silent before it is asked to speak, µs:
@@ -111,10 +199,26 @@ pub(super) fn clock_target(cfg: &NetConfig, p: &Peer) -> f64 {
     cfg.clock_bound_us.max(slow)
 }
 
-/// The clock target of a node measured by reference samples, µs: its
-/// model is replaced once a quarter of this off, so the node keeps within
-/// about 2 µs of the host.
-const REFERENCE_TARGET_US: f64 = 5.0;
+/// The clock target of a node measured by reference samples, µs: they
+/// tell that much.
+const REFERENCE_TARGET_US: f64 = 6.0;
+
+/// How far the model a node runs may be from the estimate before a new
+/// one goes out, µs: a quarter of its target, and at most
+/// [`REFERENCE_MODEL_US`] for a node measured by reference samples.
+fn model_tolerance(target: f64, p: &Peer) -> f64 {
+    let quarter = 0.25 * target;
+    if p.references > 0 {
+        quarter.min(REFERENCE_MODEL_US)
+    } else {
+        quarter
+    }
+}
+
+/// A node measured by reference samples runs a model within this of the
+/// estimate, µs: their estimates are within about as much of the truth,
+/// so any two such nodes keep within about 2 µs of each other.
+const REFERENCE_MODEL_US: f64 = 0.5;
 
 impl NetRun {
     /// Why the run could not start in time: the first node without a link,

@@ -2,7 +2,7 @@
 //!
 //! A group seal is one broadcast datagram listing every node's sequence
 //! end: every node that hears it commits the same window at the same
-//! instant. Each answers with its status through its own reliable link; a
+//! instant. Each confirms with its heartbeat (its committed end); a
 //! node that has not confirmed in time gets the seal again through its link
 //! (it may have missed the frame). One that still has not confirmed when
 //! half the lead has passed stops the run, and the window is taken back
@@ -11,9 +11,11 @@
 //! on that tail, the one that missed the seal included. The next seal
 //! waits until every node confirmed the last.
 //!
-//! The host also sends a heartbeat to every node; each node sends its own.
-//! A node that no longer hears the host or another member brakes on its
-//! committed tail by itself ([`motet_wire::group::SILENCE_US`]).
+//! The host also sends a heartbeat to every node when it has sent nothing
+//! else for a while; each node sends its own likewise, and one at once to
+//! confirm a group seal. A node that no longer hears the host or another
+//! member brakes on its committed tail by itself
+//! ([`motet_wire::group::SILENCE_US`]).
 
 use super::{NetRun, Phase};
 use motet_wire::group::{GroupMessage, Member, HEARTBEAT_US, MAX_GROUP};
@@ -29,6 +31,8 @@ pub(super) struct Group {
     confirmed: Vec<(usize, Member)>,
     unconfirmed: Option<Unconfirmed>,
     next_beat: u64,
+    /// Frames the host had put on the medium at the last round.
+    frames_sent: u64,
     /// The end and tail of the last seal journaled: a stop is journaled on it.
     pub(super) journaled: (u32, u32),
     /// Windows taken back by a group stop.
@@ -169,9 +173,14 @@ impl NetRun {
         };
         // A lost datagram is only a missing sample.
         let _ = self.peers[k].send_time_to_all(now);
+        let starting = matches!(self.phase, Phase::Starting);
         for p in self.peers.iter_mut() {
             let target = super::clocks::clock_target(&self.cfg, p);
-            p.sync.exchanged(now, target, self.cfg.sync_interval_us);
+            // A start hurries exchanges under jitter; reference samples
+            // are exact, and each sync frame costs every node an answer.
+            let hurry = starting && p.references == 0;
+            p.sync
+                .exchanged(now, target, self.cfg.sync_interval_us, hurry);
             p.asked(now);
         }
     }
@@ -187,8 +196,18 @@ impl NetRun {
             self.phase,
             Phase::Streaming | Phase::Draining | Phase::Stopping(_)
         );
-        if active && now >= g.next_beat {
+        // Every frame the host puts on the medium tells the nodes it is
+        // there: the heartbeat only fills a silence.
+        let sent: u64 = self
+            .peers
+            .iter()
+            .map(|p| p.transport().stats().frames_out)
+            .sum();
+        if sent != g.frames_sent {
+            g.frames_sent = sent;
             g.next_beat = now + HEARTBEAT_US;
+        }
+        if active && now >= g.next_beat {
             let msg = GroupMessage::Heartbeat {
                 run: self.identity.run,
                 committed: g.window,
@@ -247,13 +266,21 @@ impl NetRun {
         }
     }
 
-    /// Node `k`'s last status says it committed up to `next_seq`.
+    /// Node `k` committed up to `next_seq`: its heartbeat says so (a node
+    /// sends one as soon as it takes a group seal), or its link
+    /// acknowledged the seal sent through it, or its last status says so.
     fn confirms(&self, k: usize, next_seq: u32) -> bool {
-        matches!(
+        let reached = |committed: u32| committed.wrapping_sub(next_seq) < 1 << 31;
+        let p = &self.peers[k];
+        let beat = p
+            .beat
+            .is_some_and(|(run, c)| run == self.identity.run && reached(c));
+        let status = matches!(
             self.status[k],
             Some(NodeMessage::Status { committed, run, .. })
-                if run == self.identity.run && committed.wrapping_sub(next_seq) < 1 << 31
-        )
+                if run == self.identity.run && reached(committed)
+        );
+        beat || status || p.sealed == Some(next_seq)
     }
 
     /// When the run stops with a group seal not confirmed by every node:

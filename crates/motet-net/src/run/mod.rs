@@ -26,6 +26,7 @@ pub use stop::{LostNode, StopInfo};
 
 use crate::digest::Digest;
 use crate::journal::{JournalHeader, JournalWriter};
+use crate::node_clock::EXCHANGE_AT;
 use crate::peer::{Incoming, Peer};
 use crate::plan_feed::{run_limits, CommandSource, PlanFeed};
 use clocks::clock_target;
@@ -43,6 +44,9 @@ const CLOSE_ENOUGH: f64 = 3.0;
 
 /// Service replies kept for [`NetRun::take_service_replies`].
 const SERVICE_REPLIES: usize = 256;
+/// Nothing moves before every node's clock bound stays within its target
+/// this long with no exchange more, µs.
+const START_HORIZON_US: f64 = 1_000_000.0;
 
 /// Settings of a networked run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,7 +56,9 @@ pub struct NetConfig {
     pub lead_min_us: u64,
     /// A node silent this long is lost, µs.
     pub node_timeout_us: u64,
-    /// Status requests to each node, µs apart.
+    /// Status requests to each node while the machine finishes, µs apart
+    /// (while windows stream, a seal's acknowledgement tells the host what
+    /// it needs, and a status is asked only when a queue looks full).
     pub status_interval_us: u64,
     /// Longest time between clock exchanges with a node, µs: they are as
     /// rare as the node's error bound allows, and no rarer than this (they
@@ -276,6 +282,8 @@ pub struct NetRun {
     service_replies: VecDeque<(usize, motet_wire::ServiceReply)>,
     /// The heaters its nodes drive: heard from, ready, tripped; a wait.
     heat: heaters::Heat,
+    /// Nodes whose clock the host was in doubt of (said once).
+    doubted: Vec<usize>,
 }
 
 impl NetRun {
@@ -338,6 +346,7 @@ impl NetRun {
             samples: motet_host::samples::SampleStore::new(),
             service_replies: VecDeque::new(),
             heat: heaters::Heat::default(),
+            doubted: Vec::new(),
         }
     }
 
@@ -689,8 +698,16 @@ impl NetRun {
             }
             self.configured = true;
         }
+        // Within the share of the target the exchanges keep while
+        // streaming (the rest is for the model and a margin), and within
+        // the target a while on with no exchange more: a slope still
+        // unsure would carry the bound past it.
         let ready = self.peers.iter().all(|p| {
-            p.sync.error_bound(now as f64) <= clock_target(&self.cfg, p) && p.backlog() == 0
+            let target = clock_target(&self.cfg, p);
+            let later = now as f64 + START_HORIZON_US;
+            p.sync.error_bound(now as f64) <= EXCHANGE_AT * target
+                && p.sync.error_bound(later) <= target
+                && p.backlog() == 0
         });
         // Nothing moves before every heater a node drives has reported.
         if ready && self.heaters_heard()? {

@@ -183,7 +183,6 @@ impl NetRun {
         if let Some((k, why)) = lost {
             self.lose(k, why, now);
         }
-        self.ask_status(now);
     }
 
     /// While the nodes run their tails: ask each where it is until it says
@@ -248,14 +247,39 @@ impl NetRun {
         Ok(())
     }
 
-    /// Segments every node that takes segments has reported finished, as
-    /// far as their last statuses tell (never less than before).
+    /// Segments every node that takes segments has finished, as far as
+    /// their last statuses tell, or their last frames: a node that answers
+    /// runs its queue in order, so what ended on its clock before it last
+    /// spoke is done (never less than before).
     pub(super) fn update_done(&mut self) {
         let reported = (0..self.peers.len())
             .filter(|&k| self.dist.next_seq(k).is_some())
-            .map(|k| self.finished_by(k).unwrap_or(0))
+            .map(|k| {
+                let by_status = self.finished_by(k).unwrap_or(0);
+                let p = &self.peers[k];
+                let by_frame = p.last_heard.map_or(0, |t| {
+                    let rtt = p.link().stats().srtt_us as f64;
+                    self.ended_by(t as f64 - rtt - super::window::RETIRE_SLACK_US)
+                });
+                by_status.max(by_frame)
+            })
             .min()
             .unwrap_or(0);
         self.done = self.done.max(reported.min(self.next_index_committed()));
+    }
+
+    /// Segments the committed trajectory surely ended by host time `t`: the
+    /// committed ones before the first that ends later (none the tail may
+    /// have slowed), 0 for a time before what the host keeps.
+    fn ended_by(&self, t: f64) -> u32 {
+        if t < self.forgotten_until {
+            return 0;
+        }
+        let first = self
+            .committed
+            .iter()
+            .find(|c| c.seg.t1() > t)
+            .map_or(self.next_index_committed(), |c| c.index);
+        first.min(self.tail_start)
     }
 }

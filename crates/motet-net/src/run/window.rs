@@ -11,7 +11,7 @@ use motet_trajectory::Segment;
 use motet_wire::{HostMessage, NodeMessage};
 
 /// How long after a segment's end a node may still hold it, µs.
-const RETIRE_SLACK_US: f64 = 50_000.0;
+pub(super) const RETIRE_SLACK_US: f64 = 50_000.0;
 
 /// How long after a segment's end, on the host's clock, the host still
 /// keeps it, µs: how far back [`NetRun::position_at`] answers.
@@ -124,7 +124,8 @@ impl NetRun {
             if self.peers.iter().any(|p| p.seal_in_flight()) || self.group_busy() {
                 break;
             }
-            let grew = self.grow(t + lead + self.cfg.window_us as f64, now)?;
+            let window = self.cfg.window_us as f64;
+            let grew = self.grow(t + lead + 0.5 * window, t + lead + window, now)?;
             if self.pending.is_empty() && self.pending_events == 0 && self.starving(t + lead) {
                 // An open feed with nothing to plan while the window needs
                 // more: plan what the planner holds to rest now, while the
@@ -164,8 +165,10 @@ impl NetRun {
     }
 
     /// Routes planned items into the pending window until its tail would start
-    /// at or after `target`, the queue is full, or the job is planned out.
-    pub(super) fn grow(&mut self, target: f64, now: u64) -> Result<bool, NetError> {
+    /// at or after `target`, the queue is full, or the job is planned out;
+    /// or, once it reaches `enough`, where every node's segment batch is
+    /// nearly full, so that the window goes out in full frames.
+    pub(super) fn grow(&mut self, enough: f64, target: f64, now: u64) -> Result<bool, NetError> {
         let mut grew = false;
         loop {
             if self.queued_on_nodes(now) >= self.capacity() {
@@ -206,7 +209,8 @@ impl NetRun {
                             .map(|c| &c.seg)
                             .chain(self.pending.iter().map(|c| &c.seg)),
                     );
-                    if start >= target && self.pending.len() >= 2 {
+                    let full = start >= enough && self.dist.batches_nearly_full();
+                    if (start >= target || full) && self.pending.len() >= 2 {
                         break;
                     }
                 }
@@ -311,7 +315,9 @@ impl NetRun {
                 self.peers[k].send_motion(&o.message);
             }
             if let (Some(next_seq), None) = (self.dist.next_seq(k), &self.group) {
-                self.peers[k].send_motion(&HostMessage::Seal { next_seq });
+                // In the window's last batch when it can: its
+                // acknowledgement is the node's confirmation.
+                self.peers[k].send_seal(next_seq);
                 self.peers[k].last_asked = Some(now);
             }
         }

@@ -18,13 +18,10 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
     }
 
     /// A seal for every node at once (a group seal, with this node's end):
-    /// what [`HostMessage::Seal`] does, answered with the node's status
-    /// (the host's confirmation) or the refusal.
-    pub fn group_seal(&mut self, next_seq: u32) -> NodeMessage {
-        match self.seal(next_seq) {
-            Ok(()) => self.status_message(),
-            Err(reason) => NodeMessage::Refused { reason },
-        }
+    /// what [`HostMessage::Seal`] does (the endpoint confirms it with a
+    /// heartbeat, and sends a refusal through the link).
+    pub fn group_seal(&mut self, next_seq: u32) -> Result<(), Refusal> {
+        self.seal(next_seq)
     }
 
     /// Acts on a decoded message, family by family; `Ok` holds the reply, if
@@ -65,10 +62,14 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
             } => self.push_event_per_speed(track, time, value, feed),
             // Windows.
             HostMessage::Windowed { run } => self.open_window(run),
-            HostMessage::Seal { next_seq } => {
-                // The host learns how full the queue is with every window,
-                // in the frame that acknowledges the seal anyway.
-                return self.seal(next_seq).map(|()| Some(self.status_message()));
+            // No reply: the link's acknowledgement confirms a seal (a
+            // status would cost the node a frame and the host its ack).
+            HostMessage::Seal { next_seq } => self.seal(next_seq),
+            HostMessage::SegmentsSealed(b) => {
+                // Refused whole when no seal can follow.
+                self.takes_seals()?;
+                self.push_batch(&b)?;
+                self.seal(self.next_seq)
             }
             // The hosted graph.
             HostMessage::GraphBegin { frame_us } => self.begin_graph(frame_us),

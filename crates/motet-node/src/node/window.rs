@@ -27,9 +27,9 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         self.segments.len() - self.pending
     }
 
-    /// Commits the pending segments and events, if the window they close can
-    /// still stop on its tail.
-    pub(super) fn seal(&mut self, next_seq: u32) -> Result<(), Refusal> {
+    /// Whether a seal can be taken at all: windowed, not stopped, not
+    /// closed.
+    pub(super) fn takes_seals(&self) -> Result<(), Refusal> {
         if !self.windowed {
             return Err(Refusal::BadConfig);
         }
@@ -39,6 +39,13 @@ impl<const Q: usize, const T: usize> Node<Q, T> {
         if self.closed {
             return Err(Refusal::Closed);
         }
+        Ok(())
+    }
+
+    /// Commits the pending segments and events, if the window they close can
+    /// still stop on its tail.
+    pub(super) fn seal(&mut self, next_seq: u32) -> Result<(), Refusal> {
+        self.takes_seals()?;
         if next_seq != self.next_seq {
             return Err(Refusal::OutOfOrder {
                 expected: self.next_seq,

@@ -31,6 +31,8 @@ pub struct BatchEncoder {
     next_seq: u32,
     max_segments: usize,
     open: Option<Batch>,
+    /// Bytes the last segment took: about what the next will.
+    last_len: usize,
 }
 
 impl BatchEncoder {
@@ -51,12 +53,21 @@ impl BatchEncoder {
             next_seq,
             max_segments: max_segments.max(1),
             open: None,
+            last_len: 0,
         }
     }
 
     /// Segments waiting in the open batch.
     pub fn pending(&self) -> usize {
         self.open.as_ref().map_or(0, |b| b.segments)
+    }
+
+    /// The open batch would likely not take another segment like the last:
+    /// a window that ends here sends it nearly full.
+    pub fn nearly_full(&self) -> bool {
+        self.open.as_ref().is_some_and(|b| {
+            b.segments >= self.max_segments || b.batch.bytes.len() + self.last_len > BATCH_BYTES
+        })
     }
 
     /// Adds a segment. When it does not fit in the open batch (bytes or
@@ -90,6 +101,7 @@ impl BatchEncoder {
         // Checked above: the segment fits.
         let _ = open.batch.bytes.extend_from_slice(&bytes);
         open.segments += 1;
+        self.last_len = bytes.len();
         self.next_seq = self.next_seq.wrapping_add(1);
         self.state.advance(seg, mask, history);
         Ok(done)

@@ -47,6 +47,10 @@
 //! within an exchange or between two, a turnaround longer than the round
 //! trip) are refused with a [`ClockFault`].
 
+mod geometry;
+
+use geometry::{golden_max, hull, kth_smallest};
+
 /// Four timestamps of one exchange, µs: `t1`, `t4` on the host clock, `t2`,
 /// `t3` on the node clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -221,6 +225,10 @@ pub struct ClockSync {
     exchanges: u64,
     rejected: u64,
     changes: u32,
+    /// The rates every exchange before the last change allowed (hard
+    /// limits), when one rate explained them: what the clock ran at
+    /// before it changed.
+    before_change: Option<(f64, f64)>,
 }
 
 impl Default for ClockSync {
@@ -251,6 +259,7 @@ impl ClockSync {
             exchanges: 0,
             rejected: 0,
             changes: 0,
+            before_change: None,
         }
     }
 
@@ -376,6 +385,11 @@ impl ClockSync {
                     .take_while(|&k| off(&self.samples[self.len - k]))
                     .count()
                     .max(1);
+                // What the clock ran at until then: the exchanges the old
+                // fit still explains.
+                let from = usize::from(self.anchored);
+                let upto = self.len - keep;
+                self.before_change = feasible(&self.samples[from.min(upto)..upto]);
                 let x = if self.len > keep {
                     self.samples[self.len - keep - 1].xr
                 } else {
@@ -395,7 +409,38 @@ impl ClockSync {
                 self.refit();
             }
         }
+        self.unanchor_a_time_step();
         Ok(true)
+    }
+
+    /// After a change the fit assumes the clock's time went on and only its
+    /// rate changed: the old fit's band where it last held (the anchor)
+    /// and the new exchanges lie on one line. When no rate joins them (the
+    /// new exchanges, alone, allow rates the anchor does not), it was the
+    /// time that jumped: the anchor would hold the fit halfway between the
+    /// old time and the new, so it goes, and the new exchanges decide.
+    fn unanchor_a_time_step(&mut self) {
+        if !self.anchored || self.len <= MIN_SAMPLES {
+            return;
+        }
+        let new = &self.samples[1..self.len];
+        let Some(rates) = feasible(new) else {
+            return;
+        };
+        let mut a = self.samples[0];
+        // The band may be inverted (reference samples): as wide either way.
+        let (mid, half) = (0.5 * (a.f + a.r), 0.5 * (a.f - a.r).abs());
+        (a.f, a.r) = (mid + half, mid - half);
+        let joined = new.iter().try_fold(rates, |r, b| {
+            let r = allowed(&a, b, r)?;
+            allowed(b, &a, r)
+        });
+        if joined.is_none() {
+            self.samples.copy_within(1..self.len, 0);
+            self.len -= 1;
+            self.anchored = false;
+            self.refit();
+        }
     }
 
     /// Drops what is too old and, when full, the exchange farthest from
@@ -458,12 +503,16 @@ impl ClockSync {
         let gap = |b: f64| c_f(b) - c_r(b);
         // The exchanges' host times, split at their median: each half's
         // edges are measured apart, as a slope is only as sure as the
-        // thinner end it rests on.
+        // thinner end it rests on. When that puts the halves' centres
+        // within a quarter of the exchanges' span (a burst of them: both
+        // halves in one moment, the slope seeming unknown however long
+        // they span), at the middle of the span instead.
         let mut xs = [0.0f64; CAPACITY];
         for (x, p) in xs.iter_mut().zip(s) {
             *x = 0.5 * (p.xf + p.xr);
         }
-        let cut = kth_smallest(&mut xs[..n], n.div_ceil(2));
+        let median = kth_smallest(&mut xs[..n], n.div_ceil(2));
+        let cut = span_cut(&xs[..n], median);
         let seen = self.seen.max(1) as f64;
         let edges = |b: f64| {
             let (cf, cr) = (c_f(b), c_r(b));
@@ -592,27 +641,17 @@ impl ClockSync {
         // After a change the first sample is the old fit's band, not an
         // observation: it is left out.
         let from = usize::from(self.anchored);
-        let s = &self.samples[from..self.len];
-        if s.len() < 2 {
-            return None;
-        }
-        let (mut lo, mut hi) = (B_MIN, B_MAX);
-        for a in s {
-            for b in s {
-                // θ(a.xf) ≤ a.f + tick and θ(b.xr) ≥ b.r − tick, for
-                // θ = c + skew·x: skew · (b.xr − a.xf) ≥ (b.r − tick) − (a.f + tick).
-                let dx = b.xr - a.xf;
-                let dy = (b.r - TICK_US) - (a.f + TICK_US);
-                if dx > 0.0 {
-                    lo = lo.max(dy / dx);
-                } else if dx < 0.0 {
-                    hi = hi.min(dy / dx);
-                } else if dy > 0.0 {
-                    return None;
-                }
-            }
-        }
-        (lo <= hi).then_some((lo, hi))
+        feasible(&self.samples[from..self.len])
+    }
+
+    /// A step of the clock's rate: the rates every exchange before the
+    /// last change allowed, and those every exchange since allows (hard
+    /// limits both, see [`ClockSync::feasible_skew`]). `None` before a
+    /// change, or while either is not one rate. A crystal drifts; its rate
+    /// does not jump: two intervals far apart are a clock source gone bad
+    /// (whatever the delays, which only widen them).
+    pub fn rate_step(&self) -> Option<((f64, f64), (f64, f64))> {
+        Some((self.before_change?, self.feasible_skew()?))
     }
 
     /// A bound on the error of [`ClockSync::host_to_local`] at host time
@@ -637,76 +676,58 @@ impl ClockSync {
     }
 }
 
-/// Golden-section search for the maximum of a concave function on `[lo, hi]`.
-fn golden_max(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
-    const R: f64 = 0.618_033_988_749_894_9;
-    let mut a = hi - R * (hi - lo);
-    let mut b = lo + R * (hi - lo);
-    let (mut fa, mut fb) = (f(a), f(b));
-    // 0.04 × 0.618^80 ≈ 1e-18: below any skew that matters.
-    for _ in 0..80 {
-        if fa < fb {
-            lo = a;
-            a = b;
-            fa = fb;
-            b = lo + R * (hi - lo);
-            fb = f(b);
-        } else {
-            hi = b;
-            b = a;
-            fb = fa;
-            a = hi - R * (hi - lo);
-            fa = f(a);
-        }
+/// Where to split exchanges at host times `xs` into two halves: at their
+/// `median`, unless the halves' centres would lie within a quarter of the
+/// span, then at the span's middle (when it leaves exchanges either side).
+fn span_cut(xs: &[f64], median: f64) -> f64 {
+    let (first, last) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let centre = |late: bool| {
+        let (sum, n) = xs
+            .iter()
+            .filter(|&&x| (x > median) == late)
+            .fold((0.0, 0usize), |(s, n), &x| (s + x, n + 1));
+        sum / n.max(1) as f64
+    };
+    let middle = 0.5 * (first + last);
+    let either_side = xs.iter().any(|&x| x > middle) && xs.iter().any(|&x| x <= middle);
+    if centre(true) - centre(false) < 0.25 * (last - first) && either_side {
+        middle
+    } else {
+        median
     }
-    0.5 * (lo + hi)
 }
 
-/// The lower (`lower`) or upper convex hull of the points `key(s[i])`,
-/// as indices into `s` in order of x; returns its length.
-fn hull(
-    s: &[Sample],
-    order: &mut [u8; CAPACITY],
-    out: &mut [u8; CAPACITY],
-    key: impl Fn(&Sample) -> (f64, f64),
-    lower: bool,
-) -> usize {
-    let n = s.len();
-    for (i, o) in order.iter_mut().enumerate().take(n) {
-        *o = i as u8;
+/// The skews every sample of `s` allows (see [`ClockSync::feasible_skew`]).
+fn feasible(s: &[Sample]) -> Option<(f64, f64)> {
+    if s.len() < 2 {
+        return None;
     }
-    // Insertion sort: the exchanges arrive almost in order.
-    for i in 1..n {
-        let mut j = i;
-        while j > 0 && key(&s[order[j - 1] as usize]).0 > key(&s[order[j] as usize]).0 {
-            order.swap(j - 1, j);
-            j -= 1;
-        }
-    }
-    let mut m = 0usize;
-    for &i in &order[..n] {
-        let p = key(&s[i as usize]);
-        while m >= 2 {
-            let o = key(&s[out[m - 2] as usize]);
-            let a = key(&s[out[m - 1] as usize]);
-            let cross = (a.0 - o.0) * (p.1 - o.1) - (a.1 - o.1) * (p.0 - o.0);
-            if (lower && cross <= 0.0) || (!lower && cross >= 0.0) {
-                m -= 1;
-            } else {
-                break;
-            }
-        }
-        out[m] = i;
-        m += 1;
-    }
-    m
+    s.iter().try_fold((B_MIN, B_MAX), |r, a| {
+        s.iter().try_fold(r, |r, b| allowed(a, b, r))
+    })
 }
 
-/// The k-th least of `v` (1-based), at least 0, reordering `v`.
-fn kth_smallest(v: &mut [f64], k: usize) -> f64 {
-    let k = k.min(v.len()).max(1);
-    let (_, kth, _) = v.select_nth_unstable_by(k - 1, f64::total_cmp);
-    kth.max(0.0)
+/// The skews of `(lo, hi)` that `a`'s forward observation and `b`'s
+/// reverse one allow together: θ(a.xf) ≤ a.f + tick and θ(b.xr) ≥ b.r −
+/// tick, for θ = c + skew·x, so skew · (b.xr − a.xf) ≥ (b.r − tick) −
+/// (a.f + tick). `None` when none.
+fn allowed(a: &Sample, b: &Sample, (lo, hi): (f64, f64)) -> Option<(f64, f64)> {
+    let dx = b.xr - a.xf;
+    let dy = (b.r - TICK_US) - (a.f + TICK_US);
+    let (lo, hi) = if dx > 0.0 {
+        (lo.max(dy / dx), hi)
+    } else if dx < 0.0 {
+        (lo, hi.min(dy / dx))
+    } else if dy > 0.0 {
+        return None;
+    } else {
+        (lo, hi)
+    };
+    (lo <= hi).then_some((lo, hi))
 }
 
 #[cfg(test)]
