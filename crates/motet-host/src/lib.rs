@@ -15,6 +15,7 @@ mod machine_file_loops;
 mod machine_kinematics;
 pub mod module;
 pub mod samples;
+pub mod sensor_plan;
 pub mod servo;
 pub mod thermal;
 

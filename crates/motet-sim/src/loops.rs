@@ -3,9 +3,10 @@
 //! error and the time), and sources that stop reporting.
 
 use motet_host::loops::{fault_text, sample_every};
-use motet_host::samples::{SamplePoint, SampleStore, Series};
+use motet_host::samples::SampleStore;
+use motet_host::sensor_plan::SensorPlan;
 use motet_host::Machine;
-use motet_trajectory::{JointMap, Segment, PIECES};
+use motet_trajectory::Segment;
 use motet_wire::NodeMessage;
 
 /// The loops' side of a simulated machine's host.
@@ -17,12 +18,9 @@ pub struct LoopWatch {
     pub fault: Option<String>,
     /// Each source that faulted: (node, source).
     faulted: Vec<(usize, motet_wire::control::SampleSource)>,
-    /// Per machine sensor, the planned acceleration of its actuator's
-    /// axis (units/s²), a step at every profile piece: what its readings
-    /// are plotted against.
-    pub planned: Vec<Series>,
-    /// Per machine sensor, the axis its actuator moves.
-    axes: Vec<Option<usize>>,
+    /// The sensors' planned acceleration: what their readings are
+    /// plotted against.
+    pub planned: SensorPlan,
 }
 
 impl LoopWatch {
@@ -36,73 +34,16 @@ impl LoopWatch {
                 }
             }
         }
-        let axes = machine
-            .sensors
-            .iter()
-            .map(|s| {
-                let a = &machine.actuators[s.actuator];
-                match machine.joints[a.joint].map {
-                    JointMap::Linear { coeffs } => coeffs.iter().position(|&c| c != 0.0),
-                    _ => None,
-                }
-            })
-            .collect();
-        let planned = machine
-            .sensors
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                Series::new(
-                    0,
-                    motet_wire::control::SampleSource::Sensor(i as u8),
-                    format!("planned acceleration ({})", s.name),
-                )
-            })
-            .collect();
         LoopWatch {
             store,
-            planned,
-            axes,
+            planned: SensorPlan::new(machine),
             ..Default::default()
         }
     }
 
-    /// A segment the nodes run: its acceleration along each sensor's axis,
-    /// piece by piece.
+    /// A segment the nodes run (for the sensors' planned acceleration).
     pub fn planned(&mut self, seg: &Segment) {
-        for (series, axis) in self.planned.iter_mut().zip(&self.axes) {
-            let Some(i) = *axis else { continue };
-            if seg.profile.length() <= 0.0 {
-                // A dwell: standing still.
-                for t in [seg.t0, seg.t1()] {
-                    series.push(SamplePoint {
-                        t_us: t,
-                        value: 0.0,
-                        lo: 0.0,
-                        hi: 0.0,
-                    });
-                }
-                continue;
-            }
-            let u = seg.axis_rate(i);
-            for k in 0..PIECES {
-                let p = seg.profile.piece(k);
-                if p.duration <= 0.0 {
-                    continue;
-                }
-                let t0 = seg.t0 + p.t0 * 1e6;
-                let t1 = t0 + p.duration * 1e6;
-                for (t, a) in [(t0, p.a), (t1, p.a + p.j * p.duration)] {
-                    let v = a * u;
-                    series.push(SamplePoint {
-                        t_us: t,
-                        value: v,
-                        lo: v,
-                        hi: v,
-                    });
-                }
-            }
-        }
+        self.planned.segment(seg);
     }
 
     /// A message node `k` sent at host time `now`.

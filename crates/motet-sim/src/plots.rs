@@ -1,16 +1,18 @@
 //! The report's plots, beside `path.png`: for each servo actuator its
 //! planned and measured position and its following error
 //! (`servo-NAME.png`), for each sensor its readings against the planned
-//! acceleration (`sensor-NAME.png`); a heater loop's temperature against
-//! its target goes to `heater-NAME.png` (see [`heater_plot`]).
+//! acceleration (`sensor-NAME.png`); a heater's temperature against its
+//! target goes to `heater-NAME.png` (`crate::heaters::heater_plot`). An
+//! in-process run and a networked one plot alike: samples kept per source
+//! and the sensors' planned acceleration.
 //!
 //! Everything plotted came upstream from the nodes as samples, stamped in
 //! trajectory time; the planned position is the measured one plus the
 //! window's mean following error (the node's set point, within half the
 //! window's spread), the planned acceleration is the plan's own.
 
-use crate::loops::LoopWatch;
-use motet_host::samples::Series;
+use motet_host::samples::{SampleStore, Series};
+use motet_host::sensor_plan::SensorPlan;
 use motet_host::Machine;
 use motet_render::{write_plot, Line, Panel, Plot, PlotError};
 use motet_wire::control::SampleSource;
@@ -20,14 +22,18 @@ const PLANNED: [u8; 3] = [40, 90, 200];
 const MEASURED: [u8; 3] = [220, 90, 30];
 const ERROR: [u8; 3] = [150, 30, 160];
 
-/// Writes every plot of a run into `dir`; their file names.
+/// Writes every plot of a run into `dir` (the samples of `store`, each
+/// sensor against its acceleration in `plan`), time from the trajectory's
+/// start at host time `t0` µs; their file names.
 pub fn write_plots(
     machine: &Machine,
-    loops: &LoopWatch,
+    store: &SampleStore,
+    plan: &SensorPlan,
+    t0: f64,
     dir: &Path,
 ) -> Result<Vec<String>, PlotError> {
     let mut written = Vec::new();
-    for s in &loops.store.series {
+    for s in &store.series {
         let (file, plot) = match s.source {
             SampleSource::Servo(ch) => {
                 let Some(&a) = machine.nodes[s.node].actuators.get(ch as usize) else {
@@ -36,7 +42,7 @@ pub fn write_plots(
                 let act = &machine.actuators[a];
                 (
                     format!("servo-{}.png", act.name),
-                    servo_plot(&act.name, act.steps_per_unit, s),
+                    servo_plot(&act.name, act.steps_per_unit, s, t0),
                 )
             }
             SampleSource::Sensor(i) => {
@@ -46,7 +52,7 @@ pub fn write_plots(
                 let sensor = &machine.sensors[k];
                 (
                     format!("sensor-{}.png", sensor.name),
-                    sensor_plot(&sensor.name, s, loops.planned.get(k)),
+                    sensor_plot(&sensor.name, s, plan.get(k), t0),
                 )
             }
             SampleSource::Heater(_) => continue,
@@ -64,9 +70,9 @@ fn seconds(t_us: f64) -> f64 {
     t_us * 1e-6
 }
 
-/// A servo's plot: position (planned and measured, joint units) over
+/// A servo's plot (time from host time `t0` µs): position (planned and measured, joint units) over
 /// following error (counts, least to most over each sample's window).
-pub fn servo_plot(name: &str, counts_per_unit: f64, s: &Series) -> Plot {
+pub fn servo_plot(name: &str, counts_per_unit: f64, s: &Series, t0: f64) -> Plot {
     let pts: Vec<_> = s.all_points().copied().collect();
     let unit = |c: f64| c / counts_per_unit;
     Plot {
@@ -80,7 +86,7 @@ pub fn servo_plot(name: &str, counts_per_unit: f64, s: &Series) -> Plot {
                         color: PLANNED,
                         points: pts
                             .iter()
-                            .map(|p| (seconds(p.t_us), unit(p.value + (p.lo + p.hi) / 2.0)))
+                            .map(|p| (seconds(p.t_us - t0), unit(p.value + (p.lo + p.hi) / 2.0)))
                             .collect(),
                         band: vec![],
                     },
@@ -89,7 +95,7 @@ pub fn servo_plot(name: &str, counts_per_unit: f64, s: &Series) -> Plot {
                         color: MEASURED,
                         points: pts
                             .iter()
-                            .map(|p| (seconds(p.t_us), unit(p.value)))
+                            .map(|p| (seconds(p.t_us - t0), unit(p.value)))
                             .collect(),
                         band: vec![],
                     },
@@ -102,25 +108,31 @@ pub fn servo_plot(name: &str, counts_per_unit: f64, s: &Series) -> Plot {
                     color: ERROR,
                     points: pts
                         .iter()
-                        .map(|p| (seconds(p.t_us), (p.lo + p.hi) / 2.0))
+                        .map(|p| (seconds(p.t_us - t0), (p.lo + p.hi) / 2.0))
                         .collect(),
-                    band: pts.iter().map(|p| (seconds(p.t_us), p.lo, p.hi)).collect(),
+                    band: pts
+                        .iter()
+                        .map(|p| (seconds(p.t_us - t0), p.lo, p.hi))
+                        .collect(),
                 }],
             },
         ],
     }
 }
 
-/// A sensor's plot: its readings against its axis's planned acceleration.
-pub fn sensor_plot(name: &str, s: &Series, planned: Option<&Series>) -> Plot {
+/// A sensor's plot (time from host time `t0` µs): its readings against its axis's planned acceleration.
+pub fn sensor_plot(name: &str, s: &Series, planned: Option<&Series>, t0: f64) -> Plot {
     let mut lines = vec![Line {
         label: format!("{name} (measured)"),
         color: MEASURED,
-        points: s.all_points().map(|p| (seconds(p.t_us), p.value)).collect(),
+        points: s
+            .all_points()
+            .map(|p| (seconds(p.t_us - t0), p.value))
+            .collect(),
         band: vec![],
     }];
     if let Some(p) = planned {
-        let (t0, t1) = s
+        let (first, last) = s
             .all_points()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
                 (a.min(p.t_us), b.max(p.t_us))
@@ -132,8 +144,8 @@ pub fn sensor_plot(name: &str, s: &Series, planned: Option<&Series>) -> Plot {
                 color: PLANNED,
                 points: p
                     .all_points()
-                    .filter(|q| q.t_us >= t0 && q.t_us <= t1)
-                    .map(|q| (seconds(q.t_us), q.value))
+                    .filter(|q| q.t_us >= first && q.t_us <= last)
+                    .map(|q| (seconds(q.t_us - t0), q.value))
                     .collect(),
                 band: vec![],
             },
@@ -144,35 +156,6 @@ pub fn sensor_plot(name: &str, s: &Series, planned: Option<&Series>) -> Plot {
         panels: vec![Panel {
             label: "acceleration, units/s²".into(),
             lines,
-        }],
-    }
-}
-
-/// A heater's plot: its temperature against its target (a heater loop's
-/// samples, readings in °C, and its targets as a series of the same
-/// times): the hook `heater-NAME.png` is drawn with.
-pub fn heater_plot(name: &str, temperature: &Series, target: &[(f64, f64)]) -> Plot {
-    Plot {
-        title: format!("heater {name}: temperature and target"),
-        panels: vec![Panel {
-            label: "temperature, °C".into(),
-            lines: vec![
-                Line {
-                    label: "target".into(),
-                    color: PLANNED,
-                    points: target.iter().map(|&(t, v)| (seconds(t), v)).collect(),
-                    band: vec![],
-                },
-                Line {
-                    label: "measured".into(),
-                    color: MEASURED,
-                    points: temperature
-                        .all_points()
-                        .map(|p| (seconds(p.t_us), p.value))
-                        .collect(),
-                    band: vec![],
-                },
-            ],
         }],
     }
 }

@@ -183,7 +183,9 @@ fn samples_fit_the_budget_and_plot() {
     }
     assert!(total <= 300.0, "{total} B/s");
     let dir = tempfile::tempdir().unwrap();
-    let files = motet_sim::plots::write_plots(&m, &run.loops, dir.path()).unwrap();
+    let files =
+        motet_sim::plots::write_plots(&m, &run.loops.store, &run.loops.planned, 0.0, dir.path())
+            .unwrap();
     assert_eq!(files, ["servo-x_servo.png", "sensor-acc.png"]);
     for f in files {
         let bytes = std::fs::read(dir.path().join(f)).unwrap();

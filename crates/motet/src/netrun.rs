@@ -311,6 +311,11 @@ impl RunJob {
     }
 }
 
+/// How long a finished run still listens for the loops' samples, host µs:
+/// a node sends a source's batch once it is a second old
+/// (`motet_node::control::samples::MAX_BATCH_AGE_US`), and a frame's way.
+const SAMPLES_DRAIN_US: u64 = 1_200_000;
+
 #[allow(clippy::too_many_arguments)]
 fn drive(
     machine: &Machine,
@@ -362,11 +367,35 @@ fn drive(
         }
     };
     bar.finish_and_clear();
+    // The loops' last samples leave their nodes within a batch's age of
+    // the end: heard before the plots are drawn.
+    if matches!(phase, Phase::Done) && !run.samples().series.is_empty() {
+        let until = clock.now_us() + SAMPLES_DRAIN_US;
+        while clock.now_us() < until {
+            run.poll(clock.now_us())?;
+            std::thread::sleep(clock.real(1_000));
+        }
+    }
     let now = clock.now_us();
     let figures = run.figures(now);
     let tallies = run.tallies();
+    // The loops' plots as an in-process run writes them, from the samples
+    // the nodes sent (a stopped run's too: they show what led to it).
+    let t0 = run.trajectory_start().unwrap_or(0.0);
+    let plots = motet_sim::plots::write_plots(machine, run.samples(), run.sensor_plan(), t0, out)
+        .context("writing the loops' plots")?;
     let report = serde_json::json!({
         "machine": machine.name,
+        "plots": plots,
+        "loops": run.samples().series.iter().map(|s| {
+            let (lo, hi) = s.all_points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.lo), b.max(p.hi)));
+            let (low, high) = s.all_points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.value), b.max(p.value)));
+            let last = s.all_points().last().map(|p| p.value);
+            // A servo's: the following error's least and most (counts), its
+            // measured position's range and last value; a sensor's: its
+            // readings'.
+            serde_json::json!({ "name": s.name, "node": machine.nodes[s.node].name, "points": s.all_points().count(), "least": lo, "most": hi, "low": low, "high": high, "last": last })
+        }).collect::<Vec<_>>(),
         "commands": total,
         "segments": run.segments_sent,
         "windows": run.windows,
@@ -416,8 +445,9 @@ fn drive(
     match phase {
         Phase::Done => {
             if !quiet {
+                let files: String = plots.iter().map(|p| format!(", {p}")).collect();
                 println!(
-                    "done: {} commands, {} segments in {} windows; wrote {}/net.json",
+                    "done: {} commands, {} segments in {} windows; wrote {}/{{net.json{files}}}",
                     total,
                     run.segments_sent,
                     run.windows,

@@ -219,7 +219,8 @@ pub fn run(
     crate::heaters::plot_into(&machine, &run.heaters, &out, &mut report)?;
     report.clamped_moves = scan.clamps.moves;
     report.max_clamp_mm = scan.clamps.max_mm;
-    report.plots = motet_sim::plots::write_plots(&machine, &run.loops, &out)?;
+    report.plots =
+        motet_sim::plots::write_plots(&machine, &run.loops.store, &run.loops.planned, 0.0, &out)?;
 
     std::fs::write(
         out.join("path.png"),

@@ -101,7 +101,7 @@ fn plot(name: &str, t: &motet_sim::tune::Tuning) -> Plot {
             .iter()
             .find(|a| a.name == name)
             .map_or(1.0, |a| a.steps_per_unit);
-        let check = motet_sim::plots::servo_plot(name, cpu, s);
+        let check = motet_sim::plots::servo_plot(name, cpu, s, 0.0);
         panels.extend(check.panels);
     }
     Plot {

@@ -717,3 +717,65 @@ fn one_device_for_two_nodes_is_refused_and_status_names_silent_nodes() {
         );
     }
 }
+
+/// Servo nodes in their own processes close their loops on their plants,
+/// and the run plots what they sent: each servo followed its moves (its
+/// encoder went from the start to where the job ends), its following
+/// error within the limit, the sensor heard.
+#[test]
+fn spawned_servo_nodes_send_samples_the_run_plots() {
+    let _serial = serial();
+    let tmp = scratch("servo");
+    let out = tmp.path();
+    let job = out.join("square.gcode");
+    std::fs::write(&job, "G21 G90\nG1 X20 Y10 F3000\nG1 X0 Y0\n").unwrap();
+    let mut args = vec![
+        "run",
+        "examples/servo-mill.toml",
+        job.to_str().unwrap(),
+        "--nodes",
+        "spawn",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let (ok, _, stderr) = motet(&args);
+    assert!(ok, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
+    assert_eq!(report["outcome"], "done");
+    let plots: Vec<&str> = report["plots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_str().unwrap())
+        .collect();
+    for file in [
+        "servo-x_servo.png",
+        "servo-y_servo.png",
+        "sensor-x_accel.png",
+    ] {
+        assert!(plots.contains(&file), "{plots:?}");
+        assert!(std::fs::metadata(out.join(file)).unwrap().len() > 1000);
+    }
+    let loops = report["loops"].as_array().unwrap();
+    let x = loops
+        .iter()
+        .find(|l| l["name"] == "actuator x_servo")
+        .expect("x_servo's samples");
+    // 800 counts/mm: 20 mm out and back, within the limit (40 counts).
+    assert!(x["points"].as_u64().unwrap() > 10, "{x}");
+    let span = x["high"].as_f64().unwrap() - x["low"].as_f64().unwrap();
+    assert!((span - 16_000.0).abs() < 40.0, "{x}");
+    assert!(
+        (x["last"].as_f64().unwrap() - x["low"].as_f64().unwrap()).abs() < 40.0,
+        "{x}"
+    );
+    let most = x["least"]
+        .as_f64()
+        .unwrap()
+        .abs()
+        .max(x["most"].as_f64().unwrap().abs());
+    assert!(most > 0.0 && most < 40.0, "{x}");
+}

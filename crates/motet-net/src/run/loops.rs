@@ -46,4 +46,16 @@ impl NetRun {
     pub fn samples(&self) -> &motet_host::samples::SampleStore {
         &self.samples
     }
+
+    /// Host time at which the trajectory starts, µs (`None` before the
+    /// run streams).
+    pub fn trajectory_start(&self) -> Option<f64> {
+        self.feed_t0.is_finite().then_some(self.feed_t0)
+    }
+
+    /// The sensors' planned acceleration over the committed segments: what
+    /// their samples are plotted against.
+    pub fn sensor_plan(&self) -> &motet_host::sensor_plan::SensorPlan {
+        &self.sensor_plan
+    }
 }

@@ -278,6 +278,8 @@ pub struct NetRun {
     pace: pace::Pace,
     /// Samples the nodes' loops sent, per source.
     samples: motet_host::samples::SampleStore,
+    /// The sensors' planned acceleration, from the committed segments.
+    sensor_plan: motet_host::sensor_plan::SensorPlan,
     /// Service replies the run does not act on (a module watch's), by node.
     service_replies: VecDeque<(usize, motet_wire::ServiceReply)>,
     /// The heaters its nodes drive: heard from, ready, tripped; a wait.
@@ -344,6 +346,7 @@ impl NetRun {
             group: None,
             pace: pace::Pace::new(cfg.lead_max_us),
             samples: motet_host::samples::SampleStore::new(),
+            sensor_plan: motet_host::sensor_plan::SensorPlan::new(machine),
             service_replies: VecDeque::new(),
             heat: heaters::Heat::default(),
             doubted: Vec::new(),

@@ -289,6 +289,7 @@ impl NetRun {
             }
         }
         for c in &pending {
+            self.sensor_plan.segment(&c.seg);
             self.committed.push_back(*c);
             self.history.push_back(c.seg);
             self.committed_end = c.seg.t1();
