@@ -200,7 +200,7 @@ fn samples_fit_the_budget_and_plot() {
         .iter()
         .find(|s| s.name == "sensor acc")
         .unwrap();
-    let plan = &run.loops.planned[0];
+    let plan = &run.loops.planned.series[0];
     let planned_at = |t: f64| {
         plan.all_points()
             .take_while(|p| p.t_us <= t)
