@@ -57,6 +57,13 @@ impl WallClock {
     }
 }
 
+impl WallClock {
+    /// µs of this clock per real µs.
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+}
+
 impl Default for WallClock {
     fn default() -> Self {
         WallClock::new()

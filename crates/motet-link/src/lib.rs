@@ -25,6 +25,7 @@ pub mod slcan_port;
 pub mod spec;
 pub mod udp;
 pub mod udp_group;
+mod udp_stamp;
 
 pub use can::{BusTiming, CanBus, CanNode, CanTransport, Received};
 pub use clock::{Clock, Crystal, SimClock, WallClock};
@@ -217,6 +218,15 @@ pub trait Transport {
     /// tell better than the caller's own clock.
     fn last_stamp(&self) -> Option<Stamp> {
         None
+    }
+
+    /// From now on, stamps each frame's arrival where it comes in (a
+    /// socket's receive queue) on `clock`, the receiver's own, and gives it
+    /// as [`Transport::last_stamp`]; `false` when this transport cannot
+    /// (the default), and frames are then stamped when read.
+    fn stamp_arrivals(&mut self, clock: WallClock) -> bool {
+        let _ = clock;
+        false
     }
 }
 

@@ -1,6 +1,7 @@
 //! UDP transport: one datagram per frame.
 
-use crate::{LinkStats, Transport};
+use crate::udp_stamp::SocketStamps;
+use crate::{LinkStats, Stamp, Transport, WallClock};
 use std::io;
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::Duration;
@@ -22,6 +23,11 @@ pub struct UdpTransport {
     stats: LinkStats,
     /// Datagrams from other addresses, dropped.
     foreign: u64,
+    /// The socket's arrival stamps, once asked for
+    /// ([`Transport::stamp_arrivals`]).
+    stamps: Option<SocketStamps>,
+    /// The last datagram's arrival.
+    last_stamp: Option<Stamp>,
 }
 
 impl UdpTransport {
@@ -41,6 +47,8 @@ impl UdpTransport {
             listening: false,
             stats: LinkStats::default(),
             foreign: 0,
+            stamps: None,
+            last_stamp: None,
         })
     }
 
@@ -67,6 +75,8 @@ impl UdpTransport {
             listening: true,
             stats: LinkStats::default(),
             foreign: 0,
+            stamps: None,
+            last_stamp: None,
         })
     }
 
@@ -121,10 +131,17 @@ impl Transport for UdpTransport {
         }
         let mut buf = [0u8; MAX_DATAGRAM];
         loop {
-            match self.sock.recv_from(&mut buf) {
-                Ok((n, from)) if self.listening || Some(from) == self.peer => {
+            let got = match &self.stamps {
+                Some(st) => st
+                    .recv_from(&self.sock, &mut buf)
+                    .map(|d| (d.len, d.from, d.at_us)),
+                None => self.sock.recv_from(&mut buf).map(|(n, f)| (n, f, None)),
+            };
+            match got.map(|(n, from, at)| ((n, from), at)) {
+                Ok(((n, from), at)) if self.listening || Some(from) == self.peer => {
                     self.peer = Some(from);
                     self.stats.received(n);
+                    self.last_stamp = at.map(|at_us| Stamp { at_us, own: false });
                     return Ok(Some(buf[..n].to_vec()));
                 }
                 Ok(_) => {
@@ -150,6 +167,20 @@ impl Transport for UdpTransport {
     fn stats(&self) -> &LinkStats {
         &self.stats
     }
+
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.last_stamp
+    }
+
+    fn stamp_arrivals(&mut self, clock: WallClock) -> bool {
+        match SocketStamps::enable(&self.sock, clock) {
+            Ok(s) => {
+                self.stamps = Some(s);
+                true
+            }
+            Err(_) => false,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -174,6 +205,32 @@ mod tests {
         assert_eq!(a.stats().frames_out, 20);
         assert_eq!(b.stats().frames_in, 20);
         assert_eq!(b.stats().bytes_in, (1..=20).map(|i| i * 10).sum::<u64>());
+    }
+
+    /// A datagram read late is stamped when it arrived, on the
+    /// receiver's clock (Linux); unasked, nothing is stamped.
+    #[test]
+    fn arrivals_are_stamped_at_the_socket() {
+        let (mut a, mut b) = UdpTransport::loopback_pair().unwrap();
+        a.send(&[1, 0]).unwrap();
+        assert_eq!(b.recv(WAIT).unwrap(), Some(vec![1, 0]));
+        assert_eq!(b.last_stamp(), None);
+        // A clock five times as fast as real time.
+        let clock = WallClock::with(5.0, 0.0, 1_000_000);
+        if !b.stamp_arrivals(clock) {
+            assert!(!cfg!(target_os = "linux"), "Linux stamps datagrams");
+            return;
+        }
+        let sent = clock.now_us();
+        a.send(&[2, 0]).unwrap();
+        std::thread::sleep(Duration::from_millis(60));
+        assert_eq!(b.recv(WAIT).unwrap(), Some(vec![2, 0]));
+        let read = clock.now_us();
+        let at = b.last_stamp().expect("a stamp").at_us;
+        // Read at least 300 ms of this clock after it came; it came after
+        // it was sent (a µs of rounding either way).
+        assert!(at + 1 >= sent, "stamped {at}, sent {sent}");
+        assert!(read >= at + 250_000, "stamped {at}, read {read}");
     }
 
     #[test]

@@ -146,6 +146,13 @@ impl Peer {
         }
     }
 
+    /// Has the transport stamp each frame's arrival on `clock` (the one
+    /// this peer's `now` is read from), where it can: a clock exchange's
+    /// `t4` is then when the answer came, not when the host got to it.
+    pub fn stamp_arrivals(&mut self, clock: motet_link::WallClock) -> bool {
+        self.transport.stamp_arrivals(clock)
+    }
+
     /// Where the link is: connecting, established (with the protocol version
     /// agreed) or failed.
     pub fn link_state(&self) -> State {
@@ -320,8 +327,10 @@ impl Peer {
     }
 
     fn on_frame(&mut self, bytes: &[u8], now: u64, stamp: Option<motet_link::Stamp>) {
-        // The frame's arrival as the transport read it, if it can tell.
-        let at = stamp.map_or(now, |s| s.at_us.min(now));
+        // The frame's arrival as the transport read it, if it can tell
+        // (past `now`, the poll's time, when it came during the poll: a
+        // `t4` before it came would tell the exchange a false bound).
+        let at = stamp.map_or(now, |s| s.at_us);
         let mut raw = [0u8; MAX_RAW];
         let f = match frame::decode(bytes, &mut raw) {
             Ok(f) => f,

@@ -182,7 +182,7 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
     }
 
     /// [`Endpoint::on_frame`] for a frame the board's controller stamped on
-    /// arrival (`stamp`, local µs, at most `now`): a clock exchange takes
+    /// arrival (`stamp`, local µs): a clock exchange takes
     /// that instant as its `t2`, not the moment the frame was handled, so
     /// the time it waited for the main loop counts as the node's.
     pub fn on_frame_stamped(&mut self, bytes: &[u8], now: u64, stamp: Option<u64>) {
@@ -226,7 +226,11 @@ impl<S: Store, F: Flash, const Q: usize> Endpoint<S, F, Q> {
                     self.stats.sync_refused += 1;
                     return;
                 }
-                stamp.map_or(now, |s| s.min(now))
+                // The arrival as stamped, even past `now` (a loop's time
+                // read before it got to the frame): a `t2` taken earlier
+                // than the frame came would tell the exchange a false
+                // bound (the reply's `t3` is never before it).
+                stamp.unwrap_or(now)
             } else {
                 now
             };

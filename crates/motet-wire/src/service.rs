@@ -395,8 +395,12 @@ impl ServiceReply {
     /// Sets `t3` of a [`ServiceReply::Time`] to the moment it is sent, for an
     /// endpoint that can stamp closer to the wire than the service handler.
     pub fn stamp_t3(&mut self, now_local_us: u64) {
-        if let ServiceReply::Time { t3, .. } = self {
-            *t3 = now_local_us;
+        if let ServiceReply::Time { t2, t3, .. } = self {
+            // Never before the request came: a loop that read its clock
+            // before reading the frame (stamped at its arrival, later)
+            // sends no sooner than the stamp, and an early t3 only widens
+            // what the exchange tells.
+            *t3 = now_local_us.max(*t2);
         }
     }
 }

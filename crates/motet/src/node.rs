@@ -154,6 +154,10 @@ fn run<S: Store>(
         o.ppm,
         (random_uid() % 1_000_000_000) + 1_000_000,
     );
+    // Frames stamped as they arrive, so that a clock exchange's time here
+    // is when the host's request came, however late the process runs.
+    let mut transport = transport;
+    transport.stamp_arrivals(clock);
     let mut node = SimNode::new(cfg, store, transport, clock.now_us());
     node.plant = o.plant;
     let module = o
@@ -250,7 +254,8 @@ fn run<S: Store>(
             .transport
             .recv(Some(real.max(Duration::from_micros(20))))?
         {
-            node.endpoint.on_frame(&f, clock.now_us());
+            let stamp = node.transport.last_stamp().map(|s| s.at_us);
+            node.endpoint.on_frame_stamped(&f, clock.now_us(), stamp);
         }
     }
 }
