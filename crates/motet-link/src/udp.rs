@@ -187,6 +187,7 @@ impl Transport for UdpTransport {
 mod tests {
     use super::*;
     use crate::testutil::link_exchange;
+    use crate::Clock;
 
     const WAIT: Option<Duration> = Some(Duration::from_secs(5));
 
@@ -221,6 +222,8 @@ mod tests {
             assert!(!cfg!(target_os = "linux"), "Linux stamps datagrams");
             return;
         }
+        // The kernel starts stamping a moment after it is first asked to.
+        std::thread::sleep(Duration::from_millis(50));
         let sent = clock.now_us();
         a.send(&[2, 0]).unwrap();
         std::thread::sleep(Duration::from_millis(60));
