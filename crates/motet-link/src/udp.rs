@@ -218,8 +218,13 @@ mod tests {
         assert_eq!(b.last_stamp(), None);
         // A clock five times as fast as real time.
         let clock = WallClock::with(5.0, 0.0, 1_000_000);
-        if !b.stamp_arrivals(clock) {
-            assert!(!cfg!(target_os = "linux"), "Linux stamps datagrams");
+        let stamping = b.stamp_arrivals(clock);
+        assert_eq!(
+            stamping,
+            cfg!(target_os = "linux"),
+            "Linux stamps datagrams"
+        );
+        if !stamping {
             return;
         }
         // The kernel starts stamping a moment after it is first asked to.
