@@ -1,7 +1,7 @@
 //! Serial transport: the COBS-stuffed stream over a serial port (USB CDC,
 //! UART, a pseudo-terminal), frames ending at 0x00.
 
-use crate::{Inbox, LinkStats, StreamSplitter, Transport};
+use crate::{Clock, Inbox, LinkStats, Stamp, StreamSplitter, Transport, WallClock};
 use serialport::SerialPort;
 use std::io::{self, Write};
 use std::time::Duration;
@@ -47,6 +47,10 @@ pub struct SerialTransport {
     splitter: StreamSplitter,
     inbox: Inbox,
     stats: LinkStats,
+    /// The clock frames are stamped on as they are handed out, once asked
+    /// ([`Transport::stamp_arrivals`]).
+    stamps: Option<WallClock>,
+    last_stamp: Option<Stamp>,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -75,6 +79,8 @@ impl SerialTransport {
             splitter: StreamSplitter::default(),
             inbox: Inbox::new(),
             stats: LinkStats::default(),
+            stamps: None,
+            last_stamp: None,
         }
     }
 
@@ -104,16 +110,37 @@ impl Transport for SerialTransport {
 
     fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
         let (port, splitter) = (&mut self.port, &mut self.splitter);
-        self.inbox.recv(timeout, &mut self.stats, |inbox, wait| {
+        let frame = self.inbox.recv(timeout, &mut self.stats, |inbox, wait| {
             let mut buf = [0u8; 512];
             let n = read_port(port.as_mut(), wait, &mut buf)?;
             inbox.take_stream(splitter, &buf[..n]);
             Ok(n > 0)
-        })
+        })?;
+        // A byte stream tells no arrival: the moment a frame is handed
+        // out is after it came, which is all a clock exchange needs (late
+        // only widens what it tells), and later than the caller's own
+        // time, read before it got to the frame.
+        self.last_stamp = match (&frame, &self.stamps) {
+            (Some(_), Some(c)) => Some(Stamp {
+                at_us: c.now_us(),
+                own: false,
+            }),
+            _ => None,
+        };
+        Ok(frame)
     }
 
     fn stats(&self) -> &LinkStats {
         &self.stats
+    }
+
+    fn last_stamp(&self) -> Option<Stamp> {
+        self.last_stamp
+    }
+
+    fn stamp_arrivals(&mut self, clock: WallClock) -> bool {
+        self.stamps = Some(clock);
+        true
     }
 }
 

@@ -141,6 +141,9 @@ impl Transport for UdpTransport {
                 Ok(((n, from), at)) if self.listening || Some(from) == self.peer => {
                     self.peer = Some(from);
                     self.stats.received(n);
+                    // Without the kernel's stamp, the moment it was read:
+                    // after it came, and after the caller's own time.
+                    let at = at.or_else(|| self.stamps.as_ref().map(|st| st.now_us()));
                     self.last_stamp = at.map(|at_us| Stamp { at_us, own: false });
                     return Ok(Some(buf[..n].to_vec()));
                 }

@@ -82,6 +82,11 @@ impl SocketStamps {
         })
     }
 
+    /// The stamps' clock now.
+    pub(crate) fn now_us(&self) -> u64 {
+        self.clock.now_us()
+    }
+
     /// The process's clock when the kernel stamped `kernel` (real time
     /// since the epoch).
     fn age_to_local(&self, kernel: std::time::Duration) -> u64 {
@@ -104,6 +109,11 @@ impl SocketStamps {
             io::ErrorKind::Unsupported,
             "datagram arrival stamps need Linux",
         ))
+    }
+
+    /// Never called: [`SocketStamps::enable`] fails.
+    pub(crate) fn now_us(&self) -> u64 {
+        self.clock.now_us()
     }
 
     /// Never called: [`SocketStamps::enable`] fails.

@@ -29,7 +29,7 @@ use crate::journal::{JournalHeader, JournalWriter};
 use crate::node_clock::EXCHANGE_AT;
 use crate::peer::{Incoming, Peer};
 use crate::plan_feed::{run_limits, CommandSource, PlanFeed};
-use clocks::clock_target;
+use clocks::{clock_target, path_limit};
 use motet_host::{Distributor, Machine};
 use motet_planner::{Command, Located, PlanError, SourceLoc};
 use motet_trajectory::{Point, Segment};
@@ -37,10 +37,6 @@ use motet_wire::link::State;
 use motet_wire::{HostMessage, NodeMessage, Refusal};
 use std::collections::VecDeque;
 use window::Committed;
-
-/// A start whose clocks are within this many times their targets when the
-/// connect timeout passes may wait as long again.
-const CLOSE_ENOUGH: f64 = 3.0;
 
 /// Service replies kept for [`NetRun::take_service_replies`].
 const SERVICE_REPLIES: usize = 256;
@@ -67,10 +63,11 @@ pub struct NetConfig {
     /// The clock target, µs: nothing moves until every node's clock error
     /// bound is within it, and the exchanges and models keep it there.
     pub clock_bound_us: f64,
-    /// Give up connecting after this long, µs; after twice as long when
-    /// every link is up and every node's clock bound is within three times
-    /// its target (a busy computer makes the exchanges that tell the most
-    /// rare).
+    /// How long a start waits for every clock to reach its target, µs
+    /// (a busy computer makes the exchanges that tell the most rare); past
+    /// it the run starts once every link is up and every node's bound is
+    /// within what the machine's path allows, saying which clocks fell
+    /// short, and gives up after twice as long.
     pub connect_timeout_us: u64,
     /// How far past the lead a new window reaches, µs: longer windows mean
     /// fewer seals on the wire, shorter ones keep more of the trajectory
@@ -669,15 +666,17 @@ impl NetRun {
             .iter()
             .all(|p| matches!(p.link_state(), State::Established { .. }));
         let timeout = self.cfg.connect_timeout_us;
-        if now > started + timeout {
-            // Every link up and every clock nearly known (a busy computer
-            // makes lucky exchanges rare): worth waiting as long again
-            // rather than failing the run for a few µs.
-            let nearly = all_up
+        // Past the timeout, a start waits no longer for a clock target a
+        // busy computer keeps out of reach (its exchanges late), once every
+        // bound is within what the machine's path allows (`path_limit`, the
+        // limit a moving run holds too): it starts, and says so.
+        let overdue = now > started + timeout;
+        if overdue {
+            let within = all_up
                 && self.peers.iter().all(|p| {
-                    p.sync.error_bound(now as f64) <= CLOSE_ENOUGH * clock_target(&self.cfg, p)
+                    p.sync.error_bound(now as f64 + START_HORIZON_US) <= path_limit(&self.cfg, p)
                 });
-            if !nearly || now > started + 2 * timeout {
+            if !within || now > started + 2 * timeout {
                 return Err(self.not_ready(now));
             }
         }
@@ -707,13 +706,16 @@ impl NetRun {
         // unsure would carry the bound past it.
         let ready = self.peers.iter().all(|p| {
             let target = clock_target(&self.cfg, p);
-            let later = now as f64 + START_HORIZON_US;
-            p.sync.error_bound(now as f64) <= EXCHANGE_AT * target
-                && p.sync.error_bound(later) <= target
-                && p.backlog() == 0
+            let later = p.sync.error_bound(now as f64 + START_HORIZON_US);
+            let on_target =
+                p.sync.error_bound(now as f64) <= EXCHANGE_AT * target && later <= target;
+            (on_target || (overdue && later <= path_limit(&self.cfg, p))) && p.backlog() == 0
         });
         // Nothing moves before every heater a node drives has reported.
         if ready && self.heaters_heard()? {
+            if overdue {
+                self.note_late_clocks(now, started);
+            }
             let lead = self.lead_us();
             let t0 = now as f64 + 2.0 * lead as f64;
             // The stop horizon keeps a window's tail inside the node's queue;
