@@ -19,6 +19,7 @@ pub struct ServoFile {
     pub integral_limit: Option<Spanned<f64>>,
     pub output_limit: Option<Spanned<f64>>,
     pub derivative_hz: Option<Spanned<f64>>,
+    pub lead: Option<Spanned<f64>>,
     pub following_limit: Option<Spanned<f64>>,
 }
 

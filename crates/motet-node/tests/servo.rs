@@ -94,6 +94,7 @@ fn gains() -> ServoGains {
         integral_limit: 0.2,
         output_limit: 1.0,
         derivative_hz: 0.0,
+        lead: 0.0,
     }
 }
 
@@ -115,6 +116,12 @@ fn send(node: &mut Node, m: &HostMessage) -> Option<NodeMessage> {
 
 /// A node with the servo, given a 60 mm move and back on x.
 fn moving(config: ServoConfig) -> (Node, f64) {
+    moving_along(config, &[60.0, 0.0])
+}
+
+/// A node with the servo, given moves on x to each of `xs` (mm) from 0,
+/// starting 10 ms in; and when they end.
+fn moving_along(config: ServoConfig, xs: &[f64]) -> (Node, f64) {
     let mut node: Node = Node::new();
     assert_eq!(send(&mut node, &HostMessage::ConfigureServo(config)), None);
     assert_eq!(
@@ -129,7 +136,9 @@ fn moving(config: ServoConfig) -> (Node, f64) {
     let planned = plan(
         limits(ProfileKind::Trapezoid),
         pt(0.0, 0.0, 0.0),
-        &[feed(60.0, 0.0, 0.0, 100.0), feed(0.0, 0.0, 0.0, 100.0)],
+        &xs.iter()
+            .map(|&x| feed(x, 0.0, 0.0, 100.0))
+            .collect::<Vec<_>>(),
     );
     let mut end = 0.0;
     for (seq, p) in planned.iter().enumerate() {
@@ -287,6 +296,80 @@ fn following_error_trips_the_loop() {
         node.control().servos()[0].fault(),
         Some(FaultKind::Following)
     );
+}
+
+/// With a lead the feed-forward looks ahead on the trajectory: the drive
+/// starts twice the lead before the set point moves, and cruising it is
+/// the same as without (the window's mean speed is the speed).
+#[test]
+fn the_feed_forward_looks_ahead_by_its_lead() {
+    // (lead s, when the drive first moves, µs)
+    let cases = [(0.0, 10_000.0), (0.0005, 9_000.0), (0.002, 6_000.0)];
+    let mut cruise = vec![];
+    for (lead, starts) in cases {
+        let open = ServoGains {
+            kp: 0.0,
+            ki: 0.0,
+            kd: 0.0,
+            lead,
+            ..gains()
+        };
+        let (mut node, end) = moving(servo(open, 1e6));
+        let mut motor = Motor::new();
+        run(&mut node, &mut motor, end, 40.0);
+        let first = motor.drives.iter().find(|d| d.1 != 0.0).unwrap().0;
+        assert!(
+            (first - starts).abs() <= 100.0,
+            "lead {lead}: drives from {first} µs, want {starts}"
+        );
+        // Halfway out, at 100 mm/s: kv·v.
+        let mid = motor
+            .drives
+            .iter()
+            .find(|d| d.0 >= 10_000.0 + 300_000.0)
+            .unwrap()
+            .1;
+        cruise.push(mid);
+    }
+    let want = (100.0 * CPU / GAIN) as f32;
+    for c in cruise {
+        assert!((c - want).abs() < 1e-4, "cruising at {c}, want {want}");
+    }
+}
+
+/// Held at rest short of a count (the move ends 0.3 count past one), the
+/// loop takes the error within a count as none: it stops driving and
+/// settles instead of hunting across the count's edge.
+#[test]
+fn at_rest_an_error_within_a_count_is_none() {
+    let p_only = ServoGains {
+        kp: 0.02,
+        ki: 0.0,
+        kd: 0.0,
+        kv: 0.0,
+        ka: 0.0,
+        ..gains()
+    };
+    let (mut node, end) = moving_along(servo(p_only, 1e6), &[0.103]);
+    let mut motor = Motor::new();
+    run(&mut node, &mut motor, end + 500_000.0, 40.0);
+    let tail: Vec<_> = motor
+        .drives
+        .iter()
+        .filter(|d| d.0 > end + 400_000.0)
+        .collect();
+    assert!(!tail.is_empty());
+    assert!(tail.iter().all(|d| d.1 == 0.0), "{:?}", &tail[..4]);
+    // Still, within a count of its set point.
+    assert!((10.3 - motor.pos.floor()).abs() < 1.0, "{}", motor.pos);
+    let last = motor.pos;
+    run_from(&mut node, &mut motor, end + 500_000.0, end + 600_000.0);
+    assert!(
+        (motor.pos - last).abs() < 1e-6,
+        "and stays: {last} {}",
+        motor.pos
+    );
+    assert_eq!(node.next_deadline(), None, "settled");
 }
 
 #[test]

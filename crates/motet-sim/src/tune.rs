@@ -3,12 +3,16 @@
 //! relay) at its loop rate and sends every tick upstream; the host
 //! identifies the plant and computes the gains.
 //!
-//! * Two drive steps give the motor's speed per duty `Kv` (counts/s), the
-//!   friction's duty and the velocity's reaction curve as a delay `L` and
-//!   a time constant `T` (the thesis's Ziegler–Nichols quantities, found
-//!   by Smith's two points, 28.3 % and 63.2 % of the final speed, rather
-//!   than by a tangent on differenced encoder counts). The feed-forward follows from
-//!   the model: `kv = 1/Kv`, `ka = T/Kv`, `kf` the friction's duty.
+//! * Two drive steps each way give the motor's speed per duty `Kv`
+//!   (counts/s), the friction's duty (what hinders both ways) apart from a
+//!   constant load's (what helps one way: gravity, held by the integral),
+//!   and the velocity's reaction curve as a delay `L` and a time constant
+//!   `T` (the thesis's Ziegler–Nichols quantities), fitted by least squares
+//!   to the counts over the whole step rather than read off speeds
+//!   differenced from them. The feed-forward follows from the model:
+//!   `kv = 1/Kv`, `ka = T/Kv`, `kf` the friction's duty, and its `lead`
+//!   `L` (the current's lag and the tick's hold, which the node's
+//!   feed-forward looks ahead by).
 //! * Feedback, by `Rule`: the thesis's Ziegler–Nichols table on the
 //!   position's reaction curve (an integrating process of slope `Kv`:
 //!   `kp = 1.2/(Kv·L)`, `Ti = 2L`, `Td = L/2`); with a relay
@@ -57,6 +61,14 @@ pub struct Identified {
     pub delay_s: f64,
     /// Time constant, s.
     pub tau_s: f64,
+    /// The position's lag behind a constant speed, s: where the high
+    /// step's position, once at speed, extrapolates back to zero (every
+    /// lag and delay of the motor, its drive and the loop's tick added).
+    pub lag_s: f64,
+    /// The duty a constant load takes (gravity on a z axis), positive
+    /// against the joint's positive direction: what the steps either way
+    /// differ by; the integral holds it.
+    pub load_duty: f64,
     /// Relay: ultimate gain (duty/count) and period (s).
     pub ultimate: Option<(f64, f64)>,
 }
@@ -128,12 +140,26 @@ pub fn tune(
         ))
     })?;
     let mut bench = Bench::new(machine, a, axis, &spec);
+    // Each step either way in turn, so the carriage stays near the middle
+    // and a constant load (which helps one way, hinders the other) is told
+    // from friction (which hinders both).
     let low = bench.step(0.08)?;
+    let back_low = bench.step(-0.08)?;
     let high = bench.step(0.16)?;
-    let mut identified = identify(&low.1, &high.1, 0.08, 0.16, bench.dt())?;
+    let back_high = bench.step(-0.16)?;
+    let forward = identify(&low, &high, 0.08, 0.16, bench.dt())?;
+    let backward = identify(
+        &mirrored(&back_low),
+        &mirrored(&back_high),
+        0.08,
+        0.16,
+        bench.dt(),
+    )?;
+    let mut identified = combine(&forward, &backward);
     let mut experiments = vec![
         ("step to 8 % duty".to_string(), low.0),
         ("step to 16 % duty".to_string(), high.0),
+        ("step to −16 % duty".to_string(), back_high.0),
     ];
     if method == Method::Relay {
         let (trace, ultimate) = bench.relay(0.1, 2.0)?;
@@ -260,8 +286,12 @@ impl Bench {
         out
     }
 
-    /// Closes the loop a test left open, holding where the motor is.
+    /// Closes the loop a test left open, holding where the motor is: after
+    /// the test's last tick (at its end, which the run up to it has not
+    /// reached), or that tick would open the loop again and leave it so
+    /// (a z axis falling under its load between experiments).
     fn hold(&mut self) {
+        self.run(2e3 / self.rate);
         self.send(&HostMessage::SetPosition { position: [0.0; 6] });
     }
 
@@ -295,7 +325,7 @@ impl Bench {
         if trace.len() < 100 {
             return Err(TuneError::Experiment(
                 "step",
-                format!("{} samples", trace.len()),
+                format!("{} samples at duty {duty}", trace.len()),
             ));
         }
         let speed = (0..trace.len())
@@ -345,6 +375,29 @@ impl Bench {
     }
 }
 
+/// A step's trace and speeds the other way up.
+fn mirrored(step: &(Trace, Vec<f64>)) -> (Trace, Vec<f64>) {
+    (
+        step.0.iter().map(|&(t, c)| (t, -c)).collect(),
+        step.1.iter().map(|v| -v).collect(),
+    )
+}
+
+/// One model from the steps either way: the friction is what they share,
+/// a constant load what they differ by.
+fn combine(forward: &Identified, backward: &Identified) -> Identified {
+    let mean = |a: f64, b: f64| (a + b) / 2.0;
+    Identified {
+        kv: mean(forward.kv, backward.kv),
+        friction_duty: mean(forward.friction_duty, backward.friction_duty).max(0.0),
+        delay_s: mean(forward.delay_s, backward.delay_s),
+        tau_s: mean(forward.tau_s, backward.tau_s),
+        lag_s: mean(forward.lag_s, backward.lag_s),
+        load_duty: (forward.friction_duty - backward.friction_duty) / 2.0,
+        ultimate: None,
+    }
+}
+
 /// A trace from its first point: times and counts from there.
 fn relative(trace: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let Some(&(t0, c0)) = trace.first() else {
@@ -353,13 +406,30 @@ fn relative(trace: &[(f64, f64)]) -> Vec<(f64, f64)> {
     trace.iter().map(|&(t, c)| (t - t0, c - c0)).collect()
 }
 
-/// The model from two steps' speeds (duties `d1` < `d2`), `dt` s apart.
-fn identify(v1: &[f64], v2: &[f64], d1: f64, d2: f64, dt: f64) -> Result<Identified, TuneError> {
-    let tail = |v: &[f64]| {
-        let n = v.len();
-        v[n * 7 / 10..n - 4].iter().sum::<f64>() / (n - 4 - n * 7 / 10) as f64
-    };
-    let (s1, s2) = (tail(v1), tail(v2));
+/// The model from two steps (duties `d1` < `d2`), their traces at ticks
+/// `dt` s apart; the friction's duty as it shows that way (a constant load
+/// in it, with its sign).
+///
+/// The motor's speed after a step is taken as a delay `L` and a lag `T`
+/// (the thesis's reaction curve), fitted by least squares to the position
+/// itself over the whole step, the final speed with them: a tangent, or
+/// Smith's two points, on speeds differenced from encoder counts are at
+/// the mercy of their quantisation (the more the slower the motor), and a
+/// final speed read off the trace's end is short of the true one by what
+/// the motor had still to gain.
+fn identify(
+    low: &(Trace, Vec<f64>),
+    high: &(Trace, Vec<f64>),
+    d1: f64,
+    d2: f64,
+    dt: f64,
+) -> Result<Identified, TuneError> {
+    let (trace, slow) = (&high.0, &low.0);
+    if trace.len() < 100 || slow.len() < 100 {
+        return Err(TuneError::Experiment("step", "no rise".into()));
+    }
+    let (l, tau, s2) = fit_reaction(trace, dt);
+    let s1 = final_speed(slow, l, tau);
     if !(s2 > s1 && s1 > 0.0) {
         return Err(TuneError::Experiment(
             "step",
@@ -367,35 +437,79 @@ fn identify(v1: &[f64], v2: &[f64], d1: f64, d2: f64, dt: f64) -> Result<Identif
         ));
     }
     let kv = (s2 - s1) / (d2 - d1);
-    let friction_duty = (d1 - s1 / kv).max(0.0);
-    // The reaction curve of the larger step as a delay and a lag, from
-    // the times it reaches 28.3 % and 63.2 % of its final speed (Smith's
-    // two points: the tangent of the thesis's construction, found from
-    // differenced encoder counts, is at the mercy of their quantisation).
-    // Each crossing between ticks, interpolated.
-    let first = |frac: f64| {
-        let goal = frac * s2;
-        let i = v2.iter().position(|&v| v >= goal)?;
-        let before = if i > 0 { v2[i - 1] } else { 0.0 };
-        let f = if v2[i] > before {
-            (goal - before) / (v2[i] - before)
-        } else {
-            1.0
-        };
-        Some((i as f64 - 1.0 + f).max(0.0) * dt)
-    };
-    let (Some(t28), Some(t63)) = (first(0.283), first(0.632)) else {
-        return Err(TuneError::Experiment("step", "no rise".into()));
-    };
-    let tau = (1.5 * (t63 - t28)).max(dt);
-    let delay = (t63 - tau).max(dt);
     Ok(Identified {
         kv,
-        friction_duty,
-        delay_s: delay,
+        friction_duty: d1 - s1 / kv,
+        delay_s: l,
         tau_s: tau,
+        lag_s: l + tau,
+        load_duty: 0.0,
         ultimate: None,
     })
+}
+
+/// Counts from a step's start, per count/s of final speed, `t` s after it,
+/// of a speed that follows after a delay `l` with a lag `tau`.
+fn reaction(t: f64, l: f64, tau: f64) -> f64 {
+    let u = t - l;
+    if u > 0.0 {
+        u - tau * (1.0 - (-u / tau).exp())
+    } else {
+        0.0
+    }
+}
+
+/// The final speed that puts the reaction curve `(l, tau)` nearest the
+/// trace (linear least squares).
+fn final_speed(trace: &[(f64, f64)], l: f64, tau: f64) -> f64 {
+    let (mut cg, mut gg) = (0.0, 0.0);
+    for &(t, c) in trace {
+        let g = reaction(t, l, tau);
+        cg += c * g;
+        gg += g * g;
+    }
+    if gg > 0.0 {
+        cg / gg
+    } else {
+        0.0
+    }
+}
+
+/// `(L, T, final speed)` nearest the step's trace: the final speed in
+/// closed form for each curve, `T` and then `L` by ternary search.
+fn fit_reaction(trace: &[(f64, f64)], dt: f64) -> (f64, f64, f64) {
+    let misfit = |l: f64, tau: f64| {
+        let s = final_speed(trace, l, tau);
+        trace
+            .iter()
+            .map(|&(t, c)| (c - s * reaction(t, l, tau)).powi(2))
+            .sum::<f64>()
+    };
+    let span = trace.last().map_or(1.0, |p| p.0);
+    let best_tau = |l: f64| {
+        let (mut lo, mut hi) = (dt, span / 2.0);
+        for _ in 0..60 {
+            let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+            if misfit(l, a) <= misfit(l, b) {
+                hi = b;
+            } else {
+                lo = a;
+            }
+        }
+        (lo + hi) / 2.0
+    };
+    let (mut lo, mut hi) = (0.0, (span / 10.0).min(0.02));
+    for _ in 0..40 {
+        let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+        if misfit(a, best_tau(a)) <= misfit(b, best_tau(b)) {
+            hi = b;
+        } else {
+            lo = a;
+        }
+    }
+    let l = ((lo + hi) / 2.0).max(dt);
+    let tau = best_tau(l);
+    (l, tau, final_speed(trace, l, tau))
 }
 
 /// The gains from what was identified.
@@ -419,6 +533,14 @@ fn gains_for(id: &Identified, spec: &ServoSpec, method: Method, rule: Rule) -> S
             (kp, kp * wc / 10.0, kp * id.tau_s)
         }
     };
+    // The feed-forward: the motor's speed follows its drive as
+    // `1/((1 + s·T)(1 + s·L'))` (the mechanical lag `T`, the current's and
+    // the tick's `L'`), which a drive of `kv·v + ka·a` taken `lead` ahead
+    // inverts to first order when `lead + ka·Kv` is the whole lag: the
+    // lead is the reaction curve's delay, the acceleration's share the
+    // rest of the measured lag.
+    let lead = id.delay_s;
+    let accel_lag = (id.lag_s - lead).max(0.0);
     let clamp = |v: f64, i: usize| {
         let (_, lo, hi) = motet_wire::control::GAIN_RANGES[i];
         (v as f32).clamp(lo, hi)
@@ -428,11 +550,12 @@ fn gains_for(id: &Identified, spec: &ServoSpec, method: Method, rule: Rule) -> S
         ki: clamp(ki, 1),
         kd: clamp(kd, 2),
         kv: clamp(1.0 / id.kv, 3),
-        ka: clamp(id.tau_s / id.kv, 4),
+        ka: clamp(accel_lag / id.kv, 4),
         kf: clamp(id.friction_duty, 5),
         integral_limit: g.integral_limit,
         output_limit: g.output_limit,
         derivative_hz: clamp((spec.rate_hz / 20.0).min(1000.0), 8),
+        lead: clamp(lead, 9),
     }
 }
 

@@ -240,3 +240,34 @@ fn a_limit_switch_cuts_the_drive() {
     assert_eq!(p.motor().omega(), 0.0);
     assert!(p.joint() < 215.0, "{}", p.joint());
 }
+
+/// `motet tune` on an axis that carries a weight: the steps either way tell
+/// the friction (4 mN·m, 0.004 duty) from the weight (14.7 N on a 5 mm
+/// lead, 0.0117 duty), the fitted reaction curve has the motor's lags
+/// (the current's 0.42 ms, the whole 7.62 ms of this inertia), and the
+/// gains follow the check move within the targets.
+#[test]
+fn tuning_tells_friction_from_a_weight_and_finds_the_lags() {
+    use motet_sim::tune::{tune, Method, Rule};
+    let m = machine(GAINS, "load = 1.5\nload_force = 14.7", "");
+    let t = tune(&m, "x_servo", Method::Step, Rule::Model).unwrap();
+    let id = &t.identified;
+    // (what, found, true, relative tolerance)
+    let cases = [
+        ("friction", id.friction_duty, 0.004, 0.05),
+        ("load", id.load_duty, 0.0117, 0.05),
+        ("Kv", id.kv, 304_100.0, 0.01),
+        ("lag at speed", id.lag_s, 7.62e-3, 0.02),
+        ("delay", id.delay_s, 0.45e-3, 0.2),
+    ];
+    for (what, found, want, tol) in cases {
+        assert!(
+            ((found - want) / want).abs() <= tol,
+            "{what}: {found} against {want}"
+        );
+    }
+    assert_eq!(t.gains.lead, id.delay_s as f32);
+    let f = t.check.report.actuators[0].following.clone().unwrap();
+    assert!(f.max_settled_cruise_counts <= 2.0, "{f:?}");
+    assert!(f.max_accel_counts <= 10.0, "{f:?}");
+}

@@ -21,7 +21,11 @@ pub const MAX_COUNTS_PER_UNIT: f64 = 1.0e6;
 /// output in duty. `u = kp·e + ki·∫e dt + kd·ė + kv·v + ka·a + kf·sign(v)`
 /// with `v`, `a` the set point's speed (counts/s) and acceleration
 /// (counts/s²), the integral term clamped to ±`integral_limit` and `u` to
-/// ±`output_limit`.
+/// ±`output_limit`. With a `lead` above 0, `v` and `a` are the set point's
+/// mean speed and acceleration over the next `2·lead` seconds (its change
+/// of value and of speed over them): the feed-forward leads the motor's
+/// lag by `lead`, and a jump in the set point's speed (a corner) is fed
+/// forward as the acceleration it takes.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ServoGains {
     /// Proportional gain, duty per count.
@@ -43,11 +47,14 @@ pub struct ServoGains {
     /// Cut-off of the low-pass filter on the error's rate, Hz (0: a
     /// quarter of the loop rate).
     pub derivative_hz: f32,
+    /// How far the feed-forward looks ahead, s (0: the set point's speed
+    /// and acceleration at the tick).
+    pub lead: f32,
 }
 
 /// The ranges [`ServoGains::is_valid`] holds each gain to, in the order
 /// of the struct's fields: what a node takes, live or at configuration.
-pub const GAIN_RANGES: [(&str, f32, f32); 9] = [
+pub const GAIN_RANGES: [(&str, f32, f32); 10] = [
     ("kp", 0.0, 1.0e3),
     ("ki", 0.0, 1.0e6),
     ("kd", 0.0, 10.0),
@@ -57,11 +64,12 @@ pub const GAIN_RANGES: [(&str, f32, f32); 9] = [
     ("integral_limit", 0.0, 1.0),
     ("output_limit", 1.0e-3, 1.0),
     ("derivative_hz", 0.0, 25_000.0),
+    ("lead", 0.0, 0.01),
 ];
 
 impl ServoGains {
     /// Every gain, in the order of [`GAIN_RANGES`].
-    pub fn values(&self) -> [f32; 9] {
+    pub fn values(&self) -> [f32; 10] {
         [
             self.kp,
             self.ki,
@@ -72,6 +80,7 @@ impl ServoGains {
             self.integral_limit,
             self.output_limit,
             self.derivative_hz,
+            self.lead,
         ]
     }
 

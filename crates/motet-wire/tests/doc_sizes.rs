@@ -509,6 +509,7 @@ fn closed_loop_sizes() {
         integral_limit: 0.3,
         output_limit: 1.0,
         derivative_hz: 0.0,
+        lead: 0.0,
     };
     let servo = ServoConfig {
         channel: 0,
@@ -537,8 +538,8 @@ fn closed_loop_sizes() {
         })
     };
     let host = [
-        (HostMessage::ConfigureServo(servo), 103),
-        (HostMessage::ServoGains { channel: 0, gains }, 38),
+        (HostMessage::ConfigureServo(servo), 107),
+        (HostMessage::ServoGains { channel: 0, gains }, 42),
         (
             HostMessage::Sampling {
                 source: SampleSource::Sensor(0),

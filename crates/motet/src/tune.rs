@@ -33,12 +33,14 @@ pub fn tune_cmd(a: TuneArgs) -> Result<()> {
     let t = tune(&machine, &a.actuator, method, rule)?;
     let id = &t.identified;
     println!(
-        "{}: identified Kv {:.0} counts/s per duty, friction {:.4} duty, reaction curve L {:.2} ms, T {:.2} ms",
+        "{}: identified Kv {:.0} counts/s per duty, friction {:.4} duty, load {:.4} duty, reaction curve L {:.2} ms, T {:.2} ms, lag at speed {:.2} ms",
         a.actuator,
         id.kv,
         id.friction_duty,
+        id.load_duty,
         id.delay_s * 1e3,
-        id.tau_s * 1e3
+        id.tau_s * 1e3,
+        id.lag_s * 1e3
     );
     if let Some((ku, tu)) = id.ultimate {
         println!(
@@ -48,8 +50,14 @@ pub fn tune_cmd(a: TuneArgs) -> Result<()> {
     }
     let g = &t.gains;
     println!(
-        "  gains: kp {:.4e} ki {:.4e} kd {:.4e} kv {:.4e} ka {:.4e} kf {:.4e}",
-        g.kp, g.ki, g.kd, g.kv, g.ka, g.kf
+        "  gains: kp {:.4e} ki {:.4e} kd {:.4e} kv {:.4e} ka {:.4e} kf {:.4e} lead {:.3} ms",
+        g.kp,
+        g.ki,
+        g.kd,
+        g.kv,
+        g.ka,
+        g.kf,
+        g.lead * 1e3
     );
     let report = &t.check.report;
     if let Some(f) = report
@@ -59,8 +67,12 @@ pub fn tune_cmd(a: TuneArgs) -> Result<()> {
         .and_then(|x| x.following.as_ref())
     {
         println!(
-            "  check move: following error {:.2} counts max cruising, {:.2} accelerating, {:.2} at rest, {:.2} rms",
-            f.max_cruise_counts, f.max_accel_counts, f.max_rest_counts, f.rms_counts
+            "  check move: following error {:.2} counts max cruising ({:.2} settled), {:.2} accelerating, {:.2} at rest, {:.2} rms",
+            f.max_cruise_counts,
+            f.max_settled_cruise_counts,
+            f.max_accel_counts,
+            f.max_rest_counts,
+            f.rms_counts
         );
     }
     let out = a.out.unwrap_or_else(|| PathBuf::from("out").join("tune"));
@@ -131,6 +143,7 @@ pub fn write_gains(path: &Path, actuator: &str, g: &ServoGains) -> Result<()> {
         ("ka", g.ka),
         ("kf", g.kf),
         ("derivative_hz", g.derivative_hz),
+        ("lead", g.lead),
     ] {
         let value = toml_edit::value(round(v));
         match servo.get_mut(key).and_then(|i| i.as_value_mut()) {
@@ -175,6 +188,7 @@ mod tests {
             integral_limit: 0.2,
             output_limit: 1.0,
             derivative_hz: 500.0,
+            lead: 4.7e-4,
         };
         write_gains(&path, "xm", &g).unwrap();
         let out = std::fs::read_to_string(&path).unwrap();

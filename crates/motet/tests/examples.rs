@@ -273,8 +273,9 @@ fn a_node_in_fixed_point_time_takes_the_same_steps_within_its_tolerance() {
     }
 }
 
-/// The servo examples run their jobs with every servo within its target
-/// in accelerations, each ending within two counts of its last target;
+/// The servo examples run their jobs with every servo within its targets
+/// (two counts once a cruise has settled, ten in accelerations), each
+/// ending within two counts of its last target;
 /// `motet run` writes their plots beside the path and lists them.
 #[test]
 fn servo_examples_follow_and_plot() {
@@ -294,6 +295,11 @@ fn servo_examples_follow_and_plot() {
         for (a, ar) in m.actuators.iter().zip(&r.report.actuators) {
             let Some(f) = &ar.following else { continue };
             assert!(f.max_accel_counts <= 10.0, "{machine}: {} {f:?}", a.name);
+            assert!(
+                f.max_settled_cruise_counts <= 2.0,
+                "{machine}: {} {f:?}",
+                a.name
+            );
             assert!(f.rms_counts <= 1.0, "{machine}: {} {f:?}", a.name);
             let want = m.joints[a.joint].map.value(&last, 0.0) * a.steps_per_unit;
             assert!(

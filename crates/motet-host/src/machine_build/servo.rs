@@ -97,6 +97,7 @@ pub(super) fn servo(
         integral_limit: gain(&s.integral_limit, 6, 0.3)?,
         output_limit: gain(&s.output_limit, 7, 1.0)?,
         derivative_hz: gain(&s.derivative_hz, 8, 0.0)?,
+        lead: gain(&s.lead, 9, 0.0)?,
     };
     let rate_hz = src.value_or(
         s.rate_hz.as_ref(),

@@ -3,8 +3,8 @@
 //!
 //! Each tick reads the encoder and the limit switches at the tick's time,
 //! takes the set point from the queued segments (value for the error,
-//! speed and acceleration for the feed-forward), runs the PID and sets the
-//! drive. A following error beyond the limit, an open limit switch or an
+//! speed and acceleration for the feed-forward, at the tick or over a
+//! window ahead of it), runs the PID and sets the drive. A following error beyond the limit, an open limit switch or an
 //! encoder that gives no reading stops the drive at once (0) and reports a
 //! fault; the servo drives nothing more until it is configured again.
 
@@ -24,6 +24,10 @@ const QUIET_TICKS: u32 = 256;
 /// |Following error| a settled servo stays within, counts.
 const QUIET_COUNTS: f32 = 1.5;
 
+/// |Following error| within which a servo held at rest takes its error
+/// as none, counts.
+const REST_BAND_COUNTS: f32 = 1.0;
+
 /// A tuning test under way.
 #[derive(Clone, Copy, Debug)]
 struct Running {
@@ -41,6 +45,8 @@ pub struct Servo {
     pid: Pid,
     ticker: Ticker,
     setpoint: SetPoint,
+    /// The set point a feed-forward lead ahead, for the feed-forward.
+    ahead: SetPoint,
     /// Encoder count where the joint is 0 (set at the first tick after
     /// the position was set).
     offset: Option<f64>,
@@ -81,6 +87,7 @@ impl Servo {
             pid: Pid::new(pid_gains(&config.gains, config.rate_hz)),
             ticker: Ticker::new(config.rate_hz),
             setpoint: SetPoint::at_rest(config.map, p),
+            ahead: SetPoint::at_rest(config.map, p),
             offset: None,
             fault: None,
             test: None,
@@ -120,6 +127,11 @@ impl Servo {
 
     /// New gains from the next tick on.
     pub fn set_gains(&mut self, gains: ServoGains) {
+        if gains.lead < self.config.gains.lead {
+            // A shorter window: looked at again from the set point on, as
+            // it only ever moves forward in time.
+            self.ahead = self.setpoint;
+        }
         self.config.gains = gains;
         self.pid.set_gains(pid_gains(&gains, self.config.rate_hz));
     }
@@ -129,6 +141,7 @@ impl Servo {
     /// closes.
     pub fn set_position(&mut self, p: &Point) {
         self.setpoint.set_position(p);
+        self.ahead.set_position(p);
         self.offset = None;
         self.open = false;
         self.quiet = 0;
@@ -165,6 +178,7 @@ impl Servo {
     /// The queue dropped `n` segments from its head.
     pub fn drop_segments(&mut self, n: usize) {
         self.setpoint.drop_segments(n);
+        self.ahead.drop_segments(n);
     }
 
     /// Runs the tick due at `t` on the first `end` of `segments`; true when
@@ -194,6 +208,9 @@ impl Servo {
             .get_or_insert_with(|| count as f64 - self.setpoint.hold() * cpu);
         let measured = count as f64 - offset;
         let state = self.setpoint.state(t, segments, end);
+        // The feed-forward's window: from this tick to twice the lead on.
+        let lead = self.config.gains.lead as f64 * 1e6;
+        let later = self.ahead.state(t + 2.0 * lead, segments, end);
         let error = (state.value * cpu - measured) as f32;
         self.error = error;
         let moved = self.last_count != Some(count);
@@ -214,7 +231,20 @@ impl Servo {
                 return self.trip(FaultKind::Following, t, error, board, up);
             }
             let g = &self.config.gains;
-            let (v, a) = ((state.speed * cpu) as f32, (state.accel * cpu) as f32);
+            // Over the window, the set point's mean speed and acceleration:
+            // what the motor, whose current lags its drive, must be given
+            // now to be there at the tick in the window's middle. A jump
+            // in speed (a corner) is fed forward as the acceleration it
+            // takes over the window, instead of being left to the error.
+            let w = 2.0 * lead * 1e-6;
+            let (v, a) = if lead > 0.0 {
+                (
+                    ((later.value - state.value) / w * cpu) as f32,
+                    ((later.speed - state.speed) / w * cpu) as f32,
+                )
+            } else {
+                ((state.speed * cpu) as f32, (state.accel * cpu) as f32)
+            };
             let friction = if v > 0.0 {
                 g.kf
             } else if v < 0.0 {
@@ -223,7 +253,17 @@ impl Servo {
                 0.0
             };
             let ff = g.kv * v + g.ka * a + friction;
-            Some(self.pid.update(error, ff, self.ticker.period_s()).out)
+            // An encoder tells nothing finer than its count: held at rest,
+            // an error within one count is none. Otherwise the loop hunts
+            // across a count's edge, the derivative kicking at every flip
+            // of the last count, and the servo never settles.
+            let resting = state.speed == 0.0 && v == 0.0 && a == 0.0;
+            let e = if resting && error.abs() < REST_BAND_COUNTS {
+                0.0
+            } else {
+                error
+            };
+            Some(self.pid.update(e, ff, self.ticker.period_s()).out)
         };
         if let Some(d) = drive {
             board.drive(ch, d, t);
