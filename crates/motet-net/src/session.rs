@@ -137,13 +137,14 @@ impl Session {
             spawned: Vec::new(),
         };
         for (k, spec) in machine.nodes.iter().enumerate() {
-            // A node with closed loops runs its machine's simulated plant.
+            // A node with closed loops (servos, heaters) runs its
+            // machine's simulated plant.
             let mut args = extra.get(k).cloned().unwrap_or_default();
-            if spec
+            let servos = spec
                 .actuators
                 .iter()
-                .any(|&a| machine.actuators[a].servo.is_some())
-            {
+                .any(|&a| machine.actuators[a].servo.is_some());
+            if servos || !motet_host::heater_loop::on_node(machine, k).is_empty() {
                 args.extend([
                     "--plant".to_string(),
                     machine.file.display().to_string(),

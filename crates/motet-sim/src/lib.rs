@@ -7,6 +7,7 @@ pub mod dance;
 pub mod heaters;
 mod ideal;
 pub mod loops;
+pub mod node_plant;
 pub mod path;
 pub mod plant;
 pub mod plant_thread;

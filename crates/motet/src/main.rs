@@ -205,7 +205,7 @@ enum Cmd {
         /// With --type s3g: write each point run as a line `n,clock_us,x,y,z,a,b` (steps).
         #[arg(long)]
         record: Option<PathBuf>,
-        /// Run the servo and sensor channels of this machine file's node
+        /// Run the servo, sensor and heater channels of this machine file's node
         /// (`--plant-node`) on its simulated plant (motors, encoders,
         /// switches, sensors).
         #[arg(long, requires = "plant_node")]

@@ -372,35 +372,17 @@ fn drive(
         }
     };
     bar.finish_and_clear();
-    // The loops' last samples leave their nodes within a batch's age of
-    // the end: heard before the plots are drawn.
-    if matches!(phase, Phase::Done) && !run.samples().series.is_empty() {
-        let until = clock.now_us() + SAMPLES_DRAIN_US;
-        while clock.now_us() < until {
-            run.poll(clock.now_us())?;
-            std::thread::sleep(clock.real(1_000));
-        }
+    if matches!(phase, Phase::Done) {
+        drain_samples(&mut run, &clock)?;
     }
     let now = clock.now_us();
     let figures = run.figures(now);
     let tallies = run.tallies();
-    // The loops' plots as an in-process run writes them, from the samples
-    // the nodes sent (a stopped run's too: they show what led to it).
-    let t0 = run.trajectory_start().unwrap_or(0.0);
-    let plots = motet_sim::plots::write_plots(machine, run.samples(), run.sensor_plan(), t0, out)
-        .context("writing the loops' plots")?;
+    let plots = write_loop_plots(machine, &run, out)?;
     let report = serde_json::json!({
         "machine": machine.name,
         "plots": plots,
-        "loops": run.samples().series.iter().map(|s| {
-            let (lo, hi) = s.all_points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.lo), b.max(p.hi)));
-            let (low, high) = s.all_points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.value), b.max(p.value)));
-            let last = s.all_points().last().map(|p| p.value);
-            // A servo's: the following error's least and most (counts), its
-            // measured position's range and last value; a sensor's: its
-            // readings'.
-            serde_json::json!({ "name": s.name, "node": machine.nodes[s.node].name, "points": s.all_points().count(), "least": lo, "most": hi, "low": low, "high": high, "last": last })
-        }).collect::<Vec<_>>(),
+        "loops": loops_json(machine, &run),
         "commands": total,
         "segments": run.segments_sent,
         "windows": run.windows,
@@ -408,44 +390,14 @@ fn drive(
         "outcome": match &phase { Phase::Done => "done".to_string(), Phase::Stopped(s) => format!("stopped: {}", s.reason), _ => "?".into() },
         "pace": pace_json(run.pace()),
         "lost": match &phase { Phase::Stopped(s) => s.lost.iter().map(|l| serde_json::json!({ "node": l.name, "why": l.why })).collect::<Vec<_>>(), _ => Vec::new() },
-        "nodes": figures.iter().enumerate().map(|(k, f)| serde_json::json!({
-            "name": f.name,
-            "rtt_us": f.rtt_us,
-            "retransmits": f.retransmits,
-            "crc_errors": f.crc_errors,
-            "bytes_out": f.bytes_out,
-            "bytes_in": f.bytes_in,
-            "frames_out": f.frames_out,
-            "frames_in": f.frames_in,
-            "sync_error_us": f.sync_error_us,
-            "skew_ppm": f.skew_ppm,
-            "underruns": f.underruns,
-            "window": window(run.node_status(k)),
-            "tally": tallies[k].map(|t| serde_json::json!({
-                "steps": t.steps,
-                "tool_changes": t.tool_changes,
-                "hash": format!("{:016x}", t.hash),
-            })),
-        })).collect::<Vec<_>>(),
+        "nodes": nodes_json(&run, &figures, &tallies),
     });
     std::fs::write(
         out.join("net.json"),
         serde_json::to_string_pretty(&report)? + "\n",
     )?;
     if !quiet {
-        for f in &figures {
-            println!(
-                "  node {}: rtt {:.2} ms, {} retransmits, {} CRC errors, {} B out / {} B in, clock ±{:.1} µs ({:+.1} ppm)",
-                f.name,
-                f.rtt_us as f64 / 1000.0,
-                f.retransmits,
-                f.crc_errors,
-                f.bytes_out,
-                f.bytes_in,
-                f.sync_error_us,
-                f.skew_ppm
-            );
-        }
+        print_figures(&figures);
     }
     match phase {
         Phase::Done => {
@@ -466,6 +418,124 @@ fn drive(
             bail!("{}", stop_message(machine, &s, out))
         }
         _ => unreachable!("the loop ends only when done or stopped"),
+    }
+}
+
+/// Keeps the stopped run `run`'s record and journal beside the new ones.
+fn keep_stopped_run(out: &Path, run: &str) -> Result<()> {
+    for (name, kept) in [
+        ("journal", format!("journal.{run}")),
+        ("resume.toml", format!("resume.{run}.toml")),
+        ("stop.toml", format!("stop.{run}.toml")),
+    ] {
+        if out.join(name).exists() {
+            std::fs::rename(out.join(name), out.join(&kept))
+                .with_context(|| format!("cannot keep {} as {kept}", out.join(name).display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The loops' last samples leave their nodes within a batch's age of the
+/// end: heard before the plots are drawn.
+fn drain_samples(run: &mut NetRun, clock: &WallClock) -> Result<()> {
+    if run.samples().series.is_empty() && run.heater_traces().next().is_none() {
+        return Ok(());
+    }
+    let until = clock.now_us() + SAMPLES_DRAIN_US;
+    while clock.now_us() < until {
+        run.poll(clock.now_us())?;
+        std::thread::sleep(clock.real(1_000));
+    }
+    Ok(())
+}
+
+/// The loops' plots as an in-process run writes them, from the samples the
+/// nodes sent (a stopped run's too: they show what led to it); their files.
+fn write_loop_plots(machine: &Machine, run: &NetRun, out: &Path) -> Result<Vec<String>> {
+    let t0 = run.trajectory_start().unwrap_or(0.0);
+    let mut plots =
+        motet_sim::plots::write_plots(machine, run.samples(), run.sensor_plan(), t0, out)
+            .context("writing the loops' plots")?;
+    let traces: Vec<_> = run.heater_traces().cloned().collect();
+    for (_, file) in crate::heaters::write_plots(machine, &traces, out)? {
+        plots.push(file);
+    }
+    Ok(plots)
+}
+
+/// `net.json`'s `loops`: per servo, the following error's least and most
+/// (counts), its measured position's range and last value; per sensor,
+/// its readings'.
+fn loops_json(machine: &Machine, run: &NetRun) -> Vec<serde_json::Value> {
+    let range = |s: &motet_host::samples::Series,
+                 f: fn(&motet_host::samples::SamplePoint) -> (f64, f64)| {
+        s.all_points()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                let (lo, hi) = f(p);
+                (a.min(lo), b.max(hi))
+            })
+    };
+    run.samples()
+        .series
+        .iter()
+        .map(|s| {
+            let (lo, hi) = range(s, |p| (p.lo, p.hi));
+            let (low, high) = range(s, |p| (p.value, p.value));
+            let last = s.all_points().last().map(|p| p.value);
+            serde_json::json!({ "name": s.name, "node": machine.nodes[s.node].name, "points": s.all_points().count(), "least": lo, "most": hi, "low": low, "high": high, "last": last })
+        })
+        .collect()
+}
+
+/// `net.json`'s `nodes`: each node's link and clock figures, where it
+/// rests and what it counted.
+fn nodes_json(
+    run: &NetRun,
+    figures: &[motet_net::run::PeerFigures],
+    tallies: &[Option<motet_net::run::Tally>],
+) -> Vec<serde_json::Value> {
+    figures
+        .iter()
+        .enumerate()
+        .map(|(k, f)| {
+            serde_json::json!({
+                "name": f.name,
+                "rtt_us": f.rtt_us,
+                "retransmits": f.retransmits,
+                "crc_errors": f.crc_errors,
+                "bytes_out": f.bytes_out,
+                "bytes_in": f.bytes_in,
+                "frames_out": f.frames_out,
+                "frames_in": f.frames_in,
+                "sync_error_us": f.sync_error_us,
+                "skew_ppm": f.skew_ppm,
+                "underruns": f.underruns,
+                "window": window(run.node_status(k)),
+                "tally": tallies[k].map(|t| serde_json::json!({
+                    "steps": t.steps,
+                    "tool_changes": t.tool_changes,
+                    "hash": format!("{:016x}", t.hash),
+                })),
+            })
+        })
+        .collect()
+}
+
+/// Each node's link and clock figures, a line each.
+fn print_figures(figures: &[motet_net::run::PeerFigures]) {
+    for f in figures {
+        println!(
+            "  node {}: rtt {:.2} ms, {} retransmits, {} CRC errors, {} B out / {} B in, clock ±{:.1} µs ({:+.1} ppm)",
+            f.name,
+            f.rtt_us as f64 / 1000.0,
+            f.retransmits,
+            f.crc_errors,
+            f.bytes_out,
+            f.bytes_in,
+            f.sync_error_us,
+            f.skew_ppm
+        );
     }
 }
 
@@ -705,17 +775,7 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
         nodes: record_nodes(&session),
         ..record.clone()
     };
-    // Keep the stopped run's record and journal beside the new ones.
-    for (name, kept) in [
-        ("journal", format!("journal.{}", record.run)),
-        ("resume.toml", format!("resume.{}.toml", record.run)),
-        ("stop.toml", format!("stop.{}.toml", record.run)),
-    ] {
-        if out.join(name).exists() {
-            std::fs::rename(out.join(name), out.join(&kept))
-                .with_context(|| format!("cannot keep {} as {kept}", out.join(name).display()))?;
-        }
-    }
+    keep_stopped_run(out, &record.run)?;
     drive(
         machine,
         RunJob::Given(r.commands),

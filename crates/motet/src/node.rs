@@ -125,7 +125,7 @@ fn args_with(a: &NodeArgs, description: Option<motet_wire::describe::Description
                 .with_context(|| {
                     format!("--plant-node {name}: {} has no such node", file.display())
                 })?;
-            let plants = motet_sim::servo::ServoPlants::of_node(&m, k, &m.start, 0.0);
+            let plants = motet_sim::node_plant::NodePlant::of_node(&m, k);
             Some(Box::new(plants) as Box<dyn motet_node::Board + Send>)
         }
     };

@@ -781,3 +781,38 @@ fn spawned_servo_nodes_send_samples_the_run_plots() {
         .max(x["most"].as_f64().unwrap().abs());
     assert!(most > 0.0 && most < 40.0, "{x}");
 }
+
+/// A heater on a node in its own process: its samples come back and the
+/// run plots its temperature against its target, as an in-process run
+/// does.
+#[test]
+fn spawned_heater_nodes_plot_their_heaters() {
+    let _serial = serial();
+    let tmp = scratch("heat");
+    let out = tmp.path();
+    let job = out.join("warm.gcode");
+    std::fs::write(&job, "M104 S60\nG28\nG1 X20 Y20 F3000\nG1 X0 Y0\nM104 S0\n").unwrap();
+    let mut args = vec![
+        "run",
+        "examples/printer-heated.toml",
+        job.to_str().unwrap(),
+        "--nodes",
+        "spawn",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let (ok, _, stderr) = motet(&args);
+    assert!(ok, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
+    assert_eq!(report["outcome"], "done");
+    let plots = report["plots"].as_array().unwrap();
+    for file in ["heater-hotend.png", "heater-bed.png"] {
+        assert!(plots.iter().any(|p| p == file), "{plots:?}");
+        assert!(std::fs::metadata(out.join(file)).unwrap().len() > 1000);
+    }
+    // Only servos and sensors are the loops' sources: none here.
+    assert!(report["loops"].as_array().unwrap().is_empty(), "{report}");
+}

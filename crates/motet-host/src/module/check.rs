@@ -338,46 +338,8 @@ fn channels(d: &Description, out: &mut Vec<Problem>) {
                     step_rate(d, &at("step.max_step_hz"), &c.spec, max_step_hz, out);
                 }
             }
-            ChannelSpec::Servo {
-                lead,
-                ratio,
-                encoder_lines,
-                gains,
-                ..
-            } => {
-                lead_ratio(d.kind, &|f| at(&format!("servo.{f}")), lead, ratio, out);
-                in_range(
-                    out,
-                    &at("servo.encoder_lines"),
-                    ENCODER_LINES,
-                    encoder_lines as f32,
-                );
-                in_range(out, &at("servo.rate_hz"), RATE_HZ, gains.rate_hz as f32);
-                for (k, v) in [
-                    ("kp", gains.kp),
-                    ("ki", gains.ki),
-                    ("kd", gains.kd),
-                    ("kv", gains.kv),
-                    ("ka", gains.ka),
-                ] {
-                    if !v.is_finite() {
-                        out.push(problem(at(&format!("servo.{k}")), "must be a finite gain"));
-                    }
-                }
-                let unit = ValueRange::new(0.0, 1.0, "");
-                in_range(out, &at("servo.integral_limit"), unit, gains.integral_limit);
-                in_range(
-                    out,
-                    &at("servo.output_limit"),
-                    ValueRange::new(1e-3, 1.0, ""),
-                    gains.output_limit,
-                );
-                if gains.following_limit == 0 {
-                    out.push(problem(
-                        at("servo.following_limit"),
-                        "must be at least 1 count",
-                    ));
-                }
+            ChannelSpec::Servo { .. } => {
+                servo_channel(d.kind, &c.spec, &at, out);
                 if drives_joint {
                     joint += 1;
                     step_rate(d, &at("servo"), &c.spec, 0, out);
@@ -426,6 +388,65 @@ fn channels(d: &Description, out: &mut Vec<Problem>) {
             }
         }
     }
+    channel_counts(d, joint, out);
+}
+
+/// A servo channel's own values: its mechanics, encoder, rate and gains.
+fn servo_channel(
+    kind: ModuleKind,
+    spec: &ChannelSpec,
+    at: &dyn Fn(&str) -> String,
+    out: &mut Vec<Problem>,
+) {
+    let ChannelSpec::Servo {
+        lead,
+        ratio,
+        encoder_lines,
+        gains,
+        ..
+    } = *spec
+    else {
+        return;
+    };
+    lead_ratio(kind, &|f| at(&format!("servo.{f}")), lead, ratio, out);
+    in_range(
+        out,
+        &at("servo.encoder_lines"),
+        ENCODER_LINES,
+        encoder_lines as f32,
+    );
+    in_range(out, &at("servo.rate_hz"), RATE_HZ, gains.rate_hz as f32);
+    for (k, v) in [
+        ("kp", gains.kp),
+        ("ki", gains.ki),
+        ("kd", gains.kd),
+        ("kv", gains.kv),
+        ("ka", gains.ka),
+    ] {
+        if !v.is_finite() {
+            out.push(problem(at(&format!("servo.{k}")), "must be a finite gain"));
+        }
+    }
+    let unit = ValueRange::new(0.0, 1.0, "");
+    in_range(out, &at("servo.integral_limit"), unit, gains.integral_limit);
+    in_range(
+        out,
+        &at("servo.output_limit"),
+        ValueRange::new(1e-3, 1.0, ""),
+        gains.output_limit,
+    );
+    if gains.following_limit == 0 {
+        out.push(problem(
+            at("servo.following_limit"),
+            "must be at least 1 count",
+        ));
+    }
+}
+
+/// What a module of its kind needs among its channels: an axis a channel
+/// that drives its joint, a tool or heater exactly one of its own, a
+/// sensor or input at least one.
+fn channel_counts(d: &Description, joint: usize, out: &mut Vec<Problem>) {
     let count = |f: fn(&ChannelSpec) -> bool| d.channels.iter().filter(|c| f(&c.spec)).count();
     match d.kind {
         k if k.is_axis() && joint == 0 => out.push(problem(

@@ -542,45 +542,7 @@ impl Builder<'_> {
                 },
             }
         } else if let Some(s) = &raw.servo {
-            self.at(format!("{field}.servo"), s.span());
-            let s = s.get_ref();
-            let (lead, ratio) =
-                self.lead_ratio(kind, &format!("{field}.servo"), &s.lead, &s.ratio)?;
-            ChannelSpec::Servo {
-                lead,
-                ratio,
-                encoder_lines: self.count(
-                    &format!("{field}.servo.encoder_lines"),
-                    &s.encoder_lines,
-                    1,
-                    10_000_000,
-                )?,
-                invert: s.invert,
-                gains: ServoGains {
-                    rate_hz: match &s.rate_hz {
-                        Some(r) => {
-                            self.count(&format!("{field}.servo.rate_hz"), r, 1, 1_000_000)?
-                        }
-                        None => 10_000,
-                    },
-                    kp: s.kp as f32,
-                    ki: s.ki as f32,
-                    kd: s.kd as f32,
-                    kv: s.kv as f32,
-                    ka: s.ka as f32,
-                    integral_limit: s.integral_limit.unwrap_or(0.3) as f32,
-                    output_limit: s.output_limit.unwrap_or(1.0) as f32,
-                    following_limit: match &s.following_limit {
-                        Some(f) => self.count(
-                            &format!("{field}.servo.following_limit"),
-                            f,
-                            1,
-                            1_000_000_000,
-                        )?,
-                        None => 40,
-                    },
-                },
-            }
+            self.servo_spec(kind, &field, s)?
         } else if let Some(t) = &raw.tool {
             self.at(format!("{field}.tool"), t.span());
             let t = t.get_ref();
@@ -607,31 +569,7 @@ impl Builder<'_> {
                 settle: t.settle.unwrap_or(settle) as f32,
             }
         } else if let Some(h) = &raw.heater {
-            self.at(format!("{field}.heater"), h.span());
-            let h = h.get_ref();
-            let index = match &h.index {
-                Some(i) => self.count(&format!("{field}.heater.index"), i, 0, 255)? as u8,
-                None => 0,
-            };
-            let channel = match h.channel.get_ref().as_str() {
-                "hotend" => HeaterChannel::Hotend(index),
-                "bed" => HeaterChannel::Bed,
-                "chamber" => HeaterChannel::Chamber,
-                other => {
-                    return Err(self.error(
-                        h.channel.span(),
-                        &format!("{field}.heater.channel"),
-                        format!(
-                            "unknown heater channel `{other}`; expected hotend, bed or chamber"
-                        ),
-                    ))
-                }
-            };
-            ChannelSpec::Heater {
-                channel,
-                max_c: h.max as f32,
-                time_constant: h.time_constant as f32,
-            }
+            self.heater_spec(&field, h)?
         } else if let Some(s) = &raw.sensor {
             self.at(format!("{field}.sensor"), s.span());
             let s = s.get_ref();
@@ -652,6 +590,82 @@ impl Builder<'_> {
             unreachable!("exactly one form was given")
         };
         Ok(Channel { drives, spec })
+    }
+
+    /// A servo channel's `[channels.servo]`, at `field`.
+    fn servo_spec(
+        &mut self,
+        kind: ModuleKind,
+        field: &str,
+        s: &Spanned<ServoFile>,
+    ) -> Result<ChannelSpec, DescriptionError> {
+        self.at(format!("{field}.servo"), s.span());
+        let s = s.get_ref();
+        let (lead, ratio) = self.lead_ratio(kind, &format!("{field}.servo"), &s.lead, &s.ratio)?;
+        Ok(ChannelSpec::Servo {
+            lead,
+            ratio,
+            encoder_lines: self.count(
+                &format!("{field}.servo.encoder_lines"),
+                &s.encoder_lines,
+                1,
+                10_000_000,
+            )?,
+            invert: s.invert,
+            gains: ServoGains {
+                rate_hz: match &s.rate_hz {
+                    Some(r) => self.count(&format!("{field}.servo.rate_hz"), r, 1, 1_000_000)?,
+                    None => 10_000,
+                },
+                kp: s.kp as f32,
+                ki: s.ki as f32,
+                kd: s.kd as f32,
+                kv: s.kv as f32,
+                ka: s.ka as f32,
+                integral_limit: s.integral_limit.unwrap_or(0.3) as f32,
+                output_limit: s.output_limit.unwrap_or(1.0) as f32,
+                following_limit: match &s.following_limit {
+                    Some(f) => self.count(
+                        &format!("{field}.servo.following_limit"),
+                        f,
+                        1,
+                        1_000_000_000,
+                    )?,
+                    None => 40,
+                },
+            },
+        })
+    }
+
+    /// A heater channel's `[channels.heater]`, at `field`.
+    fn heater_spec(
+        &mut self,
+        field: &str,
+        h: &Spanned<HeaterFile>,
+    ) -> Result<ChannelSpec, DescriptionError> {
+        self.at(format!("{field}.heater"), h.span());
+        let h = h.get_ref();
+        let index = match &h.index {
+            Some(i) => self.count(&format!("{field}.heater.index"), i, 0, 255)? as u8,
+            None => 0,
+        };
+        let channel = match h.channel.get_ref().as_str() {
+            "hotend" => HeaterChannel::Hotend(index),
+            "bed" => HeaterChannel::Bed,
+            "chamber" => HeaterChannel::Chamber,
+            other => {
+                return Err(self.error(
+                    h.channel.span(),
+                    &format!("{field}.heater.channel"),
+                    format!("unknown heater channel `{other}`; expected hotend, bed or chamber"),
+                ))
+            }
+        };
+        Ok(ChannelSpec::Heater {
+            channel,
+            max_c: h.max as f32,
+            time_constant: h.time_constant as f32,
+        })
     }
 
     fn lead_ratio(

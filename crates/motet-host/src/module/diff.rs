@@ -381,36 +381,7 @@ pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
             });
         }
     }
-    // Two that traded places are one swap, not two moves.
-    let mut taken = vec![false; moved.len()];
-    for a in 0..moved.len() {
-        if taken[a] {
-            continue;
-        }
-        let (ka, ref to_a) = moved[a];
-        let swap = (a + 1..moved.len()).find(|&b| {
-            let (kb, ref to_b) = moved[b];
-            !taken[b] && traded(to_a, &expected[kb].place, to_b, &expected[ka].place)
-        });
-        match swap {
-            Some(b) => {
-                taken[b] = true;
-                let kb = moved[b].0;
-                differences.push(Difference::Swapped {
-                    first: expected[ka].record.node.clone(),
-                    second: expected[kb].record.node.clone(),
-                    first_now: to_a.clone(),
-                    second_now: moved[b].1.clone(),
-                });
-            }
-            None => differences.push(Difference::Moved {
-                node: expected[ka].record.node.clone(),
-                from: expected[ka].place.clone(),
-                to: to_a.clone(),
-            }),
-        }
-        taken[a] = true;
-    }
+    differences.extend(moves(expected, &moved));
     for (i, f) in found.iter().enumerate() {
         if used[i] {
             continue;
@@ -443,4 +414,40 @@ pub fn bus_check(expected: &[Expected], found: &[FoundModule]) -> BusCheck {
         same_machine,
         places,
     }
+}
+
+/// The modules found elsewhere than recorded (`moved`: which record, where
+/// now): two that traded places are one swap, not two moves.
+fn moves(expected: &[Expected], moved: &[(usize, Place)]) -> Vec<Difference> {
+    let mut out = Vec::new();
+    let mut taken = vec![false; moved.len()];
+    for a in 0..moved.len() {
+        if taken[a] {
+            continue;
+        }
+        let (ka, ref to_a) = moved[a];
+        let swap = (a + 1..moved.len()).find(|&b| {
+            let (kb, ref to_b) = moved[b];
+            !taken[b] && traded(to_a, &expected[kb].place, to_b, &expected[ka].place)
+        });
+        match swap {
+            Some(b) => {
+                taken[b] = true;
+                let kb = moved[b].0;
+                out.push(Difference::Swapped {
+                    first: expected[ka].record.node.clone(),
+                    second: expected[kb].record.node.clone(),
+                    first_now: to_a.clone(),
+                    second_now: moved[b].1.clone(),
+                });
+            }
+            None => out.push(Difference::Moved {
+                node: expected[ka].record.node.clone(),
+                from: expected[ka].place.clone(),
+                to: to_a.clone(),
+            }),
+        }
+        taken[a] = true;
+    }
+    out
 }

@@ -26,40 +26,7 @@ fn node_name(m: &Composed) -> &str {
 /// The machine file for a viable composition named `name`.
 pub fn machine_toml(c: &Composition, name: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Composed from modules, tool to workpiece:");
-    for m in &c.modules {
-        let role = match &m.role {
-            Role::Axis { axis, inverted } => {
-                format!("axis {axis}{}", if *inverted { " (inverted)" } else { "" })
-            }
-            Role::Tool => "tool".into(),
-            Role::Heater => "heater".into(),
-            Role::Passive => "passive".into(),
-            Role::Unresolved(_) => "unresolved".into(),
-        };
-        let _ = writeln!(
-            s,
-            "#   {}. {:<12} {:<13} -> {:<16} uid {}",
-            m.order,
-            m.name(),
-            m.module.description.kind.name(),
-            role,
-            super::format_uid(m.module.uid)
-        );
-    }
-    let p = c.tool_point();
-    let _ = writeln!(
-        s,
-        "# With every joint at 0 the tool point is at ({}, {}, {}) mm in the workpiece frame.",
-        rounded(p[0]),
-        rounded(p[1]),
-        rounded(p[2])
-    );
-    let _ = writeln!(
-        s,
-        "# Edit what you like; [modules] records what each module said of itself, and\n# `motet run --nodes paired` and `motet check --nodes paired` compare it with the bus."
-    );
-    let _ = writeln!(s, "name = {}\n", toml_str(name));
+    write_header(&mut s, c, name);
 
     let axes = c.axes();
     let _ = writeln!(s, "[motion]\nkinematics = \"cartesian\"");
@@ -106,21 +73,8 @@ pub fn machine_toml(c: &Composition, name: &str) -> String {
                 let _ = writeln!(s, "\n[actuators.{act}]");
                 let _ = writeln!(s, "joint = \"{axis}\"");
                 let _ = writeln!(s, "chain = [{}]", chain(d.kind, spec, inverted).join(", "));
-                if let ChannelSpec::Servo { gains: g, .. } = spec {
-                    let _ = writeln!(s, "\n[actuators.{act}.servo]");
-                    let _ = writeln!(s, "rate_hz = {}", g.rate_hz);
-                    for (k, v) in [
-                        ("kp", g.kp),
-                        ("ki", g.ki),
-                        ("kd", g.kd),
-                        ("kv", g.kv),
-                        ("ka", g.ka),
-                        ("integral_limit", g.integral_limit),
-                        ("output_limit", g.output_limit),
-                    ] {
-                        let _ = writeln!(s, "{k} = {}", toml_num(v));
-                    }
-                    let _ = writeln!(s, "following_limit = {}", g.following_limit);
+                if let ChannelSpec::Servo { gains, .. } = spec {
+                    write_servo(&mut s, &act, gains);
                 }
                 actuators.push(act);
             }
@@ -187,6 +141,63 @@ pub fn machine_toml(c: &Composition, name: &str) -> String {
         ));
     }
     s
+}
+
+/// The file's head: the modules in order with their roles, where the tool
+/// point is, and the machine's name.
+fn write_header(s: &mut String, c: &Composition, name: &str) {
+    let _ = writeln!(*s, "# Composed from modules, tool to workpiece:");
+    for m in &c.modules {
+        let role = match &m.role {
+            Role::Axis { axis, inverted } => {
+                format!("axis {axis}{}", if *inverted { " (inverted)" } else { "" })
+            }
+            Role::Tool => "tool".into(),
+            Role::Heater => "heater".into(),
+            Role::Passive => "passive".into(),
+            Role::Unresolved(_) => "unresolved".into(),
+        };
+        let _ = writeln!(
+            *s,
+            "#   {}. {:<12} {:<13} -> {:<16} uid {}",
+            m.order,
+            m.name(),
+            m.module.description.kind.name(),
+            role,
+            super::format_uid(m.module.uid)
+        );
+    }
+    let p = c.tool_point();
+    let _ = writeln!(
+        *s,
+        "# With every joint at 0 the tool point is at ({}, {}, {}) mm in the workpiece frame.",
+        rounded(p[0]),
+        rounded(p[1]),
+        rounded(p[2])
+    );
+    let _ = writeln!(
+        *s,
+        "# Edit what you like; [modules] records what each module said of itself, and\n# `motet run --nodes paired` and `motet check --nodes paired` compare it with the bus."
+    );
+    let _ = writeln!(*s, "name = {}\n", toml_str(name));
+}
+
+/// A servo actuator's loop, `[actuators.ACT.servo]`.
+fn write_servo(s: &mut String, act: &str, g: &motet_wire::describe::ServoGains) {
+    let _ = writeln!(*s, "\n[actuators.{act}.servo]");
+    let _ = writeln!(*s, "rate_hz = {}", g.rate_hz);
+    for (k, v) in [
+        ("kp", g.kp),
+        ("ki", g.ki),
+        ("kd", g.kd),
+        ("kv", g.kv),
+        ("ka", g.ka),
+        ("integral_limit", g.integral_limit),
+        ("output_limit", g.output_limit),
+    ] {
+        let _ = writeln!(*s, "{k} = {}", toml_num(v));
+    }
+    let _ = writeln!(*s, "following_limit = {}", g.following_limit);
 }
 
 /// The element chain of one joint channel: screw or gear, motor, its

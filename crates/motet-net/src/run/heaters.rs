@@ -15,6 +15,7 @@
 
 use super::{NetError, NetRun, Phase};
 use motet_host::heater_loop;
+use motet_host::heater_trace::HeaterTrace;
 use motet_planner::AuxEvent;
 use motet_wire::control::SampleSource;
 
@@ -36,9 +37,17 @@ pub(super) struct Heat {
     /// Holds planned, and their seconds.
     pub(super) holds: u64,
     pub(super) hold_s: f64,
+    /// Per machine heater a node drives, its samples (for its plot).
+    traces: Vec<Option<HeaterTrace>>,
 }
 
 impl NetRun {
+    /// The samples of every heater a node drives (time in s of the run's
+    /// clock), for their plots.
+    pub fn heater_traces(&self) -> impl Iterator<Item = &HeaterTrace> {
+        self.heat.traces.iter().flatten()
+    }
+
     /// Whether every node-driven heater has been heard from (one that
     /// tripped first is an error naming it).
     pub(super) fn heaters_heard(&mut self) -> Result<bool, NetError> {
@@ -69,6 +78,20 @@ impl NetRun {
                     if let Some(h) = heater_loop::by_source(&self.machine, k, i) {
                         if let Some(x) = self.heat.heard.get_mut(h) {
                             *x = true;
+                        }
+                        if self.heat.traces.len() != self.machine.heaters.len() {
+                            self.heat.traces = self
+                                .machine
+                                .heaters
+                                .iter()
+                                .map(|h| {
+                                    let l = h.node_loop.as_ref()?;
+                                    Some(HeaterTrace::new(&h.name, l.ready.window_c as f64))
+                                })
+                                .collect();
+                        }
+                        if let Some(Some(t)) = self.heat.traces.get_mut(h) {
+                            t.take(b);
                         }
                     }
                 }

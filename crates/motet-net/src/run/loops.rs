@@ -36,6 +36,10 @@ impl NetRun {
             );
             self.stop(&text, now);
         } else if let NodeMessage::Samples(b) = &m {
+            // A heater's are its trace's (`NetRun::heater_traces`).
+            if matches!(b.source, motet_wire::control::SampleSource::Heater(_)) {
+                return;
+            }
             let mut buf = [0u8; motet_wire::MAX_MESSAGE];
             let n = motet_wire::encode(&m, &mut buf).map_or(0, |b| b.len());
             self.samples.take(&self.machine, k, b, n, now as f64);

@@ -507,12 +507,7 @@ impl ClockSync {
         // within a quarter of the exchanges' span (a burst of them: both
         // halves in one moment, the slope seeming unknown however long
         // they span), at the middle of the span instead.
-        let mut xs = [0.0f64; CAPACITY];
-        for (x, p) in xs.iter_mut().zip(s) {
-            *x = 0.5 * (p.xf + p.xr);
-        }
-        let median = kth_smallest(&mut xs[..n], n.div_ceil(2));
-        let cut = span_cut(&xs[..n], median);
+        let cut = halves_cut(s);
         let seen = self.seen.max(1) as f64;
         let edges = |b: f64| {
             let (cf, cr) = (c_f(b), c_r(b));
@@ -674,6 +669,18 @@ impl ClockSync {
             + 0.5 * near.edge * self.cfg.confidence
             + self.fit.skew_bound * (x - near.centre).abs()
     }
+}
+
+/// Where the exchanges `s` (at most [`CAPACITY`]) split into their two
+/// halves: [`span_cut`] of their host times.
+fn halves_cut(s: &[Sample]) -> f64 {
+    let n = s.len();
+    let mut xs = [0.0f64; CAPACITY];
+    for (x, p) in xs.iter_mut().zip(s) {
+        *x = 0.5 * (p.xf + p.xr);
+    }
+    let median = kth_smallest(&mut xs[..n], n.div_ceil(2));
+    span_cut(&xs[..n], median)
 }
 
 /// Where to split exchanges at host times `xs` into two halves: at their
