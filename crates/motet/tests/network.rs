@@ -726,39 +726,16 @@ fn one_device_for_two_nodes_is_refused_and_status_names_silent_nodes() {
 fn spawned_servo_nodes_send_samples_the_run_plots() {
     let _serial = serial();
     let tmp = scratch("servo");
-    let out = tmp.path();
-    let job = out.join("square.gcode");
-    std::fs::write(&job, "G21 G90\nG1 X20 Y10 F3000\nG1 X0 Y0\n").unwrap();
-    let mut args = vec![
-        "run",
+    let report = spawned_run(
+        tmp.path(),
         "examples/servo-mill.toml",
-        job.to_str().unwrap(),
-        "--nodes",
-        "spawn",
-        "-q",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(FAST);
-    let (ok, _, stderr) = motet(&args);
-    assert!(ok, "{stderr}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
-    assert_eq!(report["outcome"], "done");
-    let plots: Vec<&str> = report["plots"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p.as_str().unwrap())
-        .collect();
-    for file in [
-        "servo-x_servo.png",
-        "servo-y_servo.png",
-        "sensor-x_accel.png",
-    ] {
-        assert!(plots.contains(&file), "{plots:?}");
-        assert!(std::fs::metadata(out.join(file)).unwrap().len() > 1000);
-    }
+        "G21 G90\nG1 X20 Y10 F3000\nG1 X0 Y0\n",
+        &[
+            "servo-x_servo.png",
+            "servo-y_servo.png",
+            "sensor-x_accel.png",
+        ],
+    );
     let loops = report["loops"].as_array().unwrap();
     let x = loops
         .iter()
@@ -789,13 +766,25 @@ fn spawned_servo_nodes_send_samples_the_run_plots() {
 fn spawned_heater_nodes_plot_their_heaters() {
     let _serial = serial();
     let tmp = scratch("heat");
-    let out = tmp.path();
-    let job = out.join("warm.gcode");
-    std::fs::write(&job, "M104 S60\nG28\nG1 X20 Y20 F3000\nG1 X0 Y0\nM104 S0\n").unwrap();
+    let report = spawned_run(
+        tmp.path(),
+        "examples/printer-heated.toml",
+        "M104 S60\nG28\nG1 X20 Y20 F3000\nG1 X0 Y0\nM104 S0\n",
+        &["heater-hotend.png", "heater-bed.png"],
+    );
+    // Only servos and sensors are the loops' sources: none here.
+    assert!(report["loops"].as_array().unwrap().is_empty(), "{report}");
+}
+
+/// `motet run MACHINE JOB --nodes spawn` (fast) in `out` to the end; its
+/// `net.json`, once each of `plots` is listed there and written.
+fn spawned_run(out: &Path, machine: &str, job: &str, plots: &[&str]) -> serde_json::Value {
+    let path = out.join("job.gcode");
+    std::fs::write(&path, job).unwrap();
     let mut args = vec![
         "run",
-        "examples/printer-heated.toml",
-        job.to_str().unwrap(),
+        machine,
+        path.to_str().unwrap(),
         "--nodes",
         "spawn",
         "-q",
@@ -808,11 +797,10 @@ fn spawned_heater_nodes_plot_their_heaters() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
     assert_eq!(report["outcome"], "done");
-    let plots = report["plots"].as_array().unwrap();
-    for file in ["heater-hotend.png", "heater-bed.png"] {
-        assert!(plots.iter().any(|p| p == file), "{plots:?}");
+    let listed = report["plots"].as_array().unwrap();
+    for file in plots {
+        assert!(listed.iter().any(|p| p == file), "{listed:?}");
         assert!(std::fs::metadata(out.join(file)).unwrap().len() > 1000);
     }
-    // Only servos and sensors are the loops' sources: none here.
-    assert!(report["loops"].as_array().unwrap().is_empty(), "{report}");
+    report
 }
