@@ -45,6 +45,17 @@ pub fn parse_announce(line: &str) -> Option<(String, u64)> {
 /// Starts `exe node --sim --type KIND --listen udp:127.0.0.1:0 --announce`
 /// plus `extra` arguments, and waits for its announcement.
 pub fn spawn_sim_node(exe: &Path, kind: &str, extra: &[String]) -> Result<SpawnedNode, SpawnError> {
+    spawn_sim_node_on(exe, kind, "udp:127.0.0.1:0", extra)
+}
+
+/// [`spawn_sim_node`] listening on `listen` (a port of its own, to be
+/// started again where it was).
+pub fn spawn_sim_node_on(
+    exe: &Path,
+    kind: &str,
+    listen: &str,
+    extra: &[String],
+) -> Result<SpawnedNode, SpawnError> {
     let mut child = Command::new(exe)
         .args([
             "node",
@@ -52,7 +63,7 @@ pub fn spawn_sim_node(exe: &Path, kind: &str, extra: &[String]) -> Result<Spawne
             "--type",
             kind,
             "--listen",
-            "udp:127.0.0.1:0",
+            listen,
             "--announce",
         ])
         .args(extra)

@@ -383,6 +383,7 @@ fn drive(
         "machine": machine.name,
         "plots": plots,
         "loops": loops_json(machine, &run),
+        "heaters": heaters_json(&run),
         "commands": total,
         "segments": run.segments_sent,
         "windows": run.windows,
@@ -484,6 +485,27 @@ fn loops_json(machine: &Machine, run: &NetRun) -> Vec<serde_json::Value> {
             let (low, high) = range(s, |p| (p.value, p.value));
             let last = s.all_points().last().map(|p| p.value);
             serde_json::json!({ "name": s.name, "node": machine.nodes[s.node].name, "points": s.all_points().count(), "least": lo, "most": hi, "low": low, "high": high, "last": last })
+        })
+        .collect()
+}
+
+/// `net.json`'s `heaters`: per heater a node drives, its samples' count,
+/// its first and highest reading, its highest target and power (°C, 0-1).
+fn heaters_json(run: &NetRun) -> Vec<serde_json::Value> {
+    run.heater_traces()
+        .map(|t| {
+            let pts = t.points();
+            let most = |f: fn(&motet_host::heater_trace::TracePoint) -> f64| {
+                pts.iter().map(f).fold(f64::NEG_INFINITY, f64::max)
+            };
+            serde_json::json!({
+                "name": t.name,
+                "points": pts.len(),
+                "first_c": pts.first().map(|p| p.reading),
+                "highest_c": most(|p| p.reading),
+                "highest_target_c": most(|p| p.target),
+                "highest_power": most(|p| p.power),
+            })
         })
         .collect()
 }

@@ -6,65 +6,56 @@
 //! (refused, naming every change). Bad descriptions and compositions are
 //! refused, and the in-process run checks what a job needs.
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
 
 mod common;
 use common::{motet, root};
 
 /// A simulated module; killed when dropped.
-struct Module {
-    child: Child,
-    link: String,
-}
-
-impl Drop for Module {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+type Module = motet_net::spawn::SpawnedNode;
 
 /// `motet node --sim --describe examples/modules/FILE.toml`, keeping its
 /// identity in `state`, on `listen`.
 fn module(file: &str, state: &Path, listen: &str) -> Module {
     let describe = root().join(format!("examples/modules/{file}.toml"));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_motet"))
-        .args([
-            "node",
-            "--sim",
-            "--announce",
-            "--quiet",
-            "--idle-exit",
-            "120",
-        ])
-        .args(["--time-scale", SCALE, "--listen", listen])
-        .arg("--describe")
-        .arg(&describe)
-        .arg("--state")
-        .arg(state)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let (link, _) =
-        motet_net::spawn::parse_announce(&line).unwrap_or_else(|| panic!("announce: {line:?}"));
-    Module { child, link }
-}
-
-/// Ends a module's process (its port is free once this returns).
-fn stop(m: &mut Module) {
-    let _ = m.child.kill();
-    let _ = m.child.wait();
+    let extra: Vec<String> = [
+        "--quiet",
+        "--idle-exit",
+        "120",
+        "--time-scale",
+        SCALE,
+        "--describe",
+        describe.to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+    ]
+    .map(String::from)
+    .to_vec();
+    let exe = Path::new(env!("CARGO_BIN_EXE_motet"));
+    motet_net::spawn::spawn_sim_node_on(exe, "stepper", listen, &extra).unwrap()
 }
 
 const ORDER: [&str; 5] = ["spindle", "z", "y", "x", "a"];
+
+/// `motet machine compose` of `examples/modules/NAME.toml` for each of
+/// `modules`, into `out` if given.
+fn compose(modules: &[&str], out: Option<&Path>) -> (bool, String, String) {
+    let files: Vec<String> = modules
+        .iter()
+        .map(|n| {
+            root()
+                .join(format!("examples/modules/{n}.toml"))
+                .display()
+                .to_string()
+        })
+        .collect();
+    let mut args = vec!["machine", "compose"];
+    args.extend(files.iter().map(String::as_str));
+    if let Some(o) = out {
+        args.extend(["-o", o.to_str().unwrap()]);
+    }
+    motet(&args)
+}
 
 /// The modules' clocks run twice as fast as real time (and the runs with
 /// them): five node processes and the host share a small, busy machine,
@@ -163,8 +154,8 @@ fn the_mill_from_its_modules_scanned_composed_run_then_swapped_and_replaced() {
     // y and x trade links: the same machine, accepted, and run.
     let (x, y) = (ORDER.iter().position(|n| *n == "x").unwrap(), 2);
     let (x_link, y_link) = (mods[x].link.clone(), mods[y].link.clone());
-    stop(&mut mods[x]);
-    stop(&mut mods[y]);
+    mods[x].kill();
+    mods[y].kill();
     mods[x] = module("x", &state("x"), &y_link);
     mods[y] = module("y", &state("y"), &x_link);
     let (ok, out, err) = motet(&["check", m, j, "--nodes", "paired"]);
@@ -176,7 +167,7 @@ fn the_mill_from_its_modules_scanned_composed_run_then_swapped_and_replaced() {
     );
 
     // x restarted as the short rail: refused, every change named.
-    stop(&mut mods[x]);
+    mods[x].kill();
     mods[x] = module("x-short", &state("x"), &y_link);
     let (ok, out, err) = motet(&["check", m, j, "--nodes", "paired"]);
     assert!(!ok, "{out}");
@@ -212,19 +203,7 @@ fn bad_descriptions_and_compositions_are_refused_and_in_process_runs_check_the_j
         "{err}"
     );
 
-    let ex = |n: &str| {
-        root()
-            .join(format!("examples/modules/{n}.toml"))
-            .display()
-            .to_string()
-    };
-    let (ok, _, err) = motet(&[
-        "machine",
-        "compose",
-        &ex("spindle"),
-        &ex("x"),
-        &ex("x-short"),
-    ]);
+    let (ok, _, err) = compose(&["spindle", "x", "x-short"], None);
     assert!(!ok);
     assert!(
         err.contains("modules x (uid 0000000000000002) and x (uid 0000000000000003) both drive x"),
@@ -235,16 +214,7 @@ fn bad_descriptions_and_compositions_are_refused_and_in_process_runs_check_the_j
     // Without the spindle module, the mill's job is refused at its M3; a
     // job on A, on a machine without the A module, at its A word.
     let no_spindle = dir.join("no-spindle.toml");
-    let (ok, out, err) = motet(&[
-        "machine",
-        "compose",
-        &ex("z"),
-        &ex("y"),
-        &ex("x"),
-        &ex("a"),
-        "-o",
-        no_spindle.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = compose(&["z", "y", "x", "a"], Some(&no_spindle));
     assert!(ok, "{err}{out}");
     let job = root().join("examples/jobs/mill-4axis.gcode");
     let (ok, _, err) = motet(&[
@@ -259,16 +229,7 @@ fn bad_descriptions_and_compositions_are_refused_and_in_process_runs_check_the_j
         "{err}"
     );
     let no_a = dir.join("no-a.toml");
-    let (ok, _, err) = motet(&[
-        "machine",
-        "compose",
-        &ex("spindle"),
-        &ex("z"),
-        &ex("y"),
-        &ex("x"),
-        "-o",
-        no_a.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = compose(&["spindle", "z", "y", "x"], Some(&no_a));
     assert!(ok, "{err}");
     let (ok, _, err) = motet(&["check", no_a.to_str().unwrap(), job.to_str().unwrap()]);
     assert!(!ok);
@@ -276,17 +237,7 @@ fn bad_descriptions_and_compositions_are_refused_and_in_process_runs_check_the_j
     assert!(err.contains("axis A is not on this machine"), "{err}");
     // The whole mill runs the job in process, and `check` says what it offers.
     let mill = dir.join("mill.toml");
-    let (ok, _, err) = motet(&[
-        "machine",
-        "compose",
-        &ex("spindle"),
-        &ex("z"),
-        &ex("y"),
-        &ex("x"),
-        &ex("a"),
-        "-o",
-        mill.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = compose(&ORDER, Some(&mill));
     assert!(ok, "{err}");
     let o = dir.join("out");
     let (ok, out, err) = motet(&[

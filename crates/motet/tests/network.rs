@@ -78,30 +78,13 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
 fn spawned_nodes_run_a_job_to_the_end() {
     let _serial = serial();
     let tmp = scratch("spawn");
-    let out = tmp.path();
     // Short, with every axis (so every node) moving, alone and together.
-    let job = out.join("short.gcode");
-    std::fs::write(
-        &job,
-        "G0 Z5\nG0 X40 Y40\nM3 S800\nG1 Z-2 F600\nG2 X40 Y40 Z-4 I-10 J0 F900\nG1 X80 Y70 Z0 F900\nG0 Z10\nM5\n",
-    )
-    .unwrap();
-    let mut args = vec![
-        "run",
+    let report = spawned_run(
+        tmp.path(),
         "examples/gestalt-3axis.toml",
-        job.to_str().unwrap(),
-        "--nodes",
-        "spawn",
-        "-q",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(FAST);
-    let (ok, _, stderr) = motet(&args);
-    assert!(ok, "{stderr}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("net.json")).unwrap()).unwrap();
-    assert_eq!(report["outcome"], "done");
+        "G0 Z5\nG0 X40 Y40\nM3 S800\nG1 Z-2 F600\nG2 X40 Y40 Z-4 I-10 J0 F900\nG1 X80 Y70 Z0 F900\nG0 Z10\nM5\n",
+        &[],
+    );
     assert_eq!(report["nodes"].as_array().unwrap().len(), 3);
     for n in report["nodes"].as_array().unwrap() {
         assert_eq!(n["underruns"], 0, "{n}");
@@ -769,11 +752,22 @@ fn spawned_heater_nodes_plot_their_heaters() {
     let report = spawned_run(
         tmp.path(),
         "examples/printer-heated.toml",
-        "M104 S60\nG28\nG1 X20 Y20 F3000\nG1 X0 Y0\nM104 S0\n",
+        "M104 S60\nG28\nG1 X20 Y20 F3000\nG1 X0 Y0\nG4 S4\nM104 S0\n",
         &["heater-hotend.png", "heater-bed.png"],
     );
     // Only servos and sensors are the loops' sources: none here.
     assert!(report["loops"].as_array().unwrap().is_empty(), "{report}");
+    // The hot end was driven toward 60 °C and warmed (several degrees in
+    // the dwell past its sensor's lag); the bed was left off.
+    let heaters = report["heaters"].as_array().unwrap();
+    let h = |name: &str| heaters.iter().find(|h| h["name"] == name).unwrap();
+    let (hot, bed) = (h("hotend"), h("bed"));
+    assert_eq!(hot["highest_target_c"], 60.0, "{hot}");
+    assert!(hot["highest_power"].as_f64().unwrap() > 0.5, "{hot}");
+    let warmed = hot["highest_c"].as_f64().unwrap() - hot["first_c"].as_f64().unwrap();
+    assert!(warmed > 2.0, "{hot}");
+    assert_eq!(bed["highest_target_c"], 0.0, "{bed}");
+    assert_eq!(bed["highest_power"], 0.0, "{bed}");
 }
 
 /// `motet run MACHINE JOB --nodes spawn` (fast) in `out` to the end; its
