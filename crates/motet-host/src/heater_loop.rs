@@ -344,6 +344,20 @@ pub fn fault_text(
     format!("node {node_name}: heater {name}: {seen}; every heater of the node was switched off")
 }
 
+/// Whether `m` is a heater's (its samples, its readiness, its trip),
+/// which the heaters' watch takes, not the servos' and sensors'.
+pub fn is_heater_message(m: &motet_wire::NodeMessage) -> bool {
+    use motet_wire::NodeMessage;
+    match m {
+        NodeMessage::Samples(b) => matches!(b.source, motet_wire::control::SampleSource::Heater(_)),
+        NodeMessage::Fault { source, .. } => {
+            matches!(source, motet_wire::control::SampleSource::Heater(_))
+        }
+        NodeMessage::HeaterReady { .. } => true,
+        _ => false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,9 +3,9 @@
 //! tools), its servo motors and heaters integrated up to each read and drive it
 //! makes.
 
+use crate::node_plant::NodePlant;
 use crate::plant::{Output, Stamped};
 use crate::plant_thread::PlantSink;
-use crate::servo::ServoPlants;
 use motet_node::Board;
 
 /// Collects one node's outputs for the plant, translating its channel and tool
@@ -14,10 +14,9 @@ pub(crate) struct Collector<'a, P: PlantSink> {
     pub(crate) actuators: &'a [usize],
     pub(crate) tools: &'a [usize],
     pub(crate) plant: &'a mut P,
-    /// The node's servo motors, answering its loops as it polls.
-    pub(crate) servos: &'a mut ServoPlants,
-    /// The node's simulated heaters.
-    pub(crate) heat: &'a mut crate::heaters::NodeHeat,
+    /// The node's servo motors and heaters, answering its loops as it
+    /// polls.
+    pub(crate) loops: &'a mut NodePlant,
     /// Whether this is the only node, whose outputs are then in time order
     /// as they come: the plant takes them every [`HANDOVER`] outputs
     /// instead of at the frame's end, so a long frame needs no long buffer.
@@ -57,7 +56,7 @@ impl<P: PlantSink> Board for Collector<'_, P> {
         });
     }
     fn encoder(&mut self, channel: u8, at_us: f64) -> Option<i64> {
-        let p = self.servos.get_mut(channel)?;
+        let p = self.loops.servos_mut().get_mut(channel)?;
         let count = p.read(at_us);
         let (joint, true_count) = (p.joint(), p.count());
         let actuator = self.actuators[channel as usize];
@@ -72,18 +71,15 @@ impl<P: PlantSink> Board for Collector<'_, P> {
         count
     }
     fn drive(&mut self, channel: u8, duty: f32, at_us: f64) {
-        // Servo channels and heater outputs (from
-        // `motet_host::thermal::HEATER_DRIVE_BASE`) never share a number.
-        self.servos.drive(channel, duty, at_us);
-        self.heat.drive(channel, duty, at_us);
+        self.loops.drive(channel, duty, at_us);
     }
     fn temperature(&mut self, index: u8, at_us: f64) -> Option<f32> {
-        self.heat.read(index, at_us)
+        self.loops.temperature(index, at_us)
     }
     fn limit(&mut self, channel: u8, at_us: f64) -> bool {
-        self.servos.limit(channel, at_us)
+        self.loops.limit(channel, at_us)
     }
     fn sensor(&mut self, index: u8, at_us: f64) -> Option<f32> {
-        self.servos.sensor(index, at_us)
+        self.loops.sensor(index, at_us)
     }
 }

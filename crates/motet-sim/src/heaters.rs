@@ -166,17 +166,6 @@ impl HeaterWatch {
     }
 }
 
-/// Whether `m` is a heater's (its samples, its readiness, its trip),
-/// which [`HeaterWatch`] takes, not the servos' and sensors' watch.
-pub fn is_heaters(m: &NodeMessage) -> bool {
-    match m {
-        NodeMessage::Samples(b) => matches!(b.source, SampleSource::Heater(_)),
-        NodeMessage::Fault { source, .. } => matches!(source, SampleSource::Heater(_)),
-        NodeMessage::HeaterReady { .. } => true,
-        _ => false,
-    }
-}
-
 /// A heater's plot: its reading and target against time over its power.
 pub fn heater_plot(machine: &Machine, t: &HeaterTrace) -> Plot {
     let pts = t.points();
@@ -278,7 +267,7 @@ impl<P: PlantSink> SimMachine<P> {
     /// The block temperature of the machine's heater `h` (the plant's
     /// truth, which no node reads), °C.
     pub fn heater_block_c(&self, h: usize) -> Option<f64> {
-        self.heat.iter().find_map(|n| n.block_c(h))
+        self.plants.iter().find_map(|p| p.heat().block_c(h))
     }
 }
 

@@ -1,7 +1,8 @@
-//! One node's simulated plant as the board a node process polls
-//! (`motet node --sim --plant FILE --plant-node NAME`): its servo motors,
-//! encoders, switches and sensors, and its heaters' thermal blocks, each
-//! integrated up to the node's every read and drive.
+//! One node's simulated plant: its servo motors, encoders, switches and
+//! sensors, and its heaters' thermal blocks, each integrated up to the
+//! node's every read and drive. A node process polls it as its board
+//! (`motet node --sim --plant FILE --plant-node NAME`); the simulator's
+//! collector answers its node's loops from it.
 
 use crate::servo::ServoPlants;
 use motet_host::thermal::NodeHeat;
@@ -23,9 +24,24 @@ impl NodePlant {
         }
     }
 
-    /// Whether the node has anything to simulate.
-    pub fn is_empty(&self) -> bool {
-        !self.servos.any() && self.heat.is_empty()
+    /// Whether the node has loops to answer (servos or heaters).
+    pub fn has_loops(&self) -> bool {
+        self.servos.any() || !self.heat.is_empty()
+    }
+
+    /// Its servo motors.
+    pub fn servos_mut(&mut self) -> &mut ServoPlants {
+        &mut self.servos
+    }
+
+    /// Its heaters.
+    pub fn heat(&self) -> &NodeHeat {
+        &self.heat
+    }
+
+    /// Its heaters, to change (the part fan blowing on them).
+    pub fn heat_mut(&mut self) -> &mut NodeHeat {
+        &mut self.heat
     }
 }
 

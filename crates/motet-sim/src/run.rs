@@ -6,7 +6,6 @@ use crate::path::PathRecorder;
 use crate::plant::Plant;
 use crate::plant_thread::{self, PlantSink};
 use crate::report::{ActuatorReport, AxisReport, JointReport, Report};
-use crate::servo::ServoPlants;
 use motet_host::{Distributor, Machine};
 use motet_node::Node;
 use motet_planner::{Command, Located, PlanError, Planned, Planner, SourceLoc};
@@ -87,12 +86,10 @@ pub struct SimMachine<P: PlantSink = Plant> {
     pub(crate) now: f64,
     buf: [u8; MAX_MESSAGE],
     stats: Stats,
-    /// Each node's servo motors and sensors.
-    servos: Vec<ServoPlants>,
+    /// Each node's servo motors, sensors and heaters.
+    pub(crate) plants: Vec<crate::node_plant::NodePlant>,
     /// What the nodes' loops sent: samples kept per source, the first fault.
     loops: crate::loops::LoopWatch,
-    /// Each node's simulated heaters.
-    pub(crate) heat: Vec<crate::heaters::NodeHeat>,
     /// What the host knows of them.
     pub(crate) heaters: crate::heaters::HeaterWatch,
 }
@@ -165,13 +162,10 @@ impl<P: PlantSink> SimMachine<P> {
             frame,
             now: 0.0,
             buf: [0; MAX_MESSAGE],
-            servos: (0..machine.nodes.len())
-                .map(|k| ServoPlants::of_node(machine, k, &machine.start, 0.0))
+            plants: (0..machine.nodes.len())
+                .map(|k| crate::node_plant::NodePlant::of_node(machine, k))
                 .collect(),
             loops: crate::loops::LoopWatch::new(machine),
-            heat: (0..machine.nodes.len())
-                .map(|k| crate::heaters::NodeHeat::of_node(machine, k))
-                .collect(),
             heaters: crate::heaters::HeaterWatch::new(machine),
             stats: Stats {
                 axes: machine
@@ -422,8 +416,7 @@ impl<P: PlantSink> SimMachine<P> {
                 actuators: &spec.actuators,
                 tools: &spec.tools,
                 plant: &mut self.plant,
-                servos: &mut self.servos[k],
-                heat: &mut self.heat[k],
+                loops: &mut self.plants[k],
                 single,
             };
             // The plant takes every node's outputs up to `until` together
@@ -432,7 +425,7 @@ impl<P: PlantSink> SimMachine<P> {
             // A node with loops is polled a quarter second at a time, so
             // that what they send never waits in its short queue for
             // longer (the outputs are the same: each carries its time).
-            let loops = c.servos.any() || !spec.sensors.is_empty() || !c.heat.is_empty();
+            let loops = c.loops.has_loops() || !spec.sensors.is_empty();
             let chunk = if loops { LOOP_CHUNK_US } else { f64::INFINITY };
             while node.time() < until {
                 let to = (node.time().max(self.now) + chunk).min(until);
@@ -443,7 +436,7 @@ impl<P: PlantSink> SimMachine<P> {
                         if let Ok(m) = motet_wire::decode::<NodeMessage>(bytes) {
                             // A heater's messages to the heaters' watch
                             // (its trip says what the runaway watch saw).
-                            if crate::heaters::is_heaters(&m) {
+                            if motet_host::heater_loop::is_heater_message(&m) {
                                 self.heaters.take(&self.machine, k, &m);
                             } else {
                                 self.loops.take(&self.machine, k, m, node.time());
@@ -558,8 +551,8 @@ impl<P: PlantSink> SimMachine<P> {
                 self.stats.aux_events += 1;
                 if a.channel == motet_planner::AuxChannel::Fan(0) {
                     // The part-cooling fan blows on the hot ends.
-                    for h in self.heat.iter_mut() {
-                        h.fan_at(a.time, a.value as f64);
+                    for p in self.plants.iter_mut() {
+                        p.heat_mut().fan_at(a.time, a.value as f64);
                     }
                 }
             }

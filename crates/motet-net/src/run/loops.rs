@@ -9,13 +9,10 @@ use motet_wire::NodeMessage;
 impl NetRun {
     /// A fault or samples from node `k`.
     pub(super) fn on_loop_message(&mut self, k: usize, m: NodeMessage, now: u64) {
-        self.on_heater_message(k, &m, now);
-        if let NodeMessage::Fault {
-            source: motet_wire::control::SampleSource::Heater(_),
-            ..
-        } = m
-        {
-            // A heater's trip stopped the run already, naming it.
+        // A heater's are the heaters' (a trip has stopped the run, naming
+        // it; samples go to its trace, `NetRun::heater_traces`).
+        if motet_host::heater_loop::is_heater_message(&m) {
+            self.on_heater_message(k, &m, now);
             return;
         }
         if let NodeMessage::Fault {
@@ -36,10 +33,6 @@ impl NetRun {
             );
             self.stop(&text, now);
         } else if let NodeMessage::Samples(b) = &m {
-            // A heater's are its trace's (`NetRun::heater_traces`).
-            if matches!(b.source, motet_wire::control::SampleSource::Heater(_)) {
-                return;
-            }
             let mut buf = [0u8; motet_wire::MAX_MESSAGE];
             let n = motet_wire::encode(&m, &mut buf).map_or(0, |b| b.len());
             self.samples.take(&self.machine, k, b, n, now as f64);
