@@ -47,6 +47,16 @@ impl WallClock {
         WallClock::with(1.0, 0.0, 0)
     }
 
+    /// The unscaled wall clock, at 0 at `start` (another clock's origin:
+    /// a server's, for what its transports stamp).
+    pub fn since(start: Instant) -> WallClock {
+        WallClock {
+            start,
+            rate: 1.0,
+            offset_us: 0,
+        }
+    }
+
     /// `scale` µs of this clock per real µs, times `1 + ppm·10⁻⁶`; starts at `offset_us`.
     pub fn with(scale: f64, ppm: f64, offset_us: u64) -> WallClock {
         WallClock {

@@ -49,6 +49,9 @@ pub trait Nodes: Send {
     fn identifying(&self, _k: usize, _now: u64) -> Option<bool> {
         None
     }
+    /// Frames stamped as they arrive on `clock`, the server's (its origin
+    /// when it started), where the links can tell (real transports).
+    fn stamp_arrivals(&mut self, _clock: motet_link::WallClock) {}
     /// Pairs the devices on the nodes' links with the machine's nodes (each
     /// alone on its link), writes the pairing file and goes on with them;
     /// the machine rests at `at`. Only at rest.
@@ -174,6 +177,8 @@ pub struct LinkedNodes {
     kind: &'static str,
     /// Where pairing writes the pairing file (beside the machine file).
     pairing: Option<std::path::PathBuf>,
+    /// The server's clock, once it gave it: what arrivals are stamped on.
+    pub(crate) clock: Option<motet_link::WallClock>,
 }
 
 impl LinkedNodes {
@@ -193,6 +198,7 @@ impl LinkedNodes {
             session,
             kind,
             pairing: None,
+            clock: None,
         }
     }
 
@@ -208,6 +214,11 @@ impl Nodes for LinkedNodes {
     fn begin(&mut self, machine: &Machine, commands: Vec<Located<Command>>, start: Point) {
         let peers = self.run.take_peers();
         self.run = NetRun::new(machine, commands, peers, start, self.cfg, None);
+    }
+
+    fn stamp_arrivals(&mut self, clock: motet_link::WallClock) {
+        self.clock = Some(clock);
+        self.run.stamp_arrivals(clock);
     }
 
     fn advance(&mut self, now: u64) -> Result<u64, NetError> {

@@ -130,9 +130,13 @@ impl Server {
     /// `cfg.dir`.
     pub fn start(
         machine: Machine,
-        nodes: Box<dyn Nodes>,
+        mut nodes: Box<dyn Nodes>,
         cfg: &ServerConfig,
     ) -> std::io::Result<Server> {
+        // Server time (`Shared::now`) from here; the nodes' links stamp
+        // their frames' arrival on it.
+        let started = Instant::now();
+        nodes.stamp_arrivals(motet_link::WallClock::since(started));
         let machine = Arc::new(machine);
         let (updates, _) = broadcast::channel(64);
         let mut session = Session::new(machine.clone(), nodes);
@@ -143,7 +147,7 @@ impl Server {
             jobs: Mutex::new(jobs),
             machine,
             token: cfg.token.clone(),
-            started: Instant::now(),
+            started,
             updates,
             changed: tokio::sync::Notify::new(),
             dir: cfg.dir.clone(),

@@ -331,14 +331,12 @@ fn drive(
     record.save(out)?;
     let journal = JournalWriter::create(&out.join("journal"))?;
     let clock = WallClock::with(record.time_scale, 0.0, 0);
-    let mut peers = std::mem::take(&mut session.peers);
-    // Answers stamped as they arrive: a host that runs late (a loaded
-    // computer) would otherwise count its own wait as the path's, one way.
-    for p in &mut peers {
-        p.stamp_arrivals(clock);
-    }
+    let peers = std::mem::take(&mut session.peers);
     let (run, total) = job.run(machine, peers, start, cfg(&record), journal);
     let mut run = run.with_identity(identity);
+    // Answers stamped as they arrive: a host that runs late (a loaded
+    // computer) would otherwise count its own wait as the path's, one way.
+    run.stamp_arrivals(clock);
     let bar = progress_bar(total, quiet);
     let started = std::time::Instant::now();
     let phase = loop {

@@ -396,6 +396,14 @@ impl NetRun {
         std::mem::take(&mut self.peers)
     }
 
+    /// Has every node's transport stamp frames as they arrive, on `clock`:
+    /// the clock this run's `now` is read from ([`Peer::stamp_arrivals`]).
+    pub fn stamp_arrivals(&mut self, clock: motet_link::WallClock) {
+        for p in &mut self.peers {
+            p.stamp_arrivals(clock);
+        }
+    }
+
     /// Reads the job's commands after those it was given from `source`,
     /// `total` in all (for progress), as the run plans them: the run then
     /// holds a bounded window of the job, however long it is.

@@ -90,6 +90,9 @@ impl LinkedNodes {
         self.session.nodes = s.nodes;
         self.session.infos = s.infos;
         self.run = NetRun::new(machine, Vec::new(), peers, at, self.cfg, None);
+        if let Some(c) = self.clock {
+            self.run.stamp_arrivals(c);
+        }
         Ok(PairOutcome { lines, file: path })
     }
 }
