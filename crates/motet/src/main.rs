@@ -14,6 +14,7 @@ mod flags;
 mod heaters;
 mod machine_cmd;
 mod modules;
+mod net_report;
 mod netrun;
 mod node;
 mod nodes;

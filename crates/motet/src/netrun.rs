@@ -17,7 +17,6 @@ use motet_net::session::{locate, NodeAddr, Session, SessionError};
 use motet_net::{CommandSource, NetConfig, NetRun, Phase, RunIdentity, StopInfo};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
-use motet_wire::NodeMessage;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -376,12 +375,12 @@ fn drive(
     let now = clock.now_us();
     let figures = run.figures(now);
     let tallies = run.tallies();
-    let plots = write_loop_plots(machine, &run, out)?;
+    let plots = crate::net_report::write_loop_plots(machine, &run, out)?;
     let report = serde_json::json!({
         "machine": machine.name,
         "plots": plots,
-        "loops": loops_json(machine, &run),
-        "heaters": heaters_json(&run),
+        "loops": crate::net_report::loops_json(machine, &run),
+        "heaters": crate::net_report::heaters_json(&run),
         "commands": total,
         "segments": run.segments_sent,
         "windows": run.windows,
@@ -389,14 +388,14 @@ fn drive(
         "outcome": match &phase { Phase::Done => "done".to_string(), Phase::Stopped(s) => format!("stopped: {}", s.reason), _ => "?".into() },
         "pace": pace_json(run.pace()),
         "lost": match &phase { Phase::Stopped(s) => s.lost.iter().map(|l| serde_json::json!({ "node": l.name, "why": l.why })).collect::<Vec<_>>(), _ => Vec::new() },
-        "nodes": nodes_json(&run, &figures, &tallies),
+        "nodes": crate::net_report::nodes_json(&run, &figures, &tallies),
     });
     std::fs::write(
         out.join("net.json"),
         serde_json::to_string_pretty(&report)? + "\n",
     )?;
     if !quiet {
-        print_figures(&figures);
+        crate::net_report::print_figures(&figures);
     }
     match phase {
         Phase::Done => {
@@ -449,116 +448,6 @@ fn drain_samples(run: &mut NetRun, clock: &WallClock) -> Result<()> {
     Ok(())
 }
 
-/// The loops' plots as an in-process run writes them, from the samples the
-/// nodes sent (a stopped run's too: they show what led to it); their files.
-fn write_loop_plots(machine: &Machine, run: &NetRun, out: &Path) -> Result<Vec<String>> {
-    let t0 = run.trajectory_start().unwrap_or(0.0);
-    let mut plots =
-        motet_sim::plots::write_plots(machine, run.samples(), run.sensor_plan(), t0, out)
-            .context("writing the loops' plots")?;
-    let traces: Vec<_> = run.heater_traces().cloned().collect();
-    for (_, file) in crate::heaters::write_plots(machine, &traces, out)? {
-        plots.push(file);
-    }
-    Ok(plots)
-}
-
-/// `net.json`'s `loops`: per servo, the following error's least and most
-/// (counts), its measured position's range and last value; per sensor,
-/// its readings'.
-fn loops_json(machine: &Machine, run: &NetRun) -> Vec<serde_json::Value> {
-    let range = |s: &motet_host::samples::Series,
-                 f: fn(&motet_host::samples::SamplePoint) -> (f64, f64)| {
-        s.all_points()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                let (lo, hi) = f(p);
-                (a.min(lo), b.max(hi))
-            })
-    };
-    run.samples()
-        .series
-        .iter()
-        .map(|s| {
-            let (lo, hi) = range(s, |p| (p.lo, p.hi));
-            let (low, high) = range(s, |p| (p.value, p.value));
-            let last = s.all_points().last().map(|p| p.value);
-            serde_json::json!({ "name": s.name, "node": machine.nodes[s.node].name, "points": s.all_points().count(), "least": lo, "most": hi, "low": low, "high": high, "last": last })
-        })
-        .collect()
-}
-
-/// `net.json`'s `heaters`: per heater a node drives, its samples' count,
-/// its first and highest reading, its highest target and power (°C, 0-1).
-fn heaters_json(run: &NetRun) -> Vec<serde_json::Value> {
-    run.heater_traces()
-        .map(|t| {
-            let pts = t.points();
-            let most = |f: fn(&motet_host::heater_trace::TracePoint) -> f64| {
-                pts.iter().map(f).fold(f64::NEG_INFINITY, f64::max)
-            };
-            serde_json::json!({
-                "name": t.name,
-                "points": pts.len(),
-                "first_c": pts.first().map(|p| p.reading),
-                "highest_c": most(|p| p.reading),
-                "highest_target_c": most(|p| p.target),
-                "highest_power": most(|p| p.power),
-            })
-        })
-        .collect()
-}
-
-/// `net.json`'s `nodes`: each node's link and clock figures, where it
-/// rests and what it counted.
-fn nodes_json(
-    run: &NetRun,
-    figures: &[motet_net::run::PeerFigures],
-    tallies: &[Option<motet_net::run::Tally>],
-) -> Vec<serde_json::Value> {
-    figures
-        .iter()
-        .enumerate()
-        .map(|(k, f)| {
-            serde_json::json!({
-                "name": f.name,
-                "rtt_us": f.rtt_us,
-                "retransmits": f.retransmits,
-                "crc_errors": f.crc_errors,
-                "bytes_out": f.bytes_out,
-                "bytes_in": f.bytes_in,
-                "frames_out": f.frames_out,
-                "frames_in": f.frames_in,
-                "sync_error_us": f.sync_error_us,
-                "skew_ppm": f.skew_ppm,
-                "underruns": f.underruns,
-                "window": window(run.node_status(k)),
-                "tally": tallies[k].map(|t| serde_json::json!({
-                    "steps": t.steps,
-                    "tool_changes": t.tool_changes,
-                    "hash": format!("{:016x}", t.hash),
-                })),
-            })
-        })
-        .collect()
-}
-
-/// Each node's link and clock figures, a line each.
-fn print_figures(figures: &[motet_net::run::PeerFigures]) {
-    for f in figures {
-        println!(
-            "  node {}: rtt {:.2} ms, {} retransmits, {} CRC errors, {} B out / {} B in, clock ±{:.1} µs ({:+.1} ppm)",
-            f.name,
-            f.rtt_us as f64 / 1000.0,
-            f.retransmits,
-            f.crc_errors,
-            f.bytes_out,
-            f.bytes_in,
-            f.sync_error_us,
-            f.skew_ppm
-        );
-    }
-}
-
 /// The run's progress bar on a terminal (hidden with `-q` or when stderr
 /// is not one).
 fn progress_bar(total: usize, quiet: bool) -> ProgressBar {
@@ -586,18 +475,6 @@ fn pace_json(pace: motet_net::run::PaceFigures) -> serde_json::Value {
         "least_margin_ms": least,
         "lead_ms": pace.lead_us as f64 / 1000.0,
     })
-}
-
-/// The node's committed window end and whether it stopped on its tail.
-fn window(m: Option<&NodeMessage>) -> serde_json::Value {
-    match m {
-        Some(NodeMessage::Status {
-            committed, stopped, ..
-        }) => {
-            serde_json::json!({ "committed": committed, "stopped": stopped })
-        }
-        _ => serde_json::Value::Null,
-    }
 }
 
 /// What `stop.toml` says: the stop as a person reads it.
