@@ -72,7 +72,13 @@ pub struct NodeClock {
     /// How far apart exchanges go while the bound is above its share of
     /// the target, µs ([`NodeClock::set_link_rtt`]).
     fast_us: u64,
+    /// The last [`NodeClock::rate_step`], and the exchange counts it was
+    /// computed at.
+    rate_step_seen: std::cell::Cell<Option<RateStepSeen>>,
 }
+
+/// The estimate's counts (taken, dropped; changes) and its rate step then.
+type RateStepSeen = (((u64, u64), u32), Option<((f64, f64), (f64, f64))>);
 
 impl Default for NodeClock {
     fn default() -> Self {
@@ -84,6 +90,7 @@ impl Default for NodeClock {
             next_exchange: 0,
             planned: 0,
             last_sent: None,
+            rate_step_seen: std::cell::Cell::new(None),
             models_sent: (0, 0),
             fast_us: FAST_US,
         }
@@ -156,8 +163,18 @@ impl NodeClock {
 
     /// A step of the node's rate at its last change (see
     /// [`ClockSync::rate_step`]).
+    /// Computed again only when an exchange came since: it costs the square
+    /// of the exchanges kept, and a moving run asks on every poll.
     pub fn rate_step(&self) -> Option<((f64, f64), (f64, f64))> {
-        self.est.rate_step()
+        let key = (self.est.counts(), self.est.changes());
+        if let Some((k, step)) = self.rate_step_seen.get() {
+            if k == key {
+                return step;
+            }
+        }
+        let step = self.est.rate_step();
+        self.rate_step_seen.set(Some((key, step)));
+        step
     }
 
     /// How far the model the node runs is from the estimate at host time
