@@ -326,6 +326,7 @@ pub fn record_checksum(prev: u32, text: &str) -> u32 {
     c.finish()
 }
 
+mod flusher;
 mod read;
 mod text;
 mod write;

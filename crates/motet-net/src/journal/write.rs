@@ -1,17 +1,21 @@
 //! Writing the journal: each record in its text form, signed with the
 //! checksum chained to the record before it.
 
+use super::flusher::Flusher;
 use super::text::*;
 use super::*;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-/// Appends records; each seal and stop is on disk before it returns.
+/// Appends records. Each seal is in the operating system's hands when it
+/// returns and on disk a flush later ([`super::flusher`]); the header and
+/// the stop are on disk when they return.
 pub struct JournalWriter {
     out: BufWriter<std::fs::File>,
     path: String,
     /// The last record's checksum.
     chain: u32,
+    flusher: Flusher,
 }
 
 impl JournalWriter {
@@ -22,10 +26,12 @@ impl JournalWriter {
             source,
         };
         let file = std::fs::File::create(path).map_err(io)?;
+        let flusher = Flusher::start(file.try_clone().map_err(io)?).map_err(io)?;
         Ok(JournalWriter {
             out: BufWriter::new(file),
             path: path.display().to_string(),
             chain: 0,
+            flusher,
         })
     }
 
@@ -41,11 +47,24 @@ impl JournalWriter {
         self.record(&segment_text(s))
     }
 
-    /// Appends a seal record; it and every segment before it are on disk when
-    /// this returns, so the seal may be sent.
+    /// Appends a seal record; it and every segment before it are in the
+    /// file when this returns, so the seal may be sent, and on disk once
+    /// the flush it asks for is done.
     pub fn seal(&mut self, s: JournalSeal) -> Result<(), JournalError> {
         self.record(&seal_text("seal", &s))?;
-        self.sync()
+        self.out
+            .flush()
+            .and_then(|_| self.flusher.request())
+            .map_err(|source| JournalError::Io {
+                path: self.path.clone(),
+                source,
+            })
+    }
+
+    /// The longest the disk took to flush the journal behind a seal, µs of
+    /// wall time.
+    pub fn worst_flush_us(&self) -> u64 {
+        self.flusher.worst_us()
     }
 
     /// Appends a pace record (buffered: on disk with the next seal, before
