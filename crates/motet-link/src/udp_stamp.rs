@@ -30,6 +30,15 @@ pub(crate) struct Stamped {
     pub at_us: Option<u64>,
 }
 
+/// How close the real-time readings either side of the process's clock
+/// must lie for the pair to count as one instant.
+#[cfg(target_os = "linux")]
+const PAIRED_READ: std::time::Duration = std::time::Duration::from_micros(5);
+
+/// Tries at reading both clocks at one instant.
+#[cfg(target_os = "linux")]
+const PAIRED_TRIES: usize = 8;
+
 #[cfg(target_os = "linux")]
 impl SocketStamps {
     /// Asks the kernel to stamp every datagram `sock` receives.
@@ -90,14 +99,40 @@ impl SocketStamps {
     /// The process's clock when the kernel stamped `kernel` (real time
     /// since the epoch).
     fn age_to_local(&self, kernel: std::time::Duration) -> u64 {
-        let real = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        let now = self.clock.now_us();
+        let (real, now) = self.both_clocks();
         // A stamp from the future (the real-time clock stepped back) is
         // taken as now.
         let age_us = real.saturating_sub(kernel).as_secs_f64() * 1e6 * self.clock.rate();
         now.saturating_sub(age_us as u64)
+    }
+
+    /// The real-time clock and the process's clock read at one instant: a
+    /// process preempted between the two readings would date the stamp
+    /// late by its wait, so they are read again until the real-time
+    /// readings either side lie within [`PAIRED_READ`] (or the tries run
+    /// out), and the middle of those is taken.
+    fn both_clocks(&self) -> (std::time::Duration, u64) {
+        let real = || {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap_or_default()
+        };
+        let mut best = None;
+        for _ in 0..PAIRED_TRIES {
+            let before = real();
+            let now = self.clock.now_us();
+            let after = real();
+            let spread = after.saturating_sub(before);
+            let mid = before + spread / 2;
+            if best.is_none_or(|(s, _, _)| spread < s) {
+                best = Some((spread, mid, now));
+            }
+            if spread <= PAIRED_READ {
+                break;
+            }
+        }
+        let (_, mid, now) = best.expect("at least one try");
+        (mid, now)
     }
 }
 
