@@ -15,10 +15,15 @@
 //! delivery, [`GroupTally::settle`]) the stamps are one instant on every
 //! clock, as a bus controller's are. A process reading its socket when its
 //! main loop gets there stamps late by that loop's delay, which no two
-//! members share: there the stamps are no reference, and a member should
-//! not claim its own frames heard back (without a clock it does not).
+//! members share: there such stamps are no reference. The kernel's own
+//! stamps ([`Transport::stamp_arrivals`], on Linux) are: each member's
+//! socket is stamped as the kernel delivers the datagram to all of them,
+//! so node processes and a host on one computer (or on one switch, to
+//! within its forwarding) share each frame's instant. A member claims
+//! its own frames heard back only with stamps of either kind.
 
-use crate::clock::{Clock, Crystal};
+use crate::clock::{Clock, Crystal, WallClock};
+use crate::udp_stamp::SocketStamps;
 use crate::{LinkStats, Stamp, Transport};
 use std::collections::VecDeque;
 use std::io;
@@ -42,6 +47,9 @@ struct Member {
     me: SocketAddr,
     hear_own: bool,
     stamping: Option<(Arc<dyn Clock + Send + Sync>, Crystal)>,
+    /// The kernel's arrival stamps, on the process's clock
+    /// ([`Transport::stamp_arrivals`]): taken before `stamping`.
+    kernel: Option<SocketStamps>,
     inbox: VecDeque<Taken>,
     /// Datagrams taken from the socket, own ones included.
     taken: u64,
@@ -52,17 +60,27 @@ impl Member {
     fn pull(&mut self) -> io::Result<()> {
         let mut buf = [0u8; MAX_DATAGRAM];
         loop {
-            match self.rx.recv_from(&mut buf) {
-                Ok((n, from)) => {
+            let got = match &self.kernel {
+                Some(st) => st
+                    .recv_from(&self.rx, &mut buf)
+                    .map(|d| (d.len, d.from, Some(d.at_us.unwrap_or_else(|| st.now_us())))),
+                None => self.rx.recv_from(&mut buf).map(|(n, f)| (n, f, None)),
+            };
+            match got {
+                Ok((n, from, kernel_at)) => {
                     self.taken += 1;
                     let own = from == self.me;
-                    if own && !self.hear_own {
+                    // Its own frame is worth something only stamped: the
+                    // instant every member heard it.
+                    let stamped = self.kernel.is_some() || self.stamping.is_some();
+                    if own && !(self.hear_own && stamped) {
                         continue;
                     }
-                    let stamp = self.stamping.as_ref().map(|(clock, crystal)| Stamp {
-                        at_us: crystal.local(clock.now_us() as f64),
-                        own,
+                    let at = kernel_at.or_else(|| {
+                        let (clock, crystal) = self.stamping.as_ref()?;
+                        Some(crystal.local(clock.now_us() as f64))
                     });
+                    let stamp = at.map(|at_us| Stamp { at_us, own });
                     self.inbox.push_back((buf[..n].to_vec(), stamp));
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
@@ -131,6 +149,7 @@ impl UdpGroup {
                 me,
                 hear_own: false,
                 stamping: None,
+                kernel: None,
                 inbox: VecDeque::new(),
                 taken: 0,
             })),
@@ -217,6 +236,23 @@ impl Transport for UdpGroup {
     fn last_stamp(&self) -> Option<Stamp> {
         self.last_stamp
     }
+
+    /// The kernel stamps every datagram as it reaches this member's
+    /// socket: on one computer a frame reaches every member's socket in
+    /// one pass of the kernel, so the stamps are one instant on every
+    /// member's clock however late each process reads it, and a member
+    /// hearing its own frames ([`UdpGroup::hearing_own`]) has reference
+    /// samples, as on a bus.
+    fn stamp_arrivals(&mut self, clock: WallClock) -> bool {
+        let mut m = lock(&self.member);
+        match SocketStamps::enable(&m.rx, clock) {
+            Ok(st) => {
+                m.kernel = Some(st);
+                true
+            }
+            Err(_) => false,
+        }
+    }
 }
 
 /// The members of one group in one process, and the frames they sent: a
@@ -277,7 +313,13 @@ mod tests {
         let group = SocketAddrV4::new(Ipv4Addr::new(239, 255, 77, 1), free_port().unwrap());
         let tally = GroupTally::new();
         let join = || UdpGroup::join(group, Ipv4Addr::LOCALHOST).unwrap();
-        let mut host = join().hearing_own().counted(&tally);
+        let clock: Arc<dyn Clock + Send + Sync> = Arc::new(crate::SimClock::new());
+        let mut host = join()
+            .stamping(clock, Crystal::default())
+            .hearing_own()
+            .counted(&tally);
+        // Its own frames are worth nothing unstamped: not handed back.
+        let mut unstamped = join().hearing_own().counted(&tally);
         let mut a = join().counted(&tally);
         let mut b = join().counted(&tally);
         host.send(b"seal\0").unwrap();
@@ -292,6 +334,14 @@ mod tests {
             got.push(f);
         }
         assert!(got.contains(&b"seal\0".to_vec()) && got.contains(&b"beat\0".to_vec()));
+        unstamped.send(b"mine\0").unwrap();
+        assert!(tally.settle(Duration::from_secs(5)).unwrap());
+        let mut heard = Vec::new();
+        while let Some(f) = unstamped.recv(None).unwrap() {
+            heard.push(f);
+        }
+        assert!(!heard.contains(&b"mine\0".to_vec()), "{heard:?}");
+        assert!(heard.contains(&b"seal\0".to_vec()));
         assert_eq!((a.stats().frames_out, b.stats().frames_in), (1, 2));
         assert!(UdpGroup::join(
             SocketAddrV4::new(Ipv4Addr::LOCALHOST, 4000),

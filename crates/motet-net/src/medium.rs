@@ -157,13 +157,24 @@ impl Transport for MediumPort {
         Ok(())
     }
 
-    /// Takes what the medium has, then hands out this node's next frame;
-    /// never waits.
-    fn recv(&mut self, _timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
-        let mut d = lock(&self.inner);
-        d.pump()?;
-        let Some((f, stamp)) = d.queues.get_mut(&self.address).and_then(|q| q.pop_front()) else {
-            return Ok(None);
+    /// Takes what the medium has, then hands out this node's next frame,
+    /// waiting up to `timeout` for one (a request's answer; the run's
+    /// polls never wait).
+    fn recv(&mut self, timeout: Option<Duration>) -> io::Result<Option<Vec<u8>>> {
+        let until = timeout.map(|t| std::time::Instant::now() + t);
+        let (f, stamp) = loop {
+            let mut d = lock(&self.inner);
+            d.pump()?;
+            if let Some(got) = d.queues.get_mut(&self.address).and_then(|q| q.pop_front()) {
+                break got;
+            }
+            drop(d);
+            match until {
+                Some(u) if std::time::Instant::now() < u => {
+                    std::thread::sleep(Duration::from_micros(200))
+                }
+                _ => return Ok(None),
+            }
         };
         // The host's own frame heard back is no traffic.
         if !stamp.is_some_and(|s| s.own) {
@@ -179,6 +190,11 @@ impl Transport for MediumPort {
 
     fn last_stamp(&self) -> Option<Stamp> {
         self.last_stamp
+    }
+
+    /// The shared transport stamps arrivals (once for every port).
+    fn stamp_arrivals(&mut self, clock: motet_link::WallClock) -> bool {
+        lock(&self.inner).transport.stamp_arrivals(clock)
     }
 }
 

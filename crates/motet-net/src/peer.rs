@@ -81,6 +81,11 @@ pub struct Peer {
     /// Reference samples taken: answers to a sync frame every node heard
     /// at the instant the host heard its own.
     pub references: u64,
+    /// How far apart the host's and the node's stamps of one sync frame
+    /// may lie, host µs: 0 where both are taken at the wire (a bus
+    /// controller, a simulation), a few µs of each process's clock reading
+    /// where the system stamps a datagram ([`Peer::reference_slack_us`]).
+    reference_slack_us: u64,
     seal_sent: bool,
     /// The host's sync frames to every node heard back: (`t1`, when every
     /// node heard it, host µs). The last few.
@@ -137,6 +142,7 @@ impl Peer {
             references: 0,
             seal_sent: false,
             heard_own: VecDeque::new(),
+            reference_slack_us: 0,
             asked: VecDeque::new(),
             unasked: 0,
             strangers: VecDeque::new(),
@@ -291,6 +297,12 @@ impl Peer {
         Ok(())
     }
 
+    /// How far apart the host's and the node's stamps of one sync frame
+    /// may lie, host µs (0 by default: stamps at the wire).
+    pub fn reference_slack_us(&mut self, us: u64) {
+        self.reference_slack_us = us;
+    }
+
     /// The host's own sync frame to every node, heard back at `at`.
     fn heard_own(&mut self, payload: &[u8], at: u64) {
         if let Ok(ServiceRequest::TimeGet { t1 }) = decode::<ServiceRequest>(payload) {
@@ -314,11 +326,14 @@ impl Peer {
         let e = match heard {
             Some(at) => {
                 self.references += 1;
+                // An exchange as wide as the stamps may disagree: the
+                // bounds it tells stay hard limits.
+                let slack = self.reference_slack_us;
                 Exchange {
-                    t1: at,
+                    t1: at.saturating_sub(slack),
                     t2,
                     t3: t2,
-                    t4: at,
+                    t4: at + slack,
                 }
             }
             None => Exchange { t1, t2, t3, t4 },

@@ -111,6 +111,10 @@ pub struct RunNode {
     pub uid: String,
     /// See `uid`.
     pub firmware: String,
+    /// The process simulating it, when the run started one
+    /// (`--nodes spawn`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pid: Option<u32>,
 }
 
 impl RunRecord {

@@ -4,11 +4,12 @@
 
 use crate::admin::{Admin, AdminError};
 use crate::clock::{Clock, SharedClock};
+use crate::medium::Medium;
 use crate::pairing_file::{format_uid, parse_uid, PairingFile};
 use crate::peer::{Incoming, Peer};
 use crate::registry;
 use crate::resume::NodePosition;
-use crate::spawn::{spawn_sim_node, SpawnError, SpawnedNode};
+use crate::spawn::{spawn_sim_node_logged, SpawnError, SpawnedNode};
 use motet_host::Machine;
 use motet_wire::link::State;
 use motet_wire::service::Info;
@@ -65,6 +66,18 @@ pub enum SessionError {
     },
 }
 
+/// How [`Session::spawn_with`] starts the node processes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spawning<'a> {
+    /// Every node a member of this multicast group
+    /// (`udp-group:GROUP:PORT[@IFACE]`), as on a bus; else each on a UDP
+    /// port of its own.
+    pub group: Option<&'a str>,
+    /// A folder for each node's log (`node-NAME.log`, what it says on
+    /// stderr); else the nodes write to this process's stderr.
+    pub logs: Option<&'a Path>,
+}
+
 /// Where a node of the run is.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeAddr {
@@ -87,6 +100,10 @@ pub struct Session {
     pub infos: Vec<Info>,
     /// Node processes this session started; they stop with it.
     pub spawned: Vec<SpawnedNode>,
+    /// Every node is on one shared medium (a bus, a multicast group),
+    /// reached through one transport: the run seals and stops them all in
+    /// one frame ([`crate::run::NetRun::on_shared_medium`]).
+    pub shared_medium: bool,
 }
 
 fn isn(k: usize) -> u16 {
@@ -106,6 +123,52 @@ fn open(node: &str, link: &str, clock: &SharedClock) -> Result<Admin, SessionErr
         message: e.to_string(),
     })?;
     Ok(Admin::with_clock(t, link, clock.clone()))
+}
+
+/// Whether the nodes on `link` share it: a multicast group, or a link
+/// (a CAN adapter) that several machine nodes name.
+pub fn is_shared(link: &str, nodes: &[NodeAddr]) -> bool {
+    link.starts_with("udp-group:") || nodes.iter().filter(|n| n.link == link).count() > 1
+}
+
+/// The host's end of the shared medium `link`: a group member that hears
+/// its own frames back (stamped, the reference for broadcast sync).
+fn open_medium(node: &str, link: &str) -> Result<Medium, SessionError> {
+    let err = |message: String| SessionError::Open {
+        node: node.into(),
+        link: link.into(),
+        message,
+    };
+    let t: Box<dyn motet_link::Transport + Send> =
+        match motet_link::LinkSpec::parse(link).map_err(|e| err(e.to_string()))? {
+            motet_link::LinkSpec::UdpGroup { group, port, iface } => Box::new(
+                motet_link::UdpGroup::join(std::net::SocketAddrV4::new(group, port), iface)
+                    .map_err(|e| err(e.to_string()))?
+                    .hearing_own(),
+            ),
+            spec => spec.open().map_err(|e| err(e.to_string()))?,
+        };
+    Ok(Medium::new(t))
+}
+
+/// Arguments of machine node `k`'s simulated process beyond `extra`: a
+/// node with closed loops (servos, heaters) runs its machine's plant.
+fn plant_args(machine: &Machine, k: usize, extra: &[String]) -> Vec<String> {
+    let spec = &machine.nodes[k];
+    let mut args = extra.to_vec();
+    let servos = spec
+        .actuators
+        .iter()
+        .any(|&a| machine.actuators[a].servo.is_some());
+    if servos || !motet_host::heater_loop::on_node(machine, k).is_empty() {
+        args.extend([
+            "--plant".to_string(),
+            machine.file.display().to_string(),
+            "--plant-node".to_string(),
+            spec.name.clone(),
+        ]);
+    }
+    args
 }
 
 impl Session {
@@ -130,55 +193,56 @@ impl Session {
         extra: &[Vec<String>],
         clock: &SharedClock,
     ) -> Result<Session, SessionError> {
-        let mut s = Session {
-            peers: Vec::new(),
-            nodes: Vec::new(),
-            infos: Vec::new(),
-            spawned: Vec::new(),
-        };
+        Session::spawn_with(machine, exe, extra, clock, Spawning::default())
+    }
+
+    /// [`Session::spawn_each`] as `how` says: every node on one multicast
+    /// group (the host too, one shared medium, each node given its address
+    /// by uid) or each alone on a UDP port of its own, and where the
+    /// nodes' logs go.
+    pub fn spawn_with(
+        machine: &Machine,
+        exe: &Path,
+        extra: &[Vec<String>],
+        clock: &SharedClock,
+        how: Spawning,
+    ) -> Result<Session, SessionError> {
+        let mut spawned = Vec::new();
         for (k, spec) in machine.nodes.iter().enumerate() {
-            // A node with closed loops (servos, heaters) runs its
-            // machine's simulated plant.
-            let mut args = extra.get(k).cloned().unwrap_or_default();
-            let servos = spec
-                .actuators
-                .iter()
-                .any(|&a| machine.actuators[a].servo.is_some());
-            if servos || !motet_host::heater_loop::on_node(machine, k).is_empty() {
-                args.extend([
-                    "--plant".to_string(),
-                    machine.file.display().to_string(),
-                    "--plant-node".to_string(),
-                    spec.name.clone(),
-                ]);
-            }
-            let node =
-                spawn_sim_node(exe, "stepper", &args).map_err(|source| SessionError::Spawn {
+            let args = plant_args(machine, k, extra.get(k).map_or(&[], |e| e.as_slice()));
+            let log = how.logs.map(|d| d.join(format!("node-{}.log", spec.name)));
+            let listen = how.group.unwrap_or("udp:127.0.0.1:0");
+            let node = spawn_sim_node_logged(exe, "stepper", listen, &args, log.as_deref())
+                .map_err(|source| SessionError::Spawn {
                     node: spec.name.clone(),
                     source,
                 })?;
-            let address = 2 + k as u16;
-            let mut a = open(&spec.name, &node.link, clock)?;
-            let admin_err = |source| SessionError::Admin {
-                node: spec.name.clone(),
-                source,
-            };
-            a.set_address(node.uid, address).map_err(admin_err)?;
-            let info = a.info(address).map_err(admin_err)?;
-            registry::check(machine, spec, &info).map_err(|source| SessionError::Mismatch {
-                node: spec.name.clone(),
-                source,
-            })?;
-            s.nodes.push(NodeAddr {
+            spawned.push(node);
+        }
+        let nodes: Vec<NodeAddr> = machine
+            .nodes
+            .iter()
+            .zip(&spawned)
+            .enumerate()
+            .map(|(k, (spec, node))| NodeAddr {
                 name: spec.name.clone(),
                 link: node.link.clone(),
-                address,
-            });
-            s.infos.push(info);
-            s.peers
-                .push(Peer::new(&spec.name, address, a.into_transport(), isn(k)));
-            s.spawned.push(node);
+                address: 2 + k as u16,
+            })
+            .collect();
+        // Each node takes its address from a request naming its uid: alone
+        // on its link, or heard by every node on the group.
+        for (spec, (n, node)) in machine.nodes.iter().zip(nodes.iter().zip(&spawned)) {
+            let mut a = open(&spec.name, &n.link, clock)?;
+            a.set_address(node.uid, n.address)
+                .map_err(|source| SessionError::Admin {
+                    node: spec.name.clone(),
+                    source,
+                })?;
         }
+        let uids: Vec<Option<u64>> = spawned.iter().map(|n| Some(n.uid)).collect();
+        let mut s = Session::attach_checked(machine, &nodes, &uids, clock)?;
+        s.spawned = spawned;
         Ok(s)
     }
 
@@ -218,7 +282,11 @@ impl Session {
         Session::attach_checked(machine, nodes, &vec![None; nodes.len()], clock)
     }
 
-    fn attach_checked(
+    /// [`Session::attach`] checking that each node is the device of
+    /// `uids[k]` (the pairing file's, a run record's). On a shared medium
+    /// a device that answers no more at its address (restarted without
+    /// its state) is given it again by that uid.
+    pub fn attach_checked(
         machine: &Machine,
         nodes: &[NodeAddr],
         uids: &[Option<u64>],
@@ -229,13 +297,37 @@ impl Session {
             nodes: nodes.to_vec(),
             infos: Vec::new(),
             spawned: Vec::new(),
+            shared_medium: false,
         };
+        // One transport for each shared medium, its nodes' ports on it.
+        let mut media: Vec<(String, Medium)> = Vec::new();
         for (k, (spec, n)) in machine.nodes.iter().zip(nodes).enumerate() {
-            let mut a = open(&spec.name, &n.link, clock)?;
-            let info = a.info(n.address).map_err(|source| SessionError::Admin {
+            let shared = is_shared(&n.link, nodes);
+            let mut a = if shared {
+                let medium = match media.iter().find(|(l, _)| *l == n.link) {
+                    Some((_, m)) => m.clone(),
+                    None => {
+                        let m = open_medium(&spec.name, &n.link)?;
+                        media.push((n.link.clone(), m.clone()));
+                        m
+                    }
+                };
+                Admin::with_clock(Box::new(medium.port(n.address)), &n.link, clock.clone())
+            } else {
+                open(&spec.name, &n.link, clock)?
+            };
+            let admin_err = |source| SessionError::Admin {
                 node: spec.name.clone(),
                 source,
-            })?;
+            };
+            let uid = uids.get(k).copied().flatten();
+            let info = match (a.info(n.address), uid) {
+                (Err(AdminError::NoAnswer { .. }), Some(uid)) if shared => {
+                    a.set_address(uid, n.address).map_err(admin_err)?;
+                    a.info(n.address).map_err(admin_err)?
+                }
+                (r, _) => r.map_err(admin_err)?,
+            };
             if let Some(Some(uid)) = uids.get(k) {
                 if info.uid != *uid {
                     return Err(SessionError::Node {
@@ -258,6 +350,9 @@ impl Session {
             s.peers
                 .push(Peer::new(&spec.name, n.address, a.into_transport(), isn(k)));
         }
+        // Seals and stops in one frame only when that frame reaches every
+        // node: all of them on one medium.
+        s.shared_medium = media.len() == 1 && nodes.iter().all(|n| n.link == media[0].0);
         Ok(s)
     }
 }

@@ -4,9 +4,12 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 
-/// A node process; killed when dropped.
+/// A node process; killed when dropped, unless let go
+/// ([`SpawnedNode::detach`]).
 pub struct SpawnedNode {
     child: Child,
+    /// Left running when dropped.
+    detached: bool,
     /// Link spec to reach it, e.g. `udp:127.0.0.1:40123`.
     pub link: String,
     /// Its unique id.
@@ -21,6 +24,14 @@ pub enum SpawnError {
     Start {
         /// The executable's path.
         exe: String,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
+    /// Its log file could not be created.
+    #[error("cannot create the node's log {path}: {error}")]
+    Log {
+        /// The log's path.
+        path: String,
         /// What the operating system said.
         error: std::io::Error,
     },
@@ -56,6 +67,26 @@ pub fn spawn_sim_node_on(
     listen: &str,
     extra: &[String],
 ) -> Result<SpawnedNode, SpawnError> {
+    spawn_sim_node_logged(exe, kind, listen, extra, None)
+}
+
+/// [`spawn_sim_node_on`] with what the node says on stderr written to
+/// `log` (created or emptied), else to this process's stderr. A node that
+/// outlives this process (detached) then holds none of its pipes.
+pub fn spawn_sim_node_logged(
+    exe: &Path,
+    kind: &str,
+    listen: &str,
+    extra: &[String],
+    log: Option<&Path>,
+) -> Result<SpawnedNode, SpawnError> {
+    let stderr = match log {
+        None => Stdio::inherit(),
+        Some(p) => Stdio::from(std::fs::File::create(p).map_err(|error| SpawnError::Log {
+            path: p.display().to_string(),
+            error,
+        })?),
+    };
     let mut child = Command::new(exe)
         .args([
             "node",
@@ -69,7 +100,7 @@ pub fn spawn_sim_node_on(
         .args(extra)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
+        .stderr(stderr)
         .spawn()
         .map_err(|error| SpawnError::Start {
             exe: exe.display().to_string(),
@@ -79,7 +110,12 @@ pub fn spawn_sim_node_on(
     let mut line = String::new();
     let _ = BufReader::new(stdout).read_line(&mut line);
     match parse_announce(&line) {
-        Some((link, uid)) => Ok(SpawnedNode { child, link, uid }),
+        Some((link, uid)) => Ok(SpawnedNode {
+            child,
+            detached: false,
+            link,
+            uid,
+        }),
         None => {
             let _ = child.kill();
             let _ = child.wait();
@@ -99,11 +135,19 @@ impl SpawnedNode {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+
+    /// Lets the process run on after this (a stopped run's node, waiting
+    /// for `motet resume` until its `--idle-exit`).
+    pub fn detach(mut self) {
+        self.detached = true;
+    }
 }
 
 impl Drop for SpawnedNode {
     fn drop(&mut self) {
-        self.kill();
+        if !self.detached {
+            self.kill();
+        }
     }
 }
 

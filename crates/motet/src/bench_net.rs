@@ -619,6 +619,7 @@ fn resume_figures(
                     address: i.address,
                     uid: format_uid(i.uid),
                     firmware: i.firmware.to_string(),
+                    pid: None,
                 }
             })
             .collect(),

@@ -124,7 +124,8 @@ struct RunArgs {
     #[arg(long, default_value_t = 1.0, value_parser = flags::number(ranges::TIME_SCALE))]
     time_scale: f64,
     /// With --nodes spawn|paired: least time the committed trajectory
-    /// reaches ahead, ms (at least 2×RTT is used anyway).
+    /// reaches ahead, ms of the run's time (at least 2×RTT, and 50 ms of
+    /// wall time, are used anyway).
     #[arg(long, default_value_t = 100.0, value_parser = flags::number(ranges::LEAD_MS))]
     lead_ms: f64,
     /// With --nodes spawn|paired: longest time between clock exchanges
@@ -133,6 +134,13 @@ struct RunArgs {
     /// with nothing else to say is asked after 1 s anyway.
     #[arg(long, default_value_t = 10_000.0, value_parser = flags::number(ranges::SYNC_MS))]
     sync_ms: f64,
+    /// With --nodes spawn: every node on one shared medium, a UDP
+    /// multicast group, as on a CAN bus: `udp` (a new group on this
+    /// computer's loopback) or `udp-group:GROUP:PORT[@IFACE]`. Seals and
+    /// stops reach every node in one frame, one sync frame aligns every
+    /// clock, and the nodes hear one another's heartbeats.
+    #[arg(long, value_name = "udp|udp-group:…")]
+    bus: Option<String>,
     #[command(flatten)]
     place: flags::PlacementFlags,
     /// With --nodes sim: inject a fault into a heater a node drives, at a
@@ -174,8 +182,10 @@ enum Cmd {
         /// Node type reported to the host.
         #[arg(long = "type", default_value = "stepper")]
         kind: String,
-        /// `udp:HOST:PORT` (port 0: any free one) or `pty` (a new
-        /// pseudo-terminal; its path is printed).
+        /// `udp:HOST:PORT` (port 0: any free one), `pty` (a new
+        /// pseudo-terminal; its path is printed), or
+        /// `udp-group:GROUP:PORT[@IFACE]` (a member of a multicast group
+        /// with the host and the other nodes, as on a bus).
         #[arg(long, default_value = "udp:127.0.0.1:0")]
         listen: String,
         /// Print one line `motet-node listening LINK uid UID` first (for scripts).
@@ -400,6 +410,7 @@ fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
             time_scale: a.time_scale,
             lead_ms: a.lead_ms,
             sync_ms: a.sync_ms,
+            bus: a.bus,
         }),
     }
 }

@@ -13,7 +13,7 @@ use motet_net::journal::{Journal, JournalWriter};
 use motet_net::pairing_file::{format_uid, pairing_path};
 use motet_net::resume::{parse_assumed, prove, Evidence, NodeSeen, ResumeError};
 use motet_net::run_record::{RunNode, RunRecord, RECORD_FORMAT};
-use motet_net::session::{locate, NodeAddr, Session, SessionError};
+use motet_net::session::{locate, NodeAddr, Session, SessionError, Spawning};
 use motet_net::{CommandSource, NetConfig, NetRun, Phase, RunIdentity, StopInfo};
 use motet_planner::{Command, Located};
 use motet_trajectory::Point;
@@ -42,12 +42,42 @@ pub struct NetArgs<'a> {
     pub time_scale: f64,
     pub lead_ms: f64,
     pub sync_ms: f64,
+    /// With `--nodes spawn`: the nodes share one medium (`--bus`).
+    pub bus: Option<String>,
 }
+
+/// The multicast group `--bus BUS` puts spawned nodes on: `udp` is a new
+/// group on this computer's loopback (a free port of its own, so runs side
+/// by side do not meet), or a `udp-group:` spec as given.
+fn bus_group(bus: &str) -> Result<String> {
+    if bus == "udp" {
+        let port = motet_link::udp_group::free_port().context("no free UDP port for the group")?;
+        return Ok(format!(
+            "udp-group:{}:{port}@127.0.0.1",
+            motet_net::loopback::LOOPBACK_GROUP
+        ));
+    }
+    match motet_link::LinkSpec::parse(bus) {
+        Ok(spec @ motet_link::LinkSpec::UdpGroup { .. }) => Ok(spec.to_string()),
+        _ => bail!("--bus {bus:?}: expected `udp` or `udp-group:GROUP:PORT[@IFACE]`"),
+    }
+}
+
+/// How far the host's and a node process's stamps of one sync frame may
+/// lie apart, µs of wall time: each dates the system's stamp on its clock
+/// to within 5 µs.
+const REFERENCE_SLACK_WALL_US: f64 = 10.0;
+
+/// The least lead of a run, ms of wall time (see [`cfg`]).
+const WALL_LEAD_MS: f64 = 50.0;
 
 fn cfg(r: &RunRecord) -> NetConfig {
     let (lead_ms, time_scale) = (r.lead_ms, r.time_scale);
     let mut c = NetConfig::default();
-    c.lead_min_us = (lead_ms * 1000.0) as u64;
+    // A host's stalls (a scheduler's turn, a disk's flush of the journal)
+    // are in wall time: a run faster than real time reaches ahead by at
+    // least WALL_LEAD_MS of it.
+    c.lead_min_us = (lead_ms.max(WALL_LEAD_MS * time_scale) * 1000.0) as u64;
     c.sync_interval_us = (r.sync_ms.max(1.0) * 1000.0) as u64;
     // Timeouts are in the run's own (possibly scaled) time.
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
@@ -182,12 +212,14 @@ fn record_nodes(session: &Session) -> Vec<RunNode> {
         .nodes
         .iter()
         .zip(&session.infos)
-        .map(|(n, i)| RunNode {
+        .enumerate()
+        .map(|(k, (n, i))| RunNode {
             name: n.name.clone(),
             link: n.link.clone(),
             address: n.address,
             uid: format_uid(i.uid),
             firmware: i.firmware.to_string(),
+            pid: session.spawned.get(k).map(|p| p.pid()),
         })
         .collect()
 }
@@ -219,6 +251,9 @@ pub fn run(a: NetArgs) -> Result<()> {
     let name = job_name(a.job_path);
     let out = a.out.unwrap_or_else(|| PathBuf::from("out").join(&name));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    if a.bus.is_some() && a.mode != NodesMode::Spawn {
+        bail!("--bus is for --nodes spawn (paired nodes share a medium when their pairing names one link)");
+    }
     let session = match a.mode {
         NodesMode::Spawn => {
             let exe = std::env::current_exe().context("cannot find the motet executable")?;
@@ -226,11 +261,17 @@ pub fn run(a: NetArgs) -> Result<()> {
                 "--time-scale".to_string(),
                 a.time_scale.to_string(),
                 "--idle-exit".to_string(),
-                "60".to_string(),
+                SPAWNED_IDLE_S.to_string(),
                 "--quiet".to_string(),
             ];
             let each = crate::modules::spawn_args(machine, &out, &extra)?;
-            Session::spawn_each(machine, &exe, &each, &motet_net::clock::wall())?
+            let clock = motet_net::clock::wall();
+            let group = a.bus.as_deref().map(bus_group).transpose()?;
+            let how = Spawning {
+                group: group.as_deref(),
+                logs: Some(&out),
+            };
+            Session::spawn_with(machine, &exe, &each, &clock, how)?
         }
         NodesMode::Paired => {
             let pairing = match composed {
@@ -310,6 +351,10 @@ impl RunJob {
     }
 }
 
+/// How long a simulated node a run started waits, s, once it hears no
+/// host: a stopped run's nodes wait that long for `motet resume`.
+const SPAWNED_IDLE_S: u32 = 60;
+
 /// How long a finished run still listens for the loops' samples, host µs:
 /// a node sends a source's batch once it is a second old
 /// (`motet_node::control::samples::MAX_BATCH_AGE_US`), and a frame's way.
@@ -333,9 +378,16 @@ fn drive(
     let peers = std::mem::take(&mut session.peers);
     let (run, total) = job.run(machine, peers, start, cfg(&record), journal);
     let mut run = run.with_identity(identity);
+    // One frame seals and stops every node; each watches the others.
+    if session.shared_medium && !run.on_shared_medium() && !quiet {
+        eprintln!("warning: more nodes than one group frame lists: each is sealed on its own");
+    }
     // Answers stamped as they arrive: a host that runs late (a loaded
     // computer) would otherwise count its own wait as the path's, one way.
     run.stamp_arrivals(clock);
+    // Each process dates a datagram's stamp on its own clock to within a
+    // few µs of wall time (`motet_link` reads its two clocks at once).
+    run.reference_slack_us((REFERENCE_SLACK_WALL_US * record.time_scale).ceil() as u64);
     let bar = progress_bar(total, quiet);
     let started = std::time::Instant::now();
     let phase = loop {
@@ -413,7 +465,16 @@ fn drive(
         }
         Phase::Stopped(s) => {
             std::fs::write(out.join("stop.toml"), stop_summary(machine, &s))?;
-            bail!("{}", stop_message(machine, &s, out))
+            let mut text = stop_message(machine, &s, out);
+            // The simulated nodes this run started stay where they came to
+            // rest, for `motet resume`, until they hear no host for a while.
+            if !session.spawned.is_empty() {
+                for n in session.spawned.drain(..) {
+                    n.detach();
+                }
+                text += &format!("\n  the simulated nodes wait {SPAWNED_IDLE_S} s for it");
+            }
+            bail!("{text}")
         }
         _ => unreachable!("the loop ends only when done or stopped"),
     }
@@ -546,6 +607,34 @@ fn stop_message(machine: &Machine, s: &StopInfo, out: &Path) -> String {
     text
 }
 
+/// Where the nodes that know their run rest, one line for each committed
+/// point: one line when they all stopped on the same window's tail.
+fn rest_lines(
+    machine: &Machine,
+    positions: &[Option<motet_net::resume::NodePosition>],
+) -> Vec<String> {
+    let mut by_end: std::collections::BTreeMap<u32, Vec<&str>> = Default::default();
+    for (k, p) in positions.iter().enumerate() {
+        if let Some(p) = p.as_ref().filter(|p| p.run != 0 && p.queued == 0) {
+            by_end
+                .entry(p.committed)
+                .or_default()
+                .push(machine.nodes[k].name.as_str());
+        }
+    }
+    by_end
+        .into_iter()
+        .map(|(end, names)| {
+            format!(
+                "{} {} at rest at the end of committed segment {}",
+                plural_nodes(&names),
+                if names.len() == 1 { "is" } else { "are" },
+                end.saturating_sub(1)
+            )
+        })
+        .collect()
+}
+
 fn plural_nodes(names: &[&str]) -> String {
     match names {
         [one] => format!("node {one}"),
@@ -561,6 +650,41 @@ fn show_point(machine: &Machine, p: &Point) -> String {
         .map(|(a, v)| format!("{}={v}", a.name))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// The stopped run's nodes, each the device the run had; on a shared
+/// medium one that restarted is given its address again by its uid.
+fn attach_recorded(machine: &Machine, record: &RunRecord) -> Result<Session> {
+    let nodes: Vec<NodeAddr> = record
+        .nodes
+        .iter()
+        .map(|n| NodeAddr {
+            name: n.name.clone(),
+            link: n.link.clone(),
+            address: n.address,
+        })
+        .collect();
+    // Each the device the run had; on a shared medium one that restarted
+    // is given its address again by its uid.
+    let uids: Vec<Option<u64>> = record
+        .nodes
+        .iter()
+        .map(|n| {
+            let shared = motet_net::session::is_shared(&n.link, &nodes);
+            shared
+                .then(|| motet_net::pairing_file::parse_uid(&n.uid))
+                .flatten()
+        })
+        .collect();
+    let clock = motet_net::clock::wall();
+    match Session::attach_checked(machine, &nodes, &uids, &clock) {
+        Ok(s) => Ok(s),
+        Err(SessionError::Admin {
+            node,
+            source: AdminError::NoAnswer { link, .. },
+        }) => bail!("{}", ResumeError::Silent { node, link }),
+        Err(e) => Err(e.into()),
+    }
 }
 
 /// `motet resume OUT`
@@ -593,25 +717,10 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
             machine.nodes.len()
         );
     }
-    let nodes: Vec<NodeAddr> = record
-        .nodes
-        .iter()
-        .map(|n| NodeAddr {
-            name: n.name.clone(),
-            link: n.link.clone(),
-            address: n.address,
-        })
-        .collect();
-    let mut session = match Session::attach(machine, &nodes, &motet_net::clock::wall()) {
-        Ok(s) => s,
-        Err(SessionError::Admin {
-            node,
-            source: AdminError::NoAnswer { link, .. },
-        }) => bail!("{}", ResumeError::Silent { node, link }),
-        Err(e) => return Err(e.into()),
-    };
+    let mut session = attach_recorded(machine, &record)?;
     let clock = WallClock::with(record.time_scale, 0.0, 0);
     let positions = locate(&mut session.peers, &clock, Duration::from_secs(3));
+    let rests = rest_lines(machine, &positions);
     let seen: Vec<NodeSeen> = session
         .infos
         .iter()
@@ -652,6 +761,9 @@ pub fn resume_cmd(a: ResumeArgs) -> Result<()> {
             r.command,
             files.job.commands.len()
         );
+        for line in &rests {
+            println!("  {line}");
+        }
         if !r.assumed.is_empty() {
             println!(
                 "  where {} {} was given with --assume-position",

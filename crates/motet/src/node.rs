@@ -45,8 +45,16 @@ fn listen(spec: &str) -> Result<(Box<dyn Transport + Send>, String)> {
         let t = motet_link::SerialTransport::from_port(format!("serial:{name}"), Box::new(master));
         return Ok((Box::new(t), format!("serial:{name}")));
     }
+    if spec.starts_with("udp-group:") {
+        // A member of a multicast group: it hears the host and every other
+        // node, as on a bus, and is reached at the group's own spec.
+        let t = motet_link::open(spec).with_context(|| format!("--listen {spec:?}"))?;
+        return Ok((t, spec.to_string()));
+    }
     let Some(addr) = spec.strip_prefix("udp:") else {
-        bail!("--listen {spec:?}: expected `udp:HOST:PORT` or `pty`");
+        bail!(
+            "--listen {spec:?}: expected `udp:HOST:PORT`, `udp-group:GROUP:PORT[@IFACE]` or `pty`"
+        );
     };
     let t = motet_link::UdpTransport::listen(addr)
         .with_context(|| format!("cannot listen on udp:{addr}"))?;

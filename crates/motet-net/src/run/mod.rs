@@ -404,6 +404,15 @@ impl NetRun {
         }
     }
 
+    /// How far apart the host's and a node's stamps of one sync frame may
+    /// lie, host µs ([`Peer::reference_slack_us`]): processes whose system
+    /// stamps datagrams.
+    pub fn reference_slack_us(&mut self, us: u64) {
+        for p in &mut self.peers {
+            p.reference_slack_us(us);
+        }
+    }
+
     /// Reads the job's commands after those it was given from `source`,
     /// `total` in all (for progress), as the run plans them: the run then
     /// holds a bounded window of the job, however long it is.

@@ -187,6 +187,7 @@ pub fn loopback_record(
                 address: 2 + k as u16,
                 uid: motet_net::pairing_file::format_uid(0x5157_0000 + k as u64),
                 firmware: motet_net::sim_node::sim_firmware().to_string(),
+                pid: None,
             })
             .collect(),
     }
