@@ -229,6 +229,10 @@ pub fn run(a: NetArgs) -> Result<()> {
     ranges::TIME_SCALE.check("--time-scale", a.time_scale)?;
     ranges::SYNC_MS.check("--sync-ms", a.sync_ms)?;
     ranges::LEAD_MS.check("--lead-ms", a.lead_ms)?;
+    if a.bus.is_some() && a.mode != NodesMode::Spawn {
+        bail!("--bus is for --nodes spawn (paired nodes share a medium when their pairing names one link)");
+    }
+    let group = a.bus.as_deref().map(bus_group).transpose()?;
     let opts = JobOptions {
         allow_unknown: a.allow_unknown,
         ..Default::default()
@@ -251,9 +255,6 @@ pub fn run(a: NetArgs) -> Result<()> {
     let name = job_name(a.job_path);
     let out = a.out.unwrap_or_else(|| PathBuf::from("out").join(&name));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    if a.bus.is_some() && a.mode != NodesMode::Spawn {
-        bail!("--bus is for --nodes spawn (paired nodes share a medium when their pairing names one link)");
-    }
     let session = match a.mode {
         NodesMode::Spawn => {
             let exe = std::env::current_exe().context("cannot find the motet executable")?;
@@ -266,7 +267,6 @@ pub fn run(a: NetArgs) -> Result<()> {
             ];
             let each = crate::modules::spawn_args(machine, &out, &extra)?;
             let clock = motet_net::clock::wall();
-            let group = a.bus.as_deref().map(bus_group).transpose()?;
             let how = Spawning {
                 group: group.as_deref(),
                 logs: Some(&out),

@@ -565,7 +565,35 @@ fn bad_network_input_is_a_clear_error() {
         (vec!["nodes", "status", m], "does not exist"),
         (
             vec!["node", "--sim", "--listen", "tcp:1"],
-            "expected `udp:HOST:PORT` or `pty`",
+            "expected `udp:HOST:PORT`, `udp-group:GROUP:PORT[@IFACE]` or `pty`",
+        ),
+        (
+            vec!["node", "--sim", "--listen", "udp-group:10.0.0.1:47100"],
+            "10.0.0.1",
+        ),
+        (
+            vec![
+                "run",
+                m,
+                "examples/jobs/drawing.svg",
+                "--nodes",
+                "spawn",
+                "--bus",
+                "can",
+            ],
+            "--bus \"can\": expected `udp` or `udp-group:GROUP:PORT[@IFACE]`",
+        ),
+        (
+            vec![
+                "run",
+                m,
+                "examples/jobs/drawing.svg",
+                "--nodes",
+                "paired",
+                "--bus",
+                "udp",
+            ],
+            "--bus is for --nodes spawn",
         ),
         (vec!["resume", dir.to_str().unwrap()], "resume.toml"),
     ];
