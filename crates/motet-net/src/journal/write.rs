@@ -8,7 +8,7 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Appends records. Each seal is in the operating system's hands when it
-/// returns and on disk a flush later ([`super::flusher`]); the header and
+/// returns and on disk a flush later (by a thread of its own); the header and
 /// the stop are on disk when they return.
 pub struct JournalWriter {
     out: BufWriter<std::fs::File>,
