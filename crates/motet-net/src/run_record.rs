@@ -68,6 +68,10 @@ pub struct RunRecord {
     pub lead_ms: f64,
     /// `--sync-ms`: clock exchanges with each node, ms apart.
     pub sync_ms: f64,
+    /// `--start-late-clocks`: past the connect timeout, a start went ahead
+    /// with clocks short of their target, within the machine's path.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub start_late_clocks: bool,
     /// For a run that resumed another: how its commands follow from the job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub continues: Option<Continuation>,
@@ -239,6 +243,7 @@ mod tests {
             time_scale: 1.0,
             lead_ms: 100.0,
             sync_ms: 400.0,
+            start_late_clocks: false,
             continues: None,
             nodes: vec![],
         }

@@ -294,3 +294,52 @@ fn a_start_whose_clocks_are_nearly_known_waits_past_the_timeout() {
         lb.run.phase()
     );
 }
+
+/// Clocks that need longer than the start may wait (2 ms of jitter, about
+/// 15 s to reach their target, a timeout of 4 s): nothing moves on them,
+/// and the error names a clock and its bound; asked to
+/// (`start_late_clocks`), the run starts past the timeout within the
+/// machine's path, and says which clocks fell short.
+#[test]
+fn clocks_short_of_their_target_at_the_timeout_start_only_when_asked() {
+    let (m, cmds) = load(MACHINE, JOB);
+    let n = m.nodes.len();
+    let timeout = 4_000_000;
+    for late in [false, true] {
+        let clock = SimClock::new();
+        let cfg = NetConfig {
+            connect_timeout_us: timeout,
+            start_late_clocks: late,
+            ..NetConfig::default()
+        };
+        let links = jittered_links(n, &clock, 2_000);
+        let mut lb = Loopback::new(&m, cmds.clone(), m.start, links, &clocks(n), cfg);
+        let mut notes = Vec::new();
+        let outcome = loop {
+            clock.set(lb.now);
+            if let Err(e) = lb.step() {
+                break Err(e);
+            }
+            notes.extend(lb.run.take_notes());
+            if !matches!(lb.run.phase(), Phase::Starting) {
+                break Ok(lb.now);
+            }
+            assert!(lb.now < 3 * timeout, "still starting at {} µs", lb.now);
+        };
+        match (late, outcome) {
+            (false, Err(NetError::Node { node, message })) => assert!(
+                message.contains("nothing moves before it is within ±")
+                    && message.contains("--start-late-clocks"),
+                "{node}: {message}"
+            ),
+            (true, Ok(at)) => {
+                assert!(at > timeout, "started at {at} µs, before the timeout");
+                assert!(
+                    notes.iter().any(|n| n.contains("short of its")),
+                    "{notes:?}"
+                );
+            }
+            (late, other) => panic!("start_late_clocks {late}: {other:?}"),
+        }
+    }
+}

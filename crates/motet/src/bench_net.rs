@@ -606,6 +606,7 @@ fn resume_figures(
         time_scale: 1.0,
         lead_ms: 100.0,
         sync_ms: 10_000.0,
+        start_late_clocks: false,
         continues: None,
         nodes: lb
             .nodes

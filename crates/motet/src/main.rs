@@ -141,6 +141,13 @@ struct RunArgs {
     /// clock, and the nodes hear one another's heartbeats.
     #[arg(long, value_name = "udp|udp-group:…")]
     bus: Option<String>,
+    /// With --nodes spawn|paired, on a computer too busy for the clock
+    /// target: past the connect timeout, start once every node's clock is
+    /// known within what the machine's path allows (100 × the target, at
+    /// least 1 ms), naming each clock that fell short. Without it nothing
+    /// moves on a clock above its target. A resume keeps the choice.
+    #[arg(long)]
+    start_late_clocks: bool,
     #[command(flatten)]
     place: flags::PlacementFlags,
     /// With --nodes sim: inject a fault into a heater a node drives, at a
@@ -411,6 +418,7 @@ fn run_cmd(a: RunArgs) -> anyhow::Result<()> {
             lead_ms: a.lead_ms,
             sync_ms: a.sync_ms,
             bus: a.bus,
+            start_late_clocks: a.start_late_clocks,
         }),
     }
 }

@@ -44,6 +44,8 @@ pub struct NetArgs<'a> {
     pub sync_ms: f64,
     /// With `--nodes spawn`: the nodes share one medium (`--bus`).
     pub bus: Option<String>,
+    /// `--start-late-clocks` ([`NetConfig::start_late_clocks`]).
+    pub start_late_clocks: bool,
 }
 
 /// The multicast group `--bus BUS` puts spawned nodes on: `udp` is a new
@@ -82,6 +84,7 @@ fn cfg(r: &RunRecord) -> NetConfig {
     // Timeouts are in the run's own (possibly scaled) time.
     c.node_timeout_us = (c.node_timeout_us as f64 * time_scale.max(1.0)) as u64;
     c.connect_timeout_us = (c.connect_timeout_us as f64 * time_scale.max(1.0)) as u64;
+    c.start_late_clocks = r.start_late_clocks;
     // A busy computer's stalls are in wall time: the lead may grow to
     // cover a quarter second of them, however fast the run's time goes.
     c.lead_max_us = c.lead_max_us.max((250_000.0 * time_scale) as u64);
@@ -299,6 +302,7 @@ pub fn run(a: NetArgs) -> Result<()> {
         time_scale: a.time_scale,
         lead_ms: a.lead_ms,
         sync_ms: a.sync_ms,
+        start_late_clocks: a.start_late_clocks,
         continues: None,
         nodes: record_nodes(&session),
     };

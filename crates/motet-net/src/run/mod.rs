@@ -65,10 +65,16 @@ pub struct NetConfig {
     pub clock_bound_us: f64,
     /// How long a start waits for every clock to reach its target, µs
     /// (a busy computer makes the exchanges that tell the most rare); past
-    /// it the run starts once every link is up and every node's bound is
-    /// within what the machine's path allows, saying which clocks fell
-    /// short, and gives up after twice as long.
+    /// it the run waits as long again while every node's bound is within
+    /// what the machine's path allows, and gives up when one is not, or
+    /// after twice as long, naming the clock.
     pub connect_timeout_us: u64,
+    /// Past `connect_timeout_us`, start once every link is up and every
+    /// node's bound is within what the machine's path allows, short of its
+    /// target, saying which clocks fell short (`motet run
+    /// --start-late-clocks`: a computer too busy for the target). Off by
+    /// default: nothing moves on a clock above its target.
+    pub start_late_clocks: bool,
     /// How far past the lead a new window reaches, µs: longer windows mean
     /// fewer seals on the wire, shorter ones keep more of the trajectory
     /// editable.
@@ -98,6 +104,7 @@ impl Default for NetConfig {
             sync_interval_us: 10_000_000,
             clock_bound_us: 10.0,
             connect_timeout_us: 15_000_000,
+            start_late_clocks: false,
             window_us: 1_000_000,
             max_move_us: 0,
             sync_to_all: true,
@@ -683,10 +690,11 @@ impl NetRun {
             .iter()
             .all(|p| matches!(p.link_state(), State::Established { .. }));
         let timeout = self.cfg.connect_timeout_us;
-        // Past the timeout, a start waits no longer for a clock target a
-        // busy computer keeps out of reach (its exchanges late), once every
-        // bound is within what the machine's path allows (`path_limit`, the
-        // limit a moving run holds too): it starts, and says so.
+        // Past the timeout, a start waits as long again while every bound
+        // is within what the machine's path allows (`path_limit`, the limit
+        // a moving run holds too); asked to (`start_late_clocks`), it starts
+        // then, short of a target a busy computer keeps out of reach, and
+        // says so.
         let overdue = now > started + timeout;
         if overdue {
             let within = all_up
@@ -726,11 +734,12 @@ impl NetRun {
             let later = p.sync.error_bound(now as f64 + START_HORIZON_US);
             let on_target =
                 p.sync.error_bound(now as f64) <= EXCHANGE_AT * target && later <= target;
-            (on_target || (overdue && later <= path_limit(&self.cfg, p))) && p.backlog() == 0
+            let late_ok = self.cfg.start_late_clocks && overdue;
+            (on_target || (late_ok && later <= path_limit(&self.cfg, p))) && p.backlog() == 0
         });
         // Nothing moves before every heater a node drives has reported.
         if ready && self.heaters_heard()? {
-            if overdue {
+            if overdue && self.cfg.start_late_clocks {
                 self.note_late_clocks(now, started);
             }
             let lead = self.lead_us();

@@ -176,6 +176,7 @@ pub fn loopback_record(
         time_scale: 1.0,
         lead_ms: 100.0,
         sync_ms: 400.0,
+        start_late_clocks: false,
         continues: None,
         nodes: m
             .nodes
