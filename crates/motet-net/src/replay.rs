@@ -3,7 +3,7 @@
 //! tallied. What a board reports after the run must equal this, step for
 //! step and time for time (`NodeMessage::Tally`).
 
-use crate::journal::JournalHeader;
+use crate::journal::{JournalHeader, JournalHold, JournalPace};
 use crate::plan_feed::{run_limits, PlanFeed};
 use crate::run::Tally;
 use motet_host::{Distributor, Machine};
@@ -61,12 +61,14 @@ impl Replayed {
 }
 
 /// Each machine node's tally for a run of `commands` whose journal starts
-/// with `header`, as the nodes would report it after finishing the job
-/// (a run that journaled no `pace` record: it was never slowed).
+/// with `header` and journaled the slowdowns and holds given (a host that
+/// fell behind planned the moves after it slower), as the nodes would
+/// report it after finishing the job.
 pub fn replay(
     machine: &Machine,
     commands: Vec<Located<Command>>,
     header: &JournalHeader,
+    (paces, holds): (&[JournalPace], &[JournalHold]),
 ) -> Result<Vec<Tally>, (SourceLoc, PlanError)> {
     let mut dist = Distributor::new(machine);
     let mut nodes: Vec<Replayed> = dist
@@ -87,7 +89,9 @@ pub fn replay(
         header.start,
         header.t0,
         commands,
-    );
+    )
+    .with_paces(paces)
+    .with_holds(holds);
     while let Some(item) = feed.next_given(&mut dist)? {
         for (k, n) in nodes.iter_mut().enumerate() {
             // A node that refuses a message is what the tally would show.
