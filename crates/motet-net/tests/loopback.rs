@@ -351,7 +351,7 @@ fn each_node_tallies_what_the_replay_computes() {
         assert_eq!(lb.run_until_settled(3_600_000_000).unwrap(), Phase::Done);
         let got: Vec<_> = lb.run.tallies().into_iter().map(Option::unwrap).collect();
         let journal = motet_net::journal::Journal::load(&jpath).unwrap();
-        let header = journal.header.clone().unwrap();
+        let header = journal.header.unwrap();
         let journaled = (&journal.paces[..], &journal.holds[..]);
         let want = motet_net::replay::replay(&m, cmds, &header, journaled).unwrap();
         assert_eq!(got, want, "{machine} {job}");

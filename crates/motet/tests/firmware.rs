@@ -330,7 +330,7 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
     let job =
         motet_api::load_job(&m, &root().join(JOB), &motet_api::JobOptions::default()).unwrap();
     let journal = motet_net::journal::Journal::load(&out.join("journal")).unwrap();
-    let header = journal.header.clone().unwrap();
+    let header = journal.header.unwrap();
     let journaled = (&journal.paces[..], &journal.holds[..]);
     let want = motet_net::replay::replay(&m, job.commands, &header, journaled).unwrap();
     let steps: Vec<u64> = tally["steps"]
