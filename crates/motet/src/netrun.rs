@@ -302,7 +302,10 @@ pub fn run(a: NetArgs) -> Result<()> {
         time_scale: a.time_scale,
         lead_ms: a.lead_ms,
         sync_ms: a.sync_ms,
-        start_late_clocks: a.start_late_clocks,
+        // Simulated nodes share this computer's cores with the host: how
+        // well their clocks are known says how busy it is, not whether a
+        // machine is safe.
+        start_late_clocks: a.start_late_clocks || a.mode == NodesMode::Spawn,
         continues: None,
         nodes: record_nodes(&session),
     };
