@@ -7,6 +7,7 @@ mod bench_memory;
 mod bench_net;
 mod bench_net_traffic;
 mod bench_wire;
+mod bus_arg;
 mod dance;
 mod elf;
 mod error_text;

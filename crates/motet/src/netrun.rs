@@ -48,23 +48,6 @@ pub struct NetArgs<'a> {
     pub start_late_clocks: bool,
 }
 
-/// The multicast group `--bus BUS` puts spawned nodes on: `udp` is a new
-/// group on this computer's loopback (a free port of its own, so runs side
-/// by side do not meet), or a `udp-group:` spec as given.
-fn bus_group(bus: &str) -> Result<String> {
-    if bus == "udp" {
-        let port = motet_link::udp_group::free_port().context("no free UDP port for the group")?;
-        return Ok(format!(
-            "udp-group:{}:{port}@127.0.0.1",
-            motet_net::loopback::LOOPBACK_GROUP
-        ));
-    }
-    match motet_link::LinkSpec::parse(bus) {
-        Ok(spec @ motet_link::LinkSpec::UdpGroup { .. }) => Ok(spec.to_string()),
-        _ => bail!("--bus {bus:?}: expected `udp` or `udp-group:GROUP:PORT[@IFACE]`"),
-    }
-}
-
 /// How far the host's and a node process's stamps of one sync frame may
 /// lie apart, µs of wall time: each dates the system's stamp on its clock
 /// to within 5 µs.
@@ -235,7 +218,11 @@ pub fn run(a: NetArgs) -> Result<()> {
     if a.bus.is_some() && a.mode != NodesMode::Spawn {
         bail!("--bus is for --nodes spawn (paired nodes share a medium when their pairing names one link)");
     }
-    let group = a.bus.as_deref().map(bus_group).transpose()?;
+    let group = a
+        .bus
+        .as_deref()
+        .map(crate::bus_arg::bus_group)
+        .transpose()?;
     let opts = JobOptions {
         allow_unknown: a.allow_unknown,
         ..Default::default()
