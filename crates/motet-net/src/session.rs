@@ -232,8 +232,13 @@ impl Session {
             .collect();
         // Each node takes its address from a request naming its uid: alone
         // on its link, or heard by every node on the group.
+        // One request channel for each link (all of them on a group).
+        let mut admin: Option<Admin> = None;
         for (spec, (n, node)) in machine.nodes.iter().zip(nodes.iter().zip(&spawned)) {
-            let mut a = open(&spec.name, &n.link, clock)?;
+            if admin.as_ref().is_none_or(|a| a.link() != n.link) {
+                admin = Some(open(&spec.name, &n.link, clock)?);
+            }
+            let a = admin.as_mut().expect("opened above");
             a.set_address(node.uid, n.address)
                 .map_err(|source| SessionError::Admin {
                     node: spec.name.clone(),

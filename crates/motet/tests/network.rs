@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use tempfile::TempDir;
 
 mod common;
-use common::{journal_seals, motet, resume_to_done, root};
+use common::{journal_seals, motet, resume_to_done, root, wait_for_seals};
 
 fn scratch(name: &str) -> TempDir {
     common::scratch("net", name)
@@ -323,21 +323,7 @@ fn host_killed_mid_move_stops_the_nodes_and_resume_finishes_the_job() {
         .spawn()
         .unwrap();
     // Kill it once the job is well under way (the journal has windows).
-    let started = Instant::now();
-    loop {
-        if journal_seals(&out) > 15 {
-            break;
-        }
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "the run never got going"
-        );
-        assert!(
-            host.try_wait().unwrap().is_none(),
-            "the run ended before it was killed"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_seals(&out, &mut host, 16);
     host.kill().unwrap();
     host.wait().unwrap();
     // The node runs out its committed window (up to the lead) and brakes.

@@ -5,10 +5,10 @@
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod common;
-use common::{journal_seals, motet, resume_to_done, root};
+use common::{motet, resume_to_done, root, wait_for_seals};
 
 /// Networked runs keep real time: one at a time.
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -55,28 +55,12 @@ fn start_run(dir: &Path, stderr: Stdio) -> Child {
         .unwrap()
 }
 
-/// Waits until the run has sealed `seals` windows.
-fn under_way(out: &Path, host: &mut Child, seals: usize) {
-    let started = Instant::now();
-    while journal_seals(out) < seals {
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "the run never got going"
-        );
-        assert!(
-            host.try_wait().unwrap().is_none(),
-            "the run ended before the fault"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
 /// The run record's nodes: (name, link, uid, pid of the process the run
-/// started).
+/// started). Every one was on the same multicast group.
 fn recorded(out: &Path) -> Vec<(String, String, String, u32)> {
     let text = std::fs::read_to_string(out.join("resume.toml")).unwrap();
     let record: toml::Table = toml::from_str(&text).unwrap();
-    record["nodes"]
+    let nodes = record["nodes"]
         .as_array()
         .unwrap()
         .iter()
@@ -85,7 +69,11 @@ fn recorded(out: &Path) -> Vec<(String, String, String, u32)> {
             let pid = n["pid"].as_integer().unwrap() as u32;
             (s("name"), s("link"), s("uid"), pid)
         })
-        .collect()
+        .collect::<Vec<_>>();
+    let link = &nodes[0].1;
+    assert!(link.starts_with("udp-group:"), "{link}");
+    assert!(nodes.iter().all(|n| &n.1 == link), "{nodes:?}");
+    nodes
 }
 
 fn kill(pid: u32) {
@@ -128,7 +116,7 @@ fn host_killed_every_node_on_the_group_rests_on_one_point_and_resume_finishes() 
     let tmp = common::scratch("bus", "host");
     let out = tmp.path().join("out");
     let mut host = start_run(tmp.path(), Stdio::null());
-    under_way(&out, &mut host, 6);
+    wait_for_seals(&out, &mut host, 6);
     let _left = Leftovers(recorded(&out).iter().map(|n| n.3).collect());
     host.kill().unwrap();
     host.wait().unwrap();
@@ -150,7 +138,7 @@ fn one_node_killed_the_others_rest_on_one_point_and_resume_finishes() {
         tmp.path(),
         Stdio::from(std::fs::File::create(&log).unwrap()),
     );
-    under_way(&out, &mut host, 6);
+    wait_for_seals(&out, &mut host, 6);
     let nodes = recorded(&out);
     let _left = Leftovers(nodes.iter().map(|n| n.3).collect());
     let (_, link, y_uid, y_pid) = nodes[1].clone();

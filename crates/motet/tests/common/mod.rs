@@ -41,6 +41,23 @@ pub fn journal_seals(out: &std::path::Path) -> usize {
         .unwrap_or(0)
 }
 
+/// Waits until the networked run `host` writing to `out` has sealed
+/// `seals` windows (at most a minute); fails if it ended first.
+pub fn wait_for_seals(out: &std::path::Path, host: &mut std::process::Child, seals: usize) {
+    let started = std::time::Instant::now();
+    while journal_seals(out) < seals {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(60),
+            "the run never got going"
+        );
+        assert!(
+            host.try_wait().unwrap().is_none(),
+            "the run ended before it was under way"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
 /// `motet resume OUT` succeeds and finishes the job: its stdout.
 pub fn resume_to_done(out: &std::path::Path, extra: &[&str]) -> String {
     let mut args = vec!["resume", out.to_str().unwrap()];
