@@ -318,6 +318,7 @@ fn the_board_is_flashed_and_steps_as_the_simulator_computes() {
         "-q",
         "--lead-ms",
         "400",
+        "--start-late-clocks",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -373,6 +374,10 @@ fn a_killed_host_leaves_the_board_braked_and_resume_finishes() {
             "--nodes",
             "paired",
             "-q",
+            // The emulated board shares this computer's cores: a busy one
+            // leaves its pty's least round trip near 1 ms and its clock
+            // short of the plotter's target (a resume keeps the choice).
+            "--start-late-clocks",
         ])
         .arg("--out")
         .arg(&out)
@@ -468,6 +473,10 @@ fn a_silent_vanishing_or_too_slow_board_is_a_clear_error() {
             "--nodes",
             "paired",
             "-q",
+            // The emulated board shares this computer's cores: a busy one
+            // leaves its pty's least round trip near 1 ms and its clock
+            // short of the plotter's target (a resume keeps the choice).
+            "--start-late-clocks",
         ])
         .arg("--out")
         .arg(&out)
