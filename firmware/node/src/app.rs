@@ -12,7 +12,7 @@
 use crate::board::{Board, Inputs};
 use crate::boot;
 use crate::clock::{Clock, HostToTicks};
-use crate::frames::FrameReader;
+use crate::frames::{take_frames, FrameReader};
 use crate::interrupt::Counters;
 use crate::ring::Producer;
 use crate::schedule::{Scheduler, Timing};
@@ -102,11 +102,13 @@ pub fn run<B: Board>(
     let mut loop_stats = LoopStats::default();
     let mut last_round = now;
     loop {
-        let now = clock.us(board.ticks());
+        let start = clock.us(board.ticks());
         loop_stats.rounds += 1;
-        loop_stats.max_gap_us = loop_stats.max_gap_us.max(now - last_round);
-        last_round = now;
-        receive(&mut board, &mut reader, &mut rx, &mut ep, now);
+        loop_stats.max_gap_us = loop_stats.max_gap_us.max(start - last_round);
+        last_round = start;
+        // The rest of the round runs at the last frame's time: never
+        // before a time the endpoint has seen.
+        let now = receive(&mut board, &mut reader, &mut rx, &mut ep, &mut clock).max(start);
         follow_channel_timing(&ep, &mut sched, tpu);
 
         board.read_inputs(&mut inputs);
@@ -171,32 +173,28 @@ fn node_config<B: Board>(board: &B, cfg: &AppConfig) -> NodeConfig {
     }
 }
 
-/// Reads what the link received, in `rx`-sized pieces, and hands each
-/// complete frame to the endpoint.
+/// Hands each frame the link received to the endpoint, at the clock's
+/// time when it was taken ([`take_frames`]); returns the last such time.
 fn receive<B: Board, S, F, const Q: usize>(
     board: &mut B,
     reader: &mut FrameReader,
     rx: &mut [u8],
     ep: &mut Endpoint<S, F, Q>,
-    now: u64,
-) where
+    clock: &mut Clock,
+) -> u64
+where
     S: motet_node::Store,
     F: motet_node::Flash,
 {
-    loop {
-        let n = board.link_read(rx);
-        if n == 0 {
-            break;
-        }
-        let mut rest = &rx[..n];
-        while !rest.is_empty() {
-            let (used, frame) = reader.push(rest);
-            if let Some(f) = frame {
-                ep.on_frame(f, now);
-            }
-            rest = &rest[used..];
-        }
-    }
+    // The board is read for its bytes and its counter in turn.
+    let board = core::cell::RefCell::new(board);
+    take_frames(
+        reader,
+        rx,
+        |buf| board.borrow_mut().link_read(buf),
+        || clock.us(board.borrow().ticks()),
+        |f, now| ep.on_frame(f, now),
+    )
 }
 
 /// Channel timing follows the host's configuration (only taken at rest: a

@@ -58,6 +58,41 @@ impl FrameReader {
     }
 }
 
+/// Reads the link dry: `read` fills `rx` with what arrived (0: nothing
+/// now), and each complete frame goes to `deliver` with the clock's time
+/// (`now`) read when it was taken. Returns the last such time (0 when no
+/// frame came).
+///
+/// A time per frame, not one for the round: a clock request is answered
+/// with it, and one that came while the loop was busy (or while the core
+/// was away, as an emulated board's is on a loaded computer) must not be
+/// dated before the host sent it, or the host's hard limits on the node's
+/// rate stop holding.
+pub fn take_frames(
+    reader: &mut FrameReader,
+    rx: &mut [u8],
+    mut read: impl FnMut(&mut [u8]) -> usize,
+    mut now: impl FnMut() -> u64,
+    mut deliver: impl FnMut(&[u8], u64),
+) -> u64 {
+    let mut last = 0;
+    loop {
+        let n = read(rx);
+        if n == 0 {
+            return last;
+        }
+        let mut rest = &rx[..n];
+        while !rest.is_empty() {
+            let (used, frame) = reader.push(rest);
+            if let Some(f) = frame {
+                last = now();
+                deliver(f, last);
+            }
+            rest = &rest[used..];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -96,5 +131,48 @@ mod tests {
             );
             assert_eq!(dropped, 1);
         }
+    }
+
+    /// Each frame is dated when it was taken, not when the round began:
+    /// a frame that came in a later read gets that read's time.
+    #[test]
+    fn each_frame_is_dated_when_it_is_taken() {
+        use core::cell::Cell;
+        // Reads as the link gives them: the third frame arrives 5 ms into
+        // the round, split across two reads.
+        let reads: [&[u8]; 4] = [&[1, 0, 2], &[0], &[3, 3], &[3, 0, 4, 0]];
+        let t = Cell::new(1_000u64);
+        let mut k = 0;
+        let mut got = Vec::new();
+        let mut rx = [0u8; 8];
+        let last = take_frames(
+            &mut FrameReader::new(),
+            &mut rx,
+            |buf| {
+                let Some(r) = reads.get(k) else { return 0 };
+                k += 1;
+                // Each read comes 5 ms after the one before.
+                t.set(t.get() + 5_000);
+                buf[..r.len()].copy_from_slice(r);
+                r.len()
+            },
+            || t.get(),
+            |f, at| got.push((f.to_vec(), at)),
+        );
+        assert_eq!(
+            got,
+            [
+                (std::vec![1], 6_000),
+                (std::vec![2], 11_000),
+                (std::vec![3, 3, 3], 21_000),
+                (std::vec![4], 21_000),
+            ]
+        );
+        assert_eq!(last, 21_000);
+        let mut none = |_: &mut [u8]| 0;
+        assert_eq!(
+            take_frames(&mut FrameReader::new(), &mut rx, &mut none, || 7, |_, _| {}),
+            0
+        );
     }
 }
