@@ -8,6 +8,7 @@ mod bench_net;
 mod bench_net_traffic;
 mod bench_wire;
 mod bus_arg;
+mod cable;
 mod dance;
 mod elf;
 mod error_text;
@@ -184,7 +185,8 @@ enum Cmd {
         quiet: bool,
     },
     /// Run a simulated node in this process, reachable on UDP or a
-    /// pseudo-terminal.
+    /// pseudo-terminal. `kill -USR1 PID` pulls its cable (it neither hears
+    /// nor is heard, and runs on); the next one plugs it back.
     Node {
         /// Simulated node (the only kind this command runs).
         #[arg(long, required = true)]

@@ -164,7 +164,9 @@ fn run<S: Store>(
     );
     // Frames stamped as they arrive, so that a clock exchange's time here
     // is when the host's request came, however late the process runs.
-    let mut transport = transport;
+    // Behind a cable a signal pulls (`cable`).
+    crate::cable::install().context("cannot install the SIGUSR1 handler")?;
+    let mut transport: Box<dyn Transport + Send> = Box::new(crate::cable::Cable::new(transport));
     transport.stamp_arrivals(clock);
     let mut node = SimNode::new(cfg, store, transport, clock.now_us());
     node.plant = o.plant;
@@ -207,8 +209,12 @@ fn run<S: Store>(
     let mut blinking = false;
     let mut last_report = 0u64;
     let started = clock.now_us();
+    let mut cable = crate::cable::News::new();
     loop {
         let now = clock.now_us();
+        if let Some(news) = cable.take() {
+            eprintln!("{news}");
+        }
         node.step(now);
         let blink = node.endpoint.services().blinking(now);
         let pairing = node.endpoint.services().pairing();

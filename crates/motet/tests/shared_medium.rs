@@ -1,7 +1,8 @@
 //! Three node processes on one shared medium from the command line
 //! (`motet run --nodes spawn --bus udp`: a UDP multicast group, as on a CAN
-//! bus): the host killed, or one node killed, mid-job; every surviving node
-//! rests on one committed point, and `motet resume` finishes the job.
+//! bus): the host killed, one node's cable pulled, or one node killed,
+//! mid-job; every surviving node rests on one committed point, and `motet
+//! resume` finishes the job.
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -76,12 +77,12 @@ fn recorded(out: &Path) -> Vec<(String, String, String, u32)> {
     nodes
 }
 
-fn kill(pid: u32) {
+fn kill(pid: u32, signal: &str) {
     let ok = Command::new("kill")
-        .args(["-9", &pid.to_string()])
+        .args([signal, &pid.to_string()])
         .status()
         .unwrap();
-    assert!(ok.success(), "kill {pid}");
+    assert!(ok.success(), "kill {signal} {pid}");
 }
 
 /// The node processes a test's runs started, killed at its end (a stopped
@@ -128,6 +129,42 @@ fn host_killed_every_node_on_the_group_rests_on_one_point_and_resume_finishes() 
 }
 
 #[test]
+fn one_cable_pulled_every_node_rests_on_one_point_and_resume_finishes() {
+    let _serial = serial();
+    let tmp = common::scratch("bus", "cable");
+    let out = tmp.path().join("out");
+    let log = tmp.path().join("host.log");
+    let mut host = start_run(
+        tmp.path(),
+        Stdio::from(std::fs::File::create(&log).unwrap()),
+    );
+    wait_for_seals(&out, &mut host, 6);
+    let nodes = recorded(&out);
+    let _left = Leftovers(nodes.iter().map(|n| n.3).collect());
+    // y_node's cable out: it neither hears nor is heard, and runs on.
+    let y_pid = nodes[1].3;
+    kill(y_pid, "-USR1");
+    let status = host.wait().unwrap();
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert!(!status.success(), "{stderr}");
+    assert!(
+        stderr.contains("nodes x_node, z_node came to rest at")
+            && stderr.contains("node y_node was lost")
+            && !stderr.contains("missed the last window"),
+        "{stderr}"
+    );
+    // It brakes on the tail it was sent, and is plugged back in.
+    std::thread::sleep(Duration::from_secs(2));
+    kill(y_pid, "-USR1");
+    let y_log = std::fs::read_to_string(out.join("node-y_node.log")).unwrap();
+    assert!(y_log.contains("cable pulled"), "{y_log}");
+    // All three on one point: the resume finds y_node where the others
+    // are, with nothing assumed, and finishes the job.
+    let stdout = resume_to_done(&out, &[]);
+    one_rest_line(&stdout, "nodes x_node, y_node, z_node are");
+}
+
+#[test]
 fn one_node_killed_the_others_rest_on_one_point_and_resume_finishes() {
     let _serial = serial();
     let tmp = common::scratch("bus", "node");
@@ -142,7 +179,7 @@ fn one_node_killed_the_others_rest_on_one_point_and_resume_finishes() {
     let nodes = recorded(&out);
     let _left = Leftovers(nodes.iter().map(|n| n.3).collect());
     let (_, link, y_uid, y_pid) = nodes[1].clone();
-    kill(y_pid);
+    kill(y_pid, "-9");
     let status = host.wait().unwrap();
     let stderr = std::fs::read_to_string(&log).unwrap();
     assert!(!status.success(), "{stderr}");
