@@ -65,7 +65,8 @@ pub struct Args {
     traffic: bool,
     /// Write each node's true clock error and the host's bound on it, every
     /// 100 ms while streaming, to this CSV file (seconds, node, error µs,
-    /// bound µs).
+    /// bound µs; then the host's estimate's own error and bound, and how far
+    /// the model the node runs is from the estimate, µs).
     #[arg(long, value_name = "FILE")]
     clock_trace: Option<PathBuf>,
 }
@@ -219,12 +220,18 @@ pub fn bench_net(args: Args) -> Result<()> {
 
 /// Writes every sample's clock errors and bounds as CSV.
 fn write_trace(path: &std::path::Path, samples: &[Sample], machine: &Machine) -> Result<()> {
-    let mut out = String::from("seconds,node,error_us,bound_us\n");
+    let mut out = String::from(
+        "seconds,node,error_us,bound_us,estimate_error_us,estimate_bound_us,model_off_us\n",
+    );
     for (i, s) in samples.iter().enumerate() {
         for (k, v) in s.nodes.iter().enumerate() {
             if let Some((e, b)) = v {
                 let name = &machine.nodes[k].name;
-                out += &format!("{:.1},{name},{e:.3},{b:.3}\n", i as f64 * 0.1);
+                let (ee, eb, off) = s.estimates[k].unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+                out += &format!(
+                    "{:.1},{name},{e:.3},{b:.3},{ee:.3},{eb:.3},{off:.3}\n",
+                    i as f64 * 0.1
+                );
             }
         }
     }
@@ -370,6 +377,9 @@ struct Streamed {
 struct Sample {
     /// Per node: true error and the host's bound, µs (None: no model yet).
     nodes: Vec<Option<(f64, f64)>>,
+    /// Per node, for the trace: the host's estimate's own error and bound,
+    /// and how far the model the node runs is from it, µs.
+    estimates: Vec<Option<(f64, f64, f64)>>,
     /// The planned path's speed at that moment, units/s.
     speed: f64,
 }
@@ -428,8 +438,19 @@ fn stream(lb: &mut Loopback, clock: &SimClock, limit_us: Option<u64>) -> Result<
                             .map(|h| (h - now, p.sync.error_bound(now)))
                     })
                     .collect();
+                let estimates = lb
+                    .nodes
+                    .iter()
+                    .zip(lb.run.peers())
+                    .map(|(node, p)| {
+                        let local = node.offset_us as f64 + now * (1.0 + node.ppm * 1e-6);
+                        let (off, bound) = p.sync.model_off(now)?;
+                        Some((p.sync.model().host(local) - now, bound, off))
+                    })
+                    .collect();
                 samples.push(Sample {
                     nodes,
+                    estimates,
                     speed: path_speed(lb, now),
                 });
             }
