@@ -147,9 +147,10 @@ struct RunArgs {
     /// target: past the connect timeout, start once every node's clock is
     /// known within what the machine's path allows (100 × the target, at
     /// least 1 ms), naming each clock that fell short. Without it nothing
-    /// moves on a clock above its target. Implied by --nodes spawn (its
-    /// simulated nodes share this computer's cores). A resume keeps the
-    /// choice.
+    /// moves on a clock above its target, but for a machine's only node
+    /// that moves or drives a tool (its clock sets no two nodes apart).
+    /// Implied by --nodes spawn (its simulated nodes share this computer's
+    /// cores). A resume keeps the choice.
     #[arg(long)]
     start_late_clocks: bool,
     #[command(flatten)]

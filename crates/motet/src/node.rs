@@ -193,19 +193,7 @@ fn run<S: Store>(
     }
     use std::io::Write;
     std::io::stdout().flush()?;
-    // The button: Enter on this terminal.
-    let (press_tx, press_rx) = mpsc::channel();
-    if !o.auto_press {
-        std::thread::spawn(move || {
-            let mut line = String::new();
-            while std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0) {
-                if press_tx.send(()).is_err() {
-                    break;
-                }
-                line.clear();
-            }
-        });
-    }
+    let press_rx = button_presses(o.auto_press);
     let mut blinking = false;
     let mut last_report = 0u64;
     let started = clock.now_us();
@@ -272,4 +260,21 @@ fn run<S: Store>(
             node.endpoint.on_frame_stamped(&f, clock.now_us(), stamp);
         }
     }
+}
+
+/// The button: Enter on this terminal (none when it presses itself).
+fn button_presses(auto_press: bool) -> mpsc::Receiver<()> {
+    let (press_tx, press_rx) = mpsc::channel();
+    if !auto_press {
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            while std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0) {
+                if press_tx.send(()).is_err() {
+                    break;
+                }
+                line.clear();
+            }
+        });
+    }
+    press_rx
 }

@@ -227,6 +227,27 @@ pub(super) fn path_limit(cfg: &NetConfig, p: &Peer) -> f64 {
 }
 
 impl NetRun {
+    /// Whether node `p` may start short of its clock target once the
+    /// connect timeout passed (within what the machine's path allows):
+    /// when asked to (`start_late_clocks`), or when it is the only node
+    /// that moves or drives a tool. Its clock then sets no two nodes apart:
+    /// an error far below the lead only shifts when the job happens, not
+    /// the path. (On a serial line, or on a computer busy enough to delay
+    /// exchanges, a bound stays near half the least round trip or more,
+    /// above the quarter its target asks.)
+    pub(super) fn may_start_late(&self, p: &Peer) -> bool {
+        self.cfg.start_late_clocks || self.lone_mover(&p.name)
+    }
+
+    /// Whether the node named `name` is the machine's only node with
+    /// actuators or tools.
+    fn lone_mover(&self, name: &str) -> bool {
+        let moves =
+            |n: &motet_host::machine::NodeSpec| !n.actuators.is_empty() || !n.tools.is_empty();
+        let mut movers = self.machine.nodes.iter().filter(|n| moves(n));
+        matches!((movers.next(), movers.next()), (Some(n), None) if n.name == name)
+    }
+
     /// A start past the timeout: each node whose clock is known less well
     /// than its target, said once.
     pub(super) fn note_late_clocks(&mut self, now: u64, started: u64) {
@@ -236,8 +257,13 @@ impl NetRun {
             let target = clock_target(&self.cfg, p);
             let bound = p.sync.error_bound(now as f64);
             if bound > EXCHANGE_AT * target {
+                let why = if self.cfg.start_late_clocks {
+                    "the machine's path allows"
+                } else {
+                    "no other node moves with it, and the machine's path allows"
+                };
                 let note = format!(
-                    "node {}: its clock is known to ±{bound:.1} µs after {secs:.1} s, short of its ±{target:.0} µs target (a busy computer makes its exchanges late); the run starts, as the machine's path allows ±{:.0} µs",
+                    "node {}: its clock is known to ±{bound:.1} µs after {secs:.1} s, short of its ±{target:.0} µs target (a busy computer or a slow link makes its exchanges late); the run starts, as {why} ±{:.0} µs",
                     p.name,
                     path_limit(&self.cfg, p)
                 );

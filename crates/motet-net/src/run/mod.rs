@@ -73,7 +73,9 @@ pub struct NetConfig {
     /// node's bound is within what the machine's path allows, short of its
     /// target, saying which clocks fell short (`motet run
     /// --start-late-clocks`: a computer too busy for the target). Off by
-    /// default: nothing moves on a clock above its target.
+    /// default: nothing moves on a clock above its target, but for the
+    /// machine's only node that moves or drives a tool, which starts so
+    /// unasked (its clock sets no two nodes apart).
     pub start_late_clocks: bool,
     /// How far past the lead a new window reaches, µs: longer windows mean
     /// fewer seals on the wire, shorter ones keep more of the trajectory
@@ -734,12 +736,12 @@ impl NetRun {
             let later = p.sync.error_bound(now as f64 + START_HORIZON_US);
             let on_target =
                 p.sync.error_bound(now as f64) <= EXCHANGE_AT * target && later <= target;
-            let late_ok = self.cfg.start_late_clocks && overdue;
+            let late_ok = overdue && self.may_start_late(p);
             (on_target || (late_ok && later <= path_limit(&self.cfg, p))) && p.backlog() == 0
         });
         // Nothing moves before every heater a node drives has reported.
         if ready && self.heaters_heard()? {
-            if overdue && self.cfg.start_late_clocks {
+            if overdue {
                 self.note_late_clocks(now, started);
             }
             let lead = self.lead_us();
