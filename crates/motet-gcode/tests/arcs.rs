@@ -1,7 +1,7 @@
 //! Arcs: flattened points lie on the circle, chords stay within tolerance,
 //! the last point is exactly the programmed end, the sweep goes the right way.
 
-mod common;
+use crate::common;
 
 use common::*;
 use core::f64::consts::{PI, TAU};

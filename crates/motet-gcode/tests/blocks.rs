@@ -3,7 +3,7 @@
 //! offsets, G53, G28/G28.1, G93, firmware retraction, program end, M4 and the
 //! printer/auxiliary codes.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_gcode::{parse, GcodeOptions};

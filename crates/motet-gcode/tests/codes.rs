@@ -1,7 +1,7 @@
 //! Table-driven tests: G-code snippet -> expected commands, and bad snippet ->
 //! expected line:column and message.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_planner::{AuxChannel, Command, SourceLoc};

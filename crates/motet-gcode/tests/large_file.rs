@@ -1,6 +1,6 @@
 //! A 100,000-line slicer-style file parses whole (speed is measured by `motet bench`).
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::fmt::Write;

@@ -1,6 +1,6 @@
 //! Property tests: no input panics; random valid programs end where they say.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_planner::{Command, MoveKind};

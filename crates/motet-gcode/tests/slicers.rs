@@ -1,7 +1,7 @@
 //! The real slicer files in bench/data parse whole with allow_unknown off,
 //! with plausible command counts, ending where the last G0/G1 says.
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 

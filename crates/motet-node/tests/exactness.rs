@@ -1,7 +1,7 @@
 //! Step exactness: every step is where the ideal joint crosses a half-step
 //! boundary, checked against the trajectory evaluated independently of the node.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -3,7 +3,7 @@
 //! same directions as in exact time, each within the tolerance of its
 //! exact time.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -1,7 +1,7 @@
 //! Frame equivalence: polling every 40 µs frame and jumping from deadline to
 //! deadline give bit-identical outputs, whatever the queue capacity.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -2,7 +2,7 @@
 //! more due stops at the last one's time, and polling on gives exactly the
 //! outputs of a node polled in small steps.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::{Node, MAX_OUTPUTS_PER_POLL};

@@ -1,6 +1,6 @@
 //! Refusals leave the node untouched, and a Status request reports the queues.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::{Node, NodeStatus};

@@ -3,7 +3,7 @@
 //! rest at the committed window's end point, on the path, within the
 //! acceleration limits, with its tools off from the tail's start.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -3,7 +3,7 @@
 //! on its following-error limit, a limit switch or a lost encoder, takes
 //! gains live, and sends its samples upstream.
 
-mod common;
+use crate::common;
 
 use common::{feed, limits, plan, pt};
 use motet_node::{Board, Node};

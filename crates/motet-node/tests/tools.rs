@@ -1,7 +1,7 @@
 //! Tool events: exact times, only the outputs configured for the track, in time
 //! order with the steps.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -1,7 +1,7 @@
 //! Underruns: running out of segments while moving is counted once; running out
 //! at rest is not an underrun.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_node::Node;

@@ -1,6 +1,6 @@
 //! Hatch fill: parallel lines inside filled shapes, by fill rule.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_svg::*;

@@ -1,6 +1,6 @@
 //! Bad and odd input: located errors, never a panic, options checked.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_planner::Command;

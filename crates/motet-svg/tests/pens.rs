@@ -1,7 +1,7 @@
 //! Pens and order: pen-up/down events, grouping into pens, pen changes,
 //! travel-optimised order against document order.
 
-mod common;
+use crate::common;
 
 use common::*;
 use motet_planner::{Command, MoveKind, ToolInfo, ToolKind};

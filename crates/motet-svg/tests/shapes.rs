@@ -1,7 +1,7 @@
 //! Shapes drawn as the document says: straight and curved outlines within
 //! tolerance, rounded corners, strokes on the page edges.
 
-mod common;
+use crate::common;
 
 use common::*;
 
