@@ -17,6 +17,7 @@
 //!   crystal the slope's uncertainty keeps falling, and so does the rate.
 
 use motet_wire::sync::{ClockFault, ClockModel, ClockSync, Exchange, SyncConfig};
+use std::collections::VecDeque;
 
 /// The most a crystal is off, with its temperature and age: a node whose
 /// clock runs further off the host's is refused.
@@ -51,12 +52,22 @@ const MIN_SLEW_US: f64 = 20_000.0;
 /// µs: a model that will be off by then is replaced now.
 const LOOKAHEAD_US: f64 = 100_000.0;
 
+/// Models kept that a node may still run ([`NodeClock::error_bound`]):
+/// far more than a link has in flight.
+const MAYBE_KEPT: usize = 32;
+
 /// A node's clock as the host knows it.
 #[derive(Clone, Debug)]
 pub struct NodeClock {
     est: ClockSync,
     /// The model the node runs (the last one sent), if any.
     sent: Option<ClockModel>,
+    /// Models the node may still run instead, while the link has not yet
+    /// acknowledged the later ones (oldest first): the last acknowledged
+    /// and each one sent after it but the newest.
+    maybe: VecDeque<ClockModel>,
+    /// Models sent and not yet acknowledged.
+    unacked: usize,
     /// Until when (host µs) the model sent is a slew, not the estimate.
     slewing_until: Option<f64>,
     fault: Option<ClockFault>,
@@ -85,6 +96,8 @@ impl Default for NodeClock {
         NodeClock {
             est: ClockSync::new(SyncConfig::default()),
             sent: None,
+            maybe: VecDeque::new(),
+            unacked: 0,
             slewing_until: None,
             fault: None,
             next_exchange: 0,
@@ -206,14 +219,31 @@ impl NodeClock {
     /// A bound on the node's own error at host time `host`: how far the
     /// model it runs is from the estimate, plus the estimate's bound, µs;
     /// infinite while it runs none or the host knows too little.
+    /// Until the link acknowledged the last model sent, the node may run
+    /// any since the last acknowledged one: the farthest counts.
     pub fn error_bound(&self, host: f64) -> f64 {
         match self.sent {
             Some(m) if self.fault.is_none() => {
-                let off = (m.local(host) - self.est.host_to_local(host)).abs();
+                let est = self.est.host_to_local(host);
+                let off = self.maybe.iter().fold((m.local(host) - est).abs(), |o, k| {
+                    o.max((k.local(host) - est).abs())
+                });
                 off + self.est.error_bound(host)
             }
             _ => f64::INFINITY,
         }
+    }
+
+    /// The link acknowledged the oldest model not yet acknowledged: the
+    /// node runs it or a later one.
+    pub fn model_delivered(&mut self) {
+        if self.unacked == 0 {
+            return;
+        }
+        if self.maybe.len() == self.unacked {
+            self.maybe.pop_front();
+        }
+        self.unacked -= 1;
     }
 
     /// Whether an exchange is due at host time `now`; if so, plans the next
@@ -330,6 +360,13 @@ impl NodeClock {
     }
 
     fn take(&mut self, m: ClockModel, slewing_until: Option<f64>) -> ClockModel {
+        if let Some(before) = self.sent {
+            if self.maybe.len() == MAYBE_KEPT {
+                self.maybe.pop_front();
+            }
+            self.maybe.push_back(before);
+        }
+        self.unacked += 1;
         self.sent = Some(m);
         self.slewing_until = slewing_until;
         self.models_sent.0 += 1;
@@ -341,6 +378,8 @@ impl NodeClock {
     /// as it is.
     pub fn forget_sent(&mut self) {
         self.sent = None;
+        self.maybe.clear();
+        self.unacked = 0;
         self.slewing_until = None;
     }
 
@@ -366,6 +405,40 @@ mod tests {
         }
     }
 
+    /// Until the link acknowledges a model, the node may still run the one
+    /// before: the bound counts the farther of the two.
+    #[test]
+    fn a_model_in_flight_counts_the_one_before_until_acknowledged() {
+        let mut c = NodeClock::default();
+        let mut h = 1_000u64;
+        while !c.synced() {
+            c.add(exchange(h));
+            h += 10_000;
+        }
+        let at = h as f64;
+        let est = c.model();
+        let alone = c.est.error_bound(at);
+        // The node runs a model 30 µs off the estimate...
+        c.take(
+            ClockModel {
+                offset: est.offset + 30.0,
+                ..est
+            },
+            None,
+        );
+        c.model_delivered();
+        assert!((c.error_bound(at) - (alone + 30.0)).abs() < 1e-6);
+        // ... and is sent the estimate: until the link acknowledges it, the
+        // 30 µs still count; then only the estimate's own bound.
+        c.take(est, None);
+        assert!((c.error_bound(at) - (alone + 30.0)).abs() < 1e-6);
+        c.model_delivered();
+        assert!((c.error_bound(at) - alone).abs() < 1e-6);
+        // An acknowledgement of nothing changes nothing.
+        c.model_delivered();
+        assert!((c.error_bound(at) - alone).abs() < 1e-6);
+    }
+
     #[test]
     fn corrections_are_slewed_and_time_stays_monotone() {
         let mut c = NodeClock::default();
@@ -375,6 +448,7 @@ mod tests {
             h += 10_000;
         }
         let first = c.model_due(h, 2.5, 100.0, false).expect("a first model");
+        c.model_delivered();
         // A model 30 µs off: what a node restarted on an old estimate runs.
         c.sent = Some(ClockModel {
             offset: first.offset + 30.0,
@@ -386,6 +460,8 @@ mod tests {
             c.add(exchange(h));
             if let Some(m) = c.model_due(h, 2.5, 100.0, false) {
                 models.push((h as f64 + 100.0, m));
+                // The link acknowledges it, as a node's ack would.
+                c.model_delivered();
             }
         }
         assert!(c.models_sent.1 >= 1, "the correction was slewed");

@@ -7,7 +7,7 @@ use motet_wire::frame::{self, Flags, Header, MAX_FRAME, MAX_RAW};
 use motet_wire::group::GroupMessage;
 use motet_wire::link::{Config as LinkConfig, Link, State};
 use motet_wire::service::{port, ServiceReply, ServiceRequest};
-use motet_wire::sync::Exchange;
+use motet_wire::sync::{ClockModel, Exchange};
 use motet_wire::{decode, encode, HostMessage, NodeMessage, MAX_MESSAGE};
 use std::collections::VecDeque;
 
@@ -50,6 +50,9 @@ struct Outgoing {
     /// A seal, with the node's sequence end it commits: the messages
     /// before it are a committed window.
     seal: Option<u32>,
+    /// A clock model (`TimeSet`): its acknowledgement tells the host the
+    /// node runs it ([`NodeClock::model_delivered`]).
+    model: bool,
 }
 
 /// The host's end of the link to one node: the reliable link, the frames
@@ -101,7 +104,7 @@ pub struct Peer {
     strangers: VecDeque<(u16, ServiceReply)>,
     /// Payloads handed to the link and not yet acknowledged, oldest
     /// first: the sequence end of each one that seals.
-    in_link: VecDeque<Option<u32>>,
+    in_link: VecDeque<(Option<u32>, bool)>,
     /// The sequence end of the last seal the node's link acknowledged: the
     /// node acted on it (a refusal comes back as a message).
     pub sealed: Option<u32>,
@@ -208,6 +211,18 @@ impl Peer {
         self.queue(req.port(), req, None);
     }
 
+    /// Queues the clock model the node is to run on the reliable link.
+    pub fn send_clock_model(&mut self, m: ClockModel) {
+        let req = ServiceRequest::TimeSet {
+            offset: m.offset,
+            skew: m.skew,
+        };
+        self.queue(req.port(), &req, None);
+        if let Some(o) = self.outbox.back_mut() {
+            o.model = true;
+        }
+    }
+
     fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, seal: Option<u32>) {
         let mut buf = [0u8; MAX_MESSAGE];
         let bytes = encode(msg, &mut buf).expect("host messages fit MAX_MESSAGE");
@@ -215,6 +230,7 @@ impl Peer {
             port,
             bytes: bytes.to_vec(),
             seal,
+            model: false,
         });
     }
 
@@ -440,7 +456,7 @@ impl Peer {
                 Ok(()) => {
                     // The seal is acknowledged once nothing is unacked.
                     self.seal_sent |= o.seal.is_some();
-                    self.in_link.push_back(o.seal);
+                    self.in_link.push_back((o.seal, o.model));
                     self.outbox.pop_front();
                 }
                 Err(_) => break,
@@ -458,8 +474,10 @@ impl Peer {
     /// acted on.
     fn acknowledged(&mut self) {
         while self.in_link.len() > self.link.unacked() {
-            if let Some(Some(end)) = self.in_link.pop_front() {
-                self.sealed = Some(end);
+            match self.in_link.pop_front() {
+                Some((Some(end), _)) => self.sealed = Some(end),
+                Some((None, true)) => self.sync.model_delivered(),
+                _ => {}
             }
         }
         if self.link.unacked() == 0 {

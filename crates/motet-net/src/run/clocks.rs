@@ -6,7 +6,7 @@ use super::{NetConfig, NetError, NetRun, Phase};
 use crate::node_clock::{EXCHANGE_AT, MAX_CRYSTAL};
 use crate::peer::Peer;
 use motet_wire::link::State;
-use motet_wire::service::{ServiceRequest, MAX_SKEW};
+use motet_wire::service::MAX_SKEW;
 
 impl NetRun {
     /// Clock exchanges (also the heartbeat of a quiet node) and models,
@@ -54,10 +54,7 @@ impl NetRun {
                 .sync
                 .model_due(now, model_tolerance(target, p), delay, at_rest)
             {
-                p.send_service(&ServiceRequest::TimeSet {
-                    offset: m.offset,
-                    skew: m.skew,
-                });
+                p.send_clock_model(m);
             }
         }
         if to_all {
