@@ -344,6 +344,17 @@ impl Loopback {
         }
     }
 
+    /// Stops recording every step and tool change on the nodes (tests
+    /// compare the executed path through them): a long run, or a server
+    /// that runs for days, keeps nothing that grows with its motion.
+    pub fn untraced(mut self) -> Self {
+        for n in &mut self.nodes {
+            n.node.board.trace = None;
+            n.node.board.tool_trace = None;
+        }
+        self
+    }
+
     /// Node `k` restarts (power cycled, or its process killed and started
     /// again from its store): same identity, nothing else kept.
     pub fn restart_node(&mut self, k: usize) {

@@ -114,12 +114,8 @@ impl SimNodes {
             })
             .collect();
         let clocks = vec![Crystal::default(); machine.nodes.len()];
-        let mut net = Loopback::new(machine, Vec::new(), start, links, &clocks, cfg);
-        for n in &mut net.nodes {
-            // A server runs for days: nothing may grow with its motion.
-            n.node.board.trace = None;
-            n.node.board.tool_trace = None;
-        }
+        // A server runs for days: nothing may grow with its motion.
+        let net = Loopback::new(machine, Vec::new(), start, links, &clocks, cfg).untraced();
         SimNodes { net, cfg }
     }
 }

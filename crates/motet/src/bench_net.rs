@@ -172,7 +172,10 @@ pub fn bench_net(args: Args) -> Result<()> {
             cfg,
             journal,
         ),
-    };
+    }
+    // The figures come from counters: a whole print's every step would
+    // hold hundreds of MB.
+    .untraced();
     lb.run.set_identity(identity);
     if args.jitter_us > 0 || args.faults > 0.0 {
         lb.max_step_us = 10;
