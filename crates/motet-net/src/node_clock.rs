@@ -234,6 +234,11 @@ impl NodeClock {
         }
     }
 
+    /// Models sent that the link has not yet acknowledged.
+    pub fn models_unacknowledged(&self) -> usize {
+        self.unacked
+    }
+
     /// The link acknowledged the oldest model not yet acknowledged: the
     /// node runs it or a later one.
     pub fn model_delivered(&mut self) {

@@ -47,12 +47,30 @@ pub enum Incoming {
 struct Outgoing {
     port: u8,
     bytes: Vec<u8>,
+    /// What its acknowledgement tells the host.
+    carries: Carries,
+}
+
+/// What the link's acknowledgement of a payload tells the host.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Carries {
+    /// Nothing beyond its arrival.
+    Message,
     /// A seal, with the node's sequence end it commits: the messages
-    /// before it are a committed window.
-    seal: Option<u32>,
-    /// A clock model (`TimeSet`): its acknowledgement tells the host the
-    /// node runs it ([`NodeClock::model_delivered`]).
-    model: bool,
+    /// before it are a committed window, and the node acted on it.
+    Seal(u32),
+    /// A clock model (`TimeSet`): the node runs it or a later one
+    /// ([`NodeClock::model_delivered`]).
+    Model,
+}
+
+impl Outgoing {
+    fn seal(&self) -> Option<u32> {
+        match self.carries {
+            Carries::Seal(end) => Some(end),
+            _ => None,
+        }
+    }
 }
 
 /// The host's end of the link to one node: the reliable link, the frames
@@ -103,8 +121,8 @@ pub struct Peer {
     /// newest few, with their source.
     strangers: VecDeque<(u16, ServiceReply)>,
     /// Payloads handed to the link and not yet acknowledged, oldest
-    /// first: the sequence end of each one that seals.
-    in_link: VecDeque<(Option<u32>, bool)>,
+    /// first: what each one's acknowledgement tells.
+    in_link: VecDeque<Carries>,
     /// The sequence end of the last seal the node's link acknowledged: the
     /// node acted on it (a refusal comes back as a message).
     pub sealed: Option<u32>,
@@ -181,11 +199,11 @@ impl Peer {
 
     /// Queues a motion message on the reliable link.
     pub fn send_motion(&mut self, msg: &HostMessage) {
-        let seal = match msg {
-            HostMessage::Seal { next_seq } => Some(*next_seq),
-            _ => None,
+        let carries = match msg {
+            HostMessage::Seal { next_seq } => Carries::Seal(*next_seq),
+            _ => Carries::Message,
         };
-        self.queue(motet_wire::link::DATA_PORT, msg, seal);
+        self.queue(motet_wire::link::DATA_PORT, msg, carries);
     }
 
     /// Queues the seal of a window ending at `next_seq`: in the window's
@@ -195,12 +213,12 @@ impl Peer {
         let last = self
             .outbox
             .back()
-            .filter(|o| o.port == motet_wire::link::DATA_PORT && o.seal.is_none())
+            .filter(|o| o.port == motet_wire::link::DATA_PORT && o.seal().is_none())
             .and_then(|o| decode::<HostMessage>(&o.bytes).ok());
         if let Some(HostMessage::Segments(batch)) = last {
             self.outbox.pop_back();
             let msg = HostMessage::SegmentsSealed(batch);
-            self.queue(motet_wire::link::DATA_PORT, &msg, Some(next_seq));
+            self.queue(motet_wire::link::DATA_PORT, &msg, Carries::Seal(next_seq));
         } else {
             self.send_motion(&HostMessage::Seal { next_seq });
         }
@@ -208,7 +226,7 @@ impl Peer {
 
     /// Queues a service request on the reliable link.
     pub fn send_service(&mut self, req: &ServiceRequest) {
-        self.queue(req.port(), req, None);
+        self.queue(req.port(), req, Carries::Message);
     }
 
     /// Queues the clock model the node is to run on the reliable link.
@@ -217,35 +235,39 @@ impl Peer {
             offset: m.offset,
             skew: m.skew,
         };
-        self.queue(req.port(), &req, None);
-        if let Some(o) = self.outbox.back_mut() {
-            o.model = true;
-        }
+        self.queue(req.port(), &req, Carries::Model);
     }
 
-    fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, seal: Option<u32>) {
+    fn queue<T: serde::Serialize>(&mut self, port: u8, msg: &T, carries: Carries) {
         let mut buf = [0u8; MAX_MESSAGE];
         let bytes = encode(msg, &mut buf).expect("host messages fit MAX_MESSAGE");
         self.outbox.push_back(Outgoing {
             port,
             bytes: bytes.to_vec(),
-            seal,
-            model: false,
+            carries,
         });
     }
 
-    /// Drops every queued message after the last queued seal: a window that
-    /// was not sealed must never reach the node, a seal already queued must.
+    /// Drops every motion message queued after the last queued seal: a
+    /// window that was not sealed must never reach the node, a seal
+    /// already queued must. Service requests (a clock model the host
+    /// already counts the node as running) still go.
     pub fn drop_unsealed(&mut self) {
-        match self.outbox.iter().rposition(|o| o.seal.is_some()) {
-            Some(i) => self.outbox.truncate(i + 1),
-            None => self.outbox.clear(),
-        }
+        let keep = self
+            .outbox
+            .iter()
+            .rposition(|o| o.seal().is_some())
+            .map_or(0, |s| s + 1);
+        let mut i = 0;
+        self.outbox.retain(|o| {
+            i += 1;
+            i <= keep || o.port != motet_wire::link::DATA_PORT
+        });
     }
 
     /// A seal queued or sent and not yet acknowledged.
     pub fn seal_in_flight(&self) -> bool {
-        self.outbox.iter().any(|o| o.seal.is_some()) || self.seal_sent
+        self.outbox.iter().any(|o| o.seal().is_some()) || self.seal_sent
     }
 
     /// Payloads queued or in flight, not yet acknowledged.
@@ -455,8 +477,8 @@ impl Peer {
             match self.link.send_port(o.port, &o.bytes, now) {
                 Ok(()) => {
                     // The seal is acknowledged once nothing is unacked.
-                    self.seal_sent |= o.seal.is_some();
-                    self.in_link.push_back((o.seal, o.model));
+                    self.seal_sent |= o.seal().is_some();
+                    self.in_link.push_back(o.carries);
                     self.outbox.pop_front();
                 }
                 Err(_) => break,
@@ -475,8 +497,8 @@ impl Peer {
     fn acknowledged(&mut self) {
         while self.in_link.len() > self.link.unacked() {
             match self.in_link.pop_front() {
-                Some((Some(end), _)) => self.sealed = Some(end),
-                Some((None, true)) => self.sync.model_delivered(),
+                Some(Carries::Seal(end)) => self.sealed = Some(end),
+                Some(Carries::Model) => self.sync.model_delivered(),
                 _ => {}
             }
         }
@@ -502,7 +524,7 @@ mod tests {
     fn queued(p: &Peer) -> Vec<(HostMessage, Option<u32>)> {
         p.outbox
             .iter()
-            .map(|o| (decode::<HostMessage>(&o.bytes).unwrap(), o.seal))
+            .map(|o| (decode::<HostMessage>(&o.bytes).unwrap(), o.seal()))
             .collect()
     }
 
@@ -537,5 +559,34 @@ mod tests {
         p.send_motion(&event);
         p.drop_unsealed();
         assert_eq!(queued(&p).len(), 4);
+    }
+
+    /// A stop drops the motion after the last seal, not a clock model
+    /// queued among it: the host already counts the node as running it.
+    #[test]
+    fn a_stop_keeps_the_clock_model_queued_after_the_last_seal() {
+        let (a, _b) = motet_link::pair("host", "node");
+        let mut p = Peer::new("n", 2, Box::new(a), 1);
+        let event = HostMessage::Event {
+            track: 0,
+            time: 1.0,
+            value: 0.5,
+        };
+        p.send_motion(&HostMessage::Seal { next_seq: 3 });
+        p.send_motion(&event);
+        p.send_clock_model(ClockModel {
+            offset: 5.0,
+            skew: 1e-4,
+        });
+        p.send_motion(&event);
+        p.drop_unsealed();
+        let kept: Vec<Carries> = p.outbox.iter().map(|o| o.carries).collect();
+        assert_eq!(kept, vec![Carries::Seal(3), Carries::Model]);
+        // With no seal queued, only the model stays.
+        p.send_motion(&event);
+        p.outbox.pop_front();
+        p.drop_unsealed();
+        let kept: Vec<Carries> = p.outbox.iter().map(|o| o.carries).collect();
+        assert_eq!(kept, vec![Carries::Model]);
     }
 }
