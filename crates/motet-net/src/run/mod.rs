@@ -654,7 +654,9 @@ impl NetRun {
                         let ours = run == self.identity.run;
                         if let Phase::Stopping(info) = &mut self.phase {
                             if ours && queued == 0 && !info.confirmed.iter().any(|c| c.0 == k) {
-                                info.confirmed.push((k, committed));
+                                // In node order, whichever answered first.
+                                let at = info.confirmed.partition_point(|c| c.0 < k);
+                                info.confirmed.insert(at, (k, committed));
                             }
                         }
                     }

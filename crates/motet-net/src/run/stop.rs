@@ -40,7 +40,8 @@ pub struct StopInfo {
     /// not known, only that they got no further than the committed window.
     pub lost: Vec<LostNode>,
     /// Machine nodes that reported themselves at rest, each with the end
-    /// of its committed window (`window_end`, unless it missed the last seal).
+    /// of its committed window (`window_end`, unless it missed the last
+    /// seal), in node order.
     pub confirmed: Vec<(usize, u32)>,
 }
 
