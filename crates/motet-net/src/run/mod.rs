@@ -653,10 +653,8 @@ impl NetRun {
                     }) => {
                         let ours = run == self.identity.run;
                         if let Phase::Stopping(info) = &mut self.phase {
-                            if ours && queued == 0 && !info.confirmed.iter().any(|c| c.0 == k) {
-                                // In node order, whichever answered first.
-                                let at = info.confirmed.partition_point(|c| c.0 < k);
-                                info.confirmed.insert(at, (k, committed));
+                            if ours && queued == 0 {
+                                info.at_rest(k, committed);
                             }
                         }
                     }

@@ -61,6 +61,15 @@ impl StopInfo {
     pub fn all_at_rest(&self) -> bool {
         self.lost.is_empty() && self.confirmed.iter().all(|&(_, e)| e == self.window_end)
     }
+
+    /// Node `k` reported itself at rest at the end of `committed`: kept in
+    /// node order, whichever answered first, once.
+    pub(super) fn at_rest(&mut self, k: usize, committed: u32) {
+        if !self.confirmed.iter().any(|c| c.0 == k) {
+            let at = self.confirmed.partition_point(|c| c.0 < k);
+            self.confirmed.insert(at, (k, committed));
+        }
+    }
 }
 
 impl NetRun {
